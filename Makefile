@@ -1,0 +1,49 @@
+# inflo top-level Makefile: make lily | make yarrow | make test | make bench | make clean
+# The first target run on a fresh clone creates .venv and installs inflo with its test extras.
+
+QUALITY ?= draft
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.inflo-installed
+PYTEST_ARGS ?=
+
+export QUALITY
+# numba caches compiled kernels beside the sources; keep them out of the way of stale builds
+export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
+
+.PHONY: all venv test bench lily yarrow clean distclean
+
+all: lily
+
+venv: $(STAMP)
+
+$(STAMP): pyproject.toml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip setuptools wheel
+	$(PY) -m pip install --quiet -e '.[test]'
+	@sh tools/canopy_render/ensure_system_gl.sh
+	@touch $(STAMP)
+
+test: $(STAMP)
+	$(PY) -m pytest -q $(PYTEST_ARGS)
+
+bench: $(STAMP)
+	$(PY) -m bench.run
+
+lily: $(STAMP)
+	@if [ -f pipelines/lily/Makefile ]; then \
+		$(MAKE) -C pipelines/lily QUALITY=$(QUALITY); \
+	else echo "pipeline not built yet: pipelines/lily/Makefile (issue 8)"; fi
+
+yarrow: $(STAMP)
+	@if [ -f pipelines/yarrow/Makefile ]; then \
+		$(MAKE) -C pipelines/yarrow QUALITY=$(QUALITY); \
+	else echo "pipeline not built yet: pipelines/yarrow/Makefile (issue 8)"; fi
+
+clean:
+	rm -rf build bench/out .pytest_cache .hypothesis
+	find . -path ./$(VENV) -prune -o -name __pycache__ -type d -prune -exec rm -rf {} +
+
+distclean: clean
+	rm -rf $(VENV) *.egg-info

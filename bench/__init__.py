@@ -1,0 +1,1 @@
+"""inflo benchmarks (``make bench``); never run by the tests."""

@@ -1,0 +1,90 @@
+"""Atomic output and file sequences (ARCHITECTURE.md, "Atomic output" and "Sequences").
+
+Writers never leave a half-written file under its final name: they write to a hidden temporary
+file in the target folder and ``os.replace`` it into place only when the content is complete.
+"""
+from __future__ import annotations
+
+import contextlib
+import glob
+import os
+import re
+import tempfile
+from pathlib import Path
+
+from .errors import InputError
+
+__all__ = ["atomic_write", "write_text_atomic", "write_bytes_atomic", "list_sequence", "frame_name"]
+
+
+@contextlib.contextmanager
+def atomic_write(path, mode: str = "w", encoding: str | None = "utf-8"):
+    """Open a temporary file beside ``path``; on success rename it to ``path``, on error delete it.
+
+    ``mode`` is ``"w"`` (text, ``\\n`` line ends) or ``"wb"``. Parent folders are created.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    try:
+        if "b" in mode:
+            fh = os.fdopen(fd, mode)
+        else:
+            fh = os.fdopen(fd, mode, encoding=encoding, newline="\n")
+        with fh:
+            yield fh
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def write_text_atomic(path, text: str) -> None:
+    """Write ``text`` to ``path`` atomically."""
+    with atomic_write(path, "w") as fh:
+        fh.write(text)
+
+
+def write_bytes_atomic(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically."""
+    with atomic_write(path, "wb") as fh:
+        fh.write(data)
+
+
+def frame_name(index: int, prefix: str = "frame_", suffix: str = ".obj", digits: int = 4) -> str:
+    """The file name of frame ``index`` in a sequence folder: ``frame_0007.obj``."""
+    return f"{prefix}{index:0{digits}d}{suffix}"
+
+
+_NUM = re.compile(r"(\d+)")
+
+
+def _natural_key(p: str):
+    return [int(t) if t.isdigit() else t for t in _NUM.split(os.path.basename(p))]
+
+
+def list_sequence(source, suffix: str) -> list[Path]:
+    """The files of a sequence, in frame order.
+
+    ``source`` is a folder (every non-hidden ``*suffix`` file in it), a glob pattern, or a single
+    file. Order is natural (``frame_2`` before ``frame_10``), which equals lexical order for the
+    zero-padded names inflo writes. Raises :class:`InputError` when nothing matches.
+    """
+    source = os.fspath(source)
+    if os.path.isdir(source):
+        names = [
+            os.path.join(source, n)
+            for n in os.listdir(source)
+            if n.endswith(suffix) and not n.startswith(".")
+        ]
+        if not names:
+            raise InputError(f"{source}: no {suffix} files in this folder")
+    elif os.path.isfile(source):
+        names = [source]
+    else:
+        names = [n for n in glob.glob(source) if not os.path.basename(n).startswith(".")]
+        if not names:
+            raise InputError(f"{source}: no such file or folder, and no file matches it as a glob")
+    return [Path(n) for n in sorted(names, key=_natural_key)]

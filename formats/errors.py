@@ -1,0 +1,112 @@
+"""Input errors shared by every reader: one line naming file, line, what was expected, what was found.
+
+Every reader in :mod:`inflo.formats` raises :class:`FormatError` for malformed input; the CLIs turn it
+into a one-line message on stderr and exit code 2 (see ``inflo.tools.common.cli``).
+"""
+from __future__ import annotations
+
+import math
+import os
+from typing import Iterable
+
+__all__ = [
+    "FormatError",
+    "InputError",
+    "parse_float",
+    "parse_int",
+    "parse_floats",
+    "read_lines",
+    "shorten",
+]
+
+
+class InputError(ValueError):
+    """Bad input that is not tied to one line of one file (a missing folder, an empty sequence)."""
+
+
+class FormatError(InputError):
+    """Malformed input file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file that is wrong.
+    line : int or None
+        1-based line number, or None when the problem is the file as a whole.
+    expected : str
+        What the reader expected there, in words ("3 floats after 'v'").
+    found : str
+        What it found (the offending token or line, shortened).
+    """
+
+    def __init__(self, path, line: int | None, expected: str, found: str):
+        self.path = os.fspath(path)
+        self.line = line
+        self.expected = expected
+        self.found = found
+        super().__init__(str(self))
+
+    def __str__(self) -> str:
+        where = self.path if self.line is None else f"{self.path}:{self.line}"
+        return f"{where}: expected {self.expected}, found {self.found}"
+
+
+def shorten(text: str, limit: int = 60) -> str:
+    """Quote a token or line for an error message, cut to ``limit`` characters."""
+    text = text.strip()
+    if not text:
+        return "an empty line"
+    if len(text) > limit:
+        text = text[: limit - 3] + "..."
+    return repr(text)
+
+
+def parse_float(token: str, path, line: int | None, what: str = "a number") -> float:
+    """Parse one finite float; NaN, inf and non-numbers raise :class:`FormatError`."""
+    try:
+        value = float(token)
+    except ValueError:
+        raise FormatError(path, line, what, shorten(token)) from None
+    if not math.isfinite(value):
+        raise FormatError(path, line, f"{what} (finite)", shorten(token))
+    return value
+
+
+def parse_int(token: str, path, line: int | None, what: str = "an integer") -> int:
+    """Parse one integer (no decimal point, no exponent)."""
+    try:
+        return int(token)
+    except ValueError:
+        raise FormatError(path, line, what, shorten(token)) from None
+
+
+def parse_floats(tokens: Iterable[str], path, line: int | None, what: str) -> list[float]:
+    """Parse every token of ``tokens`` as a finite float."""
+    return [parse_float(t, path, line, what) for t in tokens]
+
+
+def read_lines(path) -> list[str]:
+    """Read a text file as a list of lines (no line ends).
+
+    Raises :class:`InputError` when the file is missing or unreadable and :class:`FormatError`
+    when it is not UTF-8 text.
+    """
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a folder, expected a file") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise FormatError(path, line, "UTF-8 text", f"byte 0x{data[exc.start]:02x}") from None
+    if "\x00" in text:
+        line = text[: text.index("\x00")].count("\n") + 1
+        raise FormatError(path, line, "text", "a NUL byte (binary file?)")
+    return text.splitlines()

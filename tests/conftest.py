@@ -1,0 +1,58 @@
+"""Shared fixtures for the inflo tests."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+SEEDS = REPO.parent / "shared" / "seeds"
+
+CLI_NAMES = [
+    "floret-animate",
+    "polygonize",
+    "phyllotaxis",
+    "dimorph",
+    "fccompose",
+    "subdivide",
+    "branch-gen",
+    "canopy-render",
+]
+
+
+def cli_path(name: str) -> str:
+    """The console script ``name`` installed beside the running interpreter."""
+    return str(Path(sys.executable).parent / name)
+
+
+def run_cli(name: str, *args, cwd=None, env=None) -> subprocess.CompletedProcess:
+    """Run an installed inflo CLI, capturing text output."""
+    return subprocess.run(
+        [cli_path(name), *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env=env,
+        timeout=600,
+    )
+
+
+@pytest.fixture
+def write(tmp_path):
+    """write(name, text) -> Path: a text file under tmp_path."""
+
+    def _write(name: str, text: str) -> Path:
+        path = tmp_path / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+        return path
+
+    return _write
+
+
+def no_partial_files(folder) -> bool:
+    """True when no temporary (.part) file of an atomic write is left in ``folder``."""
+    return not any(p.name.endswith(".part") for p in Path(folder).rglob("*"))

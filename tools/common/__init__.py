@@ -1,0 +1,1 @@
+"""Shared pieces of every CLI: error handling, progress bars."""

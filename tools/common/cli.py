@@ -1,0 +1,99 @@
+"""What every inflo CLI does the same way (ARCHITECTURE.md, "Errors" and "Progress").
+
+- Bad input (:class:`~inflo.formats.errors.InputError`, including ``FormatError``) prints one line
+  ``<cli>: error: <file>:<line>: expected ..., found ...`` and exits with code 2.
+- A failed run (any other exception) prints one line and exits with code 1.
+- ``--debug`` re-raises so the traceback is shown.
+- Ctrl-C exits with code 130; files already renamed into place are complete (atomic writes).
+- Progress bars go to stderr, only on a terminal and without ``--quiet``.
+
+Usage::
+
+    @inflo_command("polygonize")
+    @click.argument(...)
+    def main(..., quiet, debug): ...
+"""
+from __future__ import annotations
+
+import contextlib
+import functools
+import sys
+
+import click
+
+from inflo.formats.errors import InputError
+
+__all__ = ["inflo_command", "progress", "NotImplementedStage", "not_implemented"]
+
+
+class NotImplementedStage(InputError):
+    """Raised by a CLI whose stage has not been built yet (exit code 2)."""
+
+
+def not_implemented(cli_name: str, issue: int) -> None:
+    raise NotImplementedStage(f"{cli_name} is not implemented yet (issue {issue})")
+
+
+def inflo_command(name: str, **command_kwargs):
+    """Decorator: a click command with ``--quiet`` and ``--debug`` and inflo's error conventions."""
+
+    def decorate(fn):
+        @functools.wraps(fn)
+        def guarded(*args, **kwargs):
+            debug = kwargs.get("debug", False)
+            try:
+                return fn(*args, **kwargs)
+            except KeyboardInterrupt:
+                if debug:
+                    raise
+                click.echo(f"{name}: interrupted; complete output files are kept", err=True)
+                sys.exit(130)
+            except InputError as exc:
+                if debug:
+                    raise
+                click.echo(f"{name}: error: {exc}", err=True)
+                sys.exit(2)
+            except click.exceptions.ClickException:
+                raise
+            except Exception as exc:  # a failed run: one line unless --debug
+                if debug:
+                    raise
+                click.echo(
+                    f"{name}: failed: {type(exc).__name__}: {exc} (rerun with --debug for a traceback)",
+                    err=True,
+                )
+                sys.exit(1)
+
+        cmd = guarded
+        cmd = click.option("--debug", is_flag=True, help="Show a Python traceback on errors.")(cmd)
+        cmd = click.option("--quiet", "-q", is_flag=True, help="No progress bar or messages.")(cmd)
+        command_kwargs.setdefault("context_settings", {"help_option_names": ["-h", "--help"]})
+        return click.command(name, **command_kwargs)(cmd)
+
+    return decorate
+
+
+@contextlib.contextmanager
+def progress(iterable=None, *, length: int | None = None, label: str = "", quiet: bool = False):
+    """A click progress bar with ETA on stderr when it is a terminal; the bare iterable otherwise.
+
+    Yields an object that iterates like ``iterable`` and has ``update(n)``.
+    """
+    if quiet or not sys.stderr.isatty():
+        yield _Silent(iterable)
+        return
+    with click.progressbar(
+        iterable, length=length, label=label, file=sys.stderr, show_eta=True, show_pos=True
+    ) as bar:
+        yield bar
+
+
+class _Silent:
+    def __init__(self, iterable):
+        self._it = iterable
+
+    def __iter__(self):
+        return iter(self._it if self._it is not None else ())
+
+    def update(self, n_steps: int, current_item=None) -> None:
+        pass

@@ -1,0 +1,1 @@
+"""dimorph: Set floret types and sizes by cones (thesis ch. 6)."""

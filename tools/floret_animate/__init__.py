@@ -1,0 +1,1 @@
+"""floret-animate: Interpolate floret key poses (thesis ch. 2.3) into one .floret file per frame."""

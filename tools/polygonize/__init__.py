@@ -1,0 +1,1 @@
+"""polygonize: Polygonize a .floret frame sequence (thesis 2.4) into OBJ frames of identical topology."""

@@ -1,0 +1,1 @@
+"""subdivide: Loop subdivision that stays collision-free (thesis 4.4)."""
