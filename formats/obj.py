@@ -1,0 +1,406 @@
+"""Wavefront OBJ meshes and OBJ sequences, read without merging or reordering vertices.
+
+The vertex order of an OBJ file is the identity of each vertex across the frames of a sequence
+(ARCHITECTURE.md "OBJ"), so this reader keeps every ``v`` line, in order, used or not (trimesh
+merges or drops vertices; see VLAB_FORMATS.md). Spec: ``formats/obj.md``.
+
+Supported statements: ``v x y z [r g b]``, ``vn``, ``vt`` (skipped), ``f`` with ``i``, ``i/t``,
+``i//n``, ``i/t/n`` references (1-based or negative), polygons fan-triangulated, ``l`` polylines,
+``o``/``g`` (face groups), ``usemtl`` (face materials), ``mtllib``/``s`` (ignored), ``#`` comments.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import atomic_write, frame_name, list_sequence
+from .errors import FormatError, InputError, read_lines, shorten
+
+__all__ = [
+    "ObjMesh",
+    "read_obj",
+    "write_obj",
+    "read_obj_sequence",
+    "write_obj_sequence",
+    "list_obj_sequence",
+    "FLOAT_FMT",
+]
+
+FLOAT_FMT = "%.6f"
+"""Coordinates are written with six decimals: stable text for diffs (ARCHITECTURE.md)."""
+
+_IGNORED = {"vt", "vp", "s", "mtllib", "usemap", "maplib", "shadow_obj", "trace_obj", "lod", "bevel",
+            "c_interp", "d_interp", "cstype", "deg", "curv", "surf", "end", "p"}
+
+
+@dataclass
+class ObjMesh:
+    """A triangle mesh with optional polylines, as stored in one OBJ file.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float64
+        Positions, in file order.
+    faces : (m, 3) int32
+        Triangles as 0-based vertex indices (polygons of the file fan-triangulated).
+    normals : (n, 3) float64 or None
+        Per-vertex normals, kept only when the file gives one ``vn`` per vertex and every face
+        uses normal index == vertex index (what :func:`write_obj` writes); otherwise None.
+    vertex_colors : (n, 3) float64 or None
+        ``v x y z r g b`` colours in [0, 1] when every vertex has them.
+    lines : list of (k,) int32
+        Polylines (``l`` statements), 0-based vertex indices; used for skeletons.
+    groups : list of str
+        Names of ``o``/``g`` groups in order of first appearance.
+    face_group : (m,) int32 or None
+        Index into ``groups`` per face (-1 before any group), None when the file has no groups.
+    materials : list of str
+        Names given by ``usemtl``.
+    face_material : (m,) int32 or None
+        Index into ``materials`` per face (-1 before any ``usemtl``), None when none is used.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int32))
+    normals: np.ndarray | None = None
+    vertex_colors: np.ndarray | None = None
+    lines: list = field(default_factory=list)
+    groups: list = field(default_factory=list)
+    face_group: np.ndarray | None = None
+    materials: list = field(default_factory=list)
+    face_material: np.ndarray | None = None
+
+    def __post_init__(self):
+        self.vertices = np.ascontiguousarray(self.vertices, dtype=np.float64).reshape(-1, 3)
+        self.faces = np.ascontiguousarray(self.faces, dtype=np.int32).reshape(-1, 3)
+        self.lines = [np.asarray(l, dtype=np.int32) for l in self.lines]
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.vertices)
+
+    @property
+    def n_faces(self) -> int:
+        return len(self.faces)
+
+    def same_topology(self, other: "ObjMesh") -> bool:
+        """Same vertex count, same faces and polylines in the same order."""
+        return (
+            self.n_vertices == other.n_vertices
+            and np.array_equal(self.faces, other.faces)
+            and len(self.lines) == len(other.lines)
+            and all(np.array_equal(a, b) for a, b in zip(self.lines, other.lines))
+        )
+
+
+def _parse_ref(tok: str, n_v: int, n_vn: int, path, lineno):
+    """One face/line reference ``i``, ``i/t``, ``i//n`` or ``i/t/n`` -> (0-based vertex, 0-based normal or -1)."""
+    parts = tok.split("/")
+    if len(parts) > 3 or parts[0] == "":
+        raise FormatError(path, lineno, "a vertex reference i, i/t, i//n or i/t/n", shorten(tok))
+    try:
+        vi = int(parts[0])
+        ni = int(parts[2]) if len(parts) == 3 and parts[2] != "" else 0
+    except ValueError:
+        raise FormatError(path, lineno, "integer vertex references", shorten(tok)) from None
+    if vi < 0:
+        vi = n_v + vi + 1
+    if not 1 <= vi <= n_v:
+        raise FormatError(path, lineno, f"a vertex index in 1..{n_v} (defined so far)", shorten(tok))
+    if ni < 0:
+        ni = n_vn + ni + 1
+    if ni and not 1 <= ni <= n_vn:
+        raise FormatError(path, lineno, f"a normal index in 1..{n_vn}", shorten(tok))
+    return vi - 1, ni - 1
+
+
+def _floats(rows, want, path, linenos, what):
+    """Convert token rows (lists of str, keyword stripped) to a float array, naming the first bad line."""
+    try:
+        arr = np.array(rows, dtype=np.float64)
+    except ValueError:
+        arr = None
+    if arr is not None and arr.ndim == 2 and arr.shape[1] in want and np.isfinite(arr).all():
+        return arr
+    for toks, ln in zip(rows, linenos):
+        if len(toks) not in want:
+            raise FormatError(path, ln, f"{' or '.join(map(str, sorted(want)))} numbers after '{what}'",
+                              f"{len(toks)}: {shorten(' '.join(toks))}")
+        for t in toks:
+            try:
+                x = float(t)
+            except ValueError:
+                raise FormatError(path, ln, f"a number after '{what}'", shorten(t)) from None
+            if not np.isfinite(x):
+                raise FormatError(path, ln, f"a finite number after '{what}'", shorten(t))
+    # rows of differing (allowed) lengths: the first line sets the width
+    width = len(rows[0])
+    for toks, ln in zip(rows, linenos):
+        if len(toks) != width:
+            raise FormatError(path, ln, f"{width} numbers after '{what}' as on the other lines", str(len(toks)))
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def read_obj(path) -> ObjMesh:
+    """Read one OBJ file without merging, dropping or reordering vertices.
+
+    Faces keep file order; a polygon with k > 3 vertices becomes k - 2 fan triangles in place.
+
+    Raises
+    ------
+    FormatError
+        Unknown statement, wrong number of coordinates, NaN/inf, a face or polyline index out of
+        range (or referring to a vertex not yet defined), a face with fewer than 3 vertices.
+    """
+    lines = read_lines(path)
+    heads = [l[:2] for l in lines]
+    v_idx = [i for i, h in enumerate(heads) if h == "v " or h == "v\t"]
+    f_idx = [i for i, h in enumerate(heads) if h == "f " or h == "f\t"]
+    vn_idx = []
+
+    # the other statements, in file order: groups, materials, polylines, unknown keywords
+    groups, group_index, materials, mat_index = [], {}, [], {}
+    group_changes, mat_changes = [(-1, -1)], [(-1, -1)]  # (line index, value)
+    polyline_at = []
+    late_v = late_f = False
+    for i, h in enumerate(heads):
+        if h in ("v ", "f ", "v\t", "f\t") or h[:1] == "#":
+            continue
+        toks = lines[i].split()
+        if not toks or toks[0][0] == "#":
+            continue
+        tag, lineno = toks[0], i + 1
+        if tag == "vn":
+            vn_idx.append(i)
+        elif tag == "v":  # indented or otherwise unusual v/f lines
+            v_idx.append(i)
+            late_v = True
+        elif tag == "f":
+            f_idx.append(i)
+            late_f = True
+        elif tag in ("o", "g"):
+            name = " ".join(toks[1:]) or "default"
+            if name not in group_index:
+                group_index[name] = len(groups)
+                groups.append(name)
+            group_changes.append((i, group_index[name]))
+        elif tag == "usemtl":
+            name = " ".join(toks[1:])
+            if not name:
+                raise FormatError(path, lineno, "a material name after 'usemtl'", shorten(lines[i]))
+            if name not in mat_index:
+                mat_index[name] = len(materials)
+                materials.append(name)
+            mat_changes.append((i, mat_index[name]))
+        elif tag == "l":
+            if len(toks) < 3:
+                raise FormatError(path, lineno, "at least 2 vertex references after 'l'", shorten(lines[i]))
+            polyline_at.append(i)
+        elif tag in _IGNORED:
+            continue
+        else:
+            raise FormatError(path, lineno, "an OBJ statement (v, vn, vt, f, l, o, g, usemtl, s, mtllib, #)",
+                              shorten(tag))
+    if late_v:
+        v_idx.sort()
+    if late_f:
+        f_idx.sort()
+    v_line = np.asarray(v_idx, dtype=np.int64)
+    vn_line = np.asarray(vn_idx, dtype=np.int64)
+
+    vertices, colors = np.zeros((0, 3)), None
+    if v_idx:
+        v = _bulk_floats(lines, v_idx, {3, 4, 6}, path, "v")
+        vertices = v[:, :3]
+        if v.shape[1] == 6:
+            colors = v[:, 3:6].copy()
+    vn = _bulk_floats(lines, vn_idx, {3}, path, "vn") if vn_idx else None
+
+    polylines = []
+    for i in polyline_at:
+        n_v, n_vn = int(np.searchsorted(v_line, i)), int(np.searchsorted(vn_line, i))
+        polylines.append([_parse_ref(t, n_v, n_vn, path, i + 1)[0] for t in lines[i].split()[1:]])
+
+    faces, face_nrm, face_line = _read_faces(lines, f_idx, v_line, vn_line, path)
+    normals = None
+    if vn is not None and len(vn) == len(vertices) and (
+        face_nrm.size == 0 or np.array_equal(face_nrm, faces)
+    ):
+        normals = vn
+
+    def per_face(changes):
+        at = np.array([c[0] for c in changes], dtype=np.int64)
+        val = np.array([c[1] for c in changes], dtype=np.int32)
+        return val[np.searchsorted(at, face_line, side="right") - 1]
+
+    return ObjMesh(
+        vertices=vertices,
+        faces=faces,
+        normals=normals,
+        vertex_colors=colors,
+        lines=polylines,
+        groups=groups,
+        face_group=per_face(group_changes) if groups else None,
+        materials=materials,
+        face_material=per_face(mat_changes) if materials else None,
+    )
+
+
+def _bulk_tokens(lines, idx, width):
+    """Tokens of the lines ``idx`` as an (n, width) list when every line has exactly ``width`` tokens."""
+    toks = " ".join([lines[i] for i in idx]).split()
+    n = len(idx)
+    if len(toks) != n * width:
+        return None
+    key = toks[0]
+    if toks[0::width].count(key) != n:
+        return None
+    return toks
+
+
+def _bulk_floats(lines, idx, want, path, what):
+    """Numbers after the keyword of the lines ``idx`` as an (n, k) float64 array, k in ``want``."""
+    for width in sorted(want):
+        toks = _bulk_tokens(lines, idx, width + 1)
+        if toks is None:
+            continue
+        try:
+            arr = np.array(toks, dtype=object).reshape(len(idx), width + 1)[:, 1:].astype(np.float64)
+        except ValueError:
+            break
+        if np.isfinite(arr).all():
+            return arr
+        break
+    return _floats([lines[i].split()[1:] for i in idx], want, path, [i + 1 for i in idx], what)
+
+
+def _read_faces(lines, f_idx, v_line, vn_line, path):
+    """Triangles of the ``f`` lines, in file order: (faces (m,3), normal refs (m,3), line index (m,))."""
+    if not f_idx:
+        z = np.zeros((0, 3), np.int32)
+        return z, z.astype(np.int64), np.zeros(0, np.int64)
+    line = np.asarray(f_idx, dtype=np.int64)
+    toks = _bulk_tokens(lines, f_idx, 4)
+    if toks is not None and not any("/" in t for t in toks):
+        try:
+            tri = np.array(toks, dtype=object).reshape(-1, 4)[:, 1:].astype(np.int64)
+        except ValueError:
+            tri = None
+        if tri is not None:
+            n_v = np.searchsorted(v_line, line)[:, None]  # vertices defined before each face line
+            tri = np.where(tri < 0, tri + n_v + 1, tri)
+            bad = (tri < 1) | (tri > n_v)
+            if not bad.any():
+                return (tri - 1).astype(np.int32), np.full_like(tri, -1), line
+    # general path: slashes, polygons, or an error to report with its line
+    out_tri, out_nrm, out_line = [], [], []
+    for i in f_idx:
+        r = lines[i].split()
+        if len(r) < 4:
+            raise FormatError(path, i + 1, "at least 3 vertex references after 'f'", shorten(lines[i]))
+        n_v, n_vn = int(np.searchsorted(v_line, i)), int(np.searchsorted(vn_line, i))
+        refs = [_parse_ref(t, n_v, n_vn, path, i + 1) for t in r[1:]]
+        for k in range(1, len(refs) - 1):
+            out_tri.append((refs[0][0], refs[k][0], refs[k + 1][0]))
+            out_nrm.append((refs[0][1], refs[k][1], refs[k + 1][1]))
+            out_line.append(i)
+    return (np.array(out_tri, np.int32).reshape(-1, 3), np.array(out_nrm, np.int64).reshape(-1, 3),
+            np.array(out_line, np.int64))
+
+
+def _fmt_rows(arr: np.ndarray, prefix: str, fmt: str) -> str:
+    if len(arr) == 0:
+        return ""
+    row = prefix + " ".join([fmt] * arr.shape[1]) + "\n"
+    return "".join(row % tuple(r) for r in arr.tolist())
+
+
+def write_obj(path, mesh: ObjMesh, *, header: str | None = None, fmt: str = FLOAT_FMT) -> None:
+    """Write ``mesh`` to ``path`` atomically, vertices in order, faces 1-based.
+
+    Faces are written grouped as stored; a ``g``/``usemtl`` line is emitted where a face's group
+    or material changes. Per-vertex normals are written as ``vn`` with ``f a//a b//b c//c``.
+    """
+    _check_mesh(mesh, path)
+    parts = []
+    if header:
+        parts.extend(f"# {h}\n" for h in header.splitlines())
+    if mesh.vertex_colors is not None:
+        parts.append(_fmt_rows(np.hstack([mesh.vertices, mesh.vertex_colors]), "v ", fmt))
+    else:
+        parts.append(_fmt_rows(mesh.vertices, "v ", fmt))
+    if mesh.normals is not None:
+        parts.append(_fmt_rows(mesh.normals, "vn ", fmt))
+    f1 = (mesh.faces.astype(np.int64) + 1).tolist()
+    face_fmt = "f {0}//{0} {1}//{1} {2}//{2}\n" if mesh.normals is not None else "f {0} {1} {2}\n"
+    grp = mesh.face_group.tolist() if mesh.face_group is not None else None
+    mat = mesh.face_material.tolist() if mesh.face_material is not None else None
+    cur_g = cur_m = -1
+    out = []
+    for i, (a, b, c) in enumerate(f1):
+        if grp is not None and grp[i] != cur_g and grp[i] >= 0:
+            cur_g = grp[i]
+            out.append(f"g {mesh.groups[cur_g]}\n")
+        if mat is not None and mat[i] != cur_m and mat[i] >= 0:
+            cur_m = mat[i]
+            out.append(f"usemtl {mesh.materials[cur_m]}\n")
+        out.append(face_fmt.format(a, b, c))
+    parts.append("".join(out))
+    for pl in mesh.lines:
+        parts.append("l " + " ".join(str(int(i) + 1) for i in pl) + "\n")
+    with atomic_write(path) as fh:
+        fh.write("".join(parts))
+
+
+def _check_mesh(mesh: ObjMesh, path) -> None:
+    n = mesh.n_vertices
+    if not np.isfinite(mesh.vertices).all():
+        raise ValueError(f"{path}: refusing to write non-finite vertex coordinates")
+    if mesh.faces.size and (mesh.faces.min() < 0 or mesh.faces.max() >= n):
+        raise ValueError(f"{path}: face index out of range 0..{n - 1}")
+    for pl in mesh.lines:
+        if len(pl) and (pl.min() < 0 or pl.max() >= n):
+            raise ValueError(f"{path}: polyline index out of range 0..{n - 1}")
+    if mesh.normals is not None and mesh.normals.shape != mesh.vertices.shape:
+        raise ValueError(f"{path}: normals must be (n, 3) like the vertices")
+
+
+def list_obj_sequence(source) -> list[Path]:
+    """The OBJ files of a sequence (folder, glob or single file), in frame order."""
+    return list_sequence(source, ".obj")
+
+
+def read_obj_sequence(source, *, same_topology: bool = True) -> tuple[list[Path], list[ObjMesh]]:
+    """Read every frame of an OBJ sequence.
+
+    With ``same_topology`` (default) every frame must have the first frame's vertex count and
+    faces, else a :class:`FormatError` names the first frame that differs.
+    """
+    paths = list_obj_sequence(source)
+    meshes = [read_obj(p) for p in paths]
+    if same_topology:
+        first = meshes[0]
+        for p, m in zip(paths[1:], meshes[1:]):
+            if m.n_vertices != first.n_vertices:
+                raise FormatError(p, None, f"{first.n_vertices} vertices as in {paths[0].name}",
+                                  str(m.n_vertices))
+            if not m.same_topology(first):
+                raise FormatError(p, None, f"the same faces and polylines as {paths[0].name}",
+                                  "a different topology")
+    return paths, meshes
+
+
+def write_obj_sequence(folder, frames, *, prefix: str = "frame_", start: int = 0, digits: int = 4,
+                       fmt: str = FLOAT_FMT) -> list[Path]:
+    """Write meshes as ``folder/frame_0000.obj``, ... (each file atomic); returns the paths."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for i, mesh in enumerate(frames, start):
+        p = folder / frame_name(i, prefix, ".obj", digits)
+        write_obj(p, mesh, fmt=fmt)
+        out.append(p)
+    return out
