@@ -1,0 +1,133 @@
+"""Rigid body animation (RBA) files: thesis appendix C.3 and figure 8.2. Spec: ``formats/rba.md``.
+
+One file per frame (``rba/0000.rba``, ...), one line per floret present in that frame::
+
+    id pos_x pos_y pos_z scale_x scale_y scale_z up_x up_y up_z right_x right_y right_z
+
+``id`` is the index of an ``rba:`` placement in the accompanying scene file (the order of
+placements in the SCN file is the identity, fig. 8.2). ``#`` starts a comment line.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import atomic_write, frame_name, list_sequence
+from .errors import FormatError, read_lines, shorten
+from .placement import FLOAT_FMT, PREAMBLE_FIELDS, format_preamble, parse_preamble, placement_matrix
+
+__all__ = ["RbaFrame", "read_rba", "write_rba", "read_rba_sequence", "write_rba_sequence", "list_rba_sequence"]
+
+
+@dataclass
+class RbaFrame:
+    """The placements of the florets present in one frame, as structure of arrays.
+
+    Attributes
+    ----------
+    ids : (k,) int32
+        Scene placement indices, in file order (unique).
+    pos, scale, up, right : (k, 3) float64
+    """
+
+    ids: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+    pos: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    scale: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    up: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    right: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+
+    def __post_init__(self):
+        self.ids = np.asarray(self.ids, dtype=np.int32).reshape(-1)
+        for name in ("pos", "scale", "up", "right"):
+            setattr(self, name, np.asarray(getattr(self, name), dtype=np.float64).reshape(-1, 3))
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def index(self, pid: int) -> int | None:
+        """Row of placement ``pid`` in this frame, or None when the floret is not present."""
+        hit = np.nonzero(self.ids == pid)[0]
+        return int(hit[0]) if len(hit) else None
+
+    def matrix(self, row: int) -> np.ndarray:
+        """(4, 4) local-to-scene matrix of row ``row``."""
+        return placement_matrix(self.pos[row], self.scale[row], self.up[row], self.right[row])
+
+
+def read_rba(path, scene=None) -> RbaFrame:
+    """Read one RBA frame.
+
+    Parameters
+    ----------
+    scene : inflo.formats.scn.Scene, optional
+        When given, every id must be the index of an ``rba:`` placement of this scene.
+
+    Raises
+    ------
+    FormatError
+        Wrong number of values, non-numbers, NaN/inf, degenerate frames, a repeated id, or an id
+        that is not an ``rba:`` placement of ``scene``.
+    """
+    ids, rows, seen = [], [], {}
+    for lineno, raw in enumerate(read_lines(path), 1):
+        s = raw.strip()
+        if not s or s[0] == "#":
+            continue
+        toks = s.split()
+        if len(toks) != PREAMBLE_FIELDS:
+            raise FormatError(path, lineno, f"{PREAMBLE_FIELDS} values 'id pos(3) scale(3) up(3) right(3)'",
+                              f"{len(toks)} values")
+        pid, pos, scale, up, right = parse_preamble(toks, path, lineno, "RBA entry")
+        if pid in seen:
+            raise FormatError(path, lineno, f"each id once (id {pid} is on line {seen[pid]})", shorten(toks[0]))
+        seen[pid] = lineno
+        if scene is not None:
+            if pid >= len(scene.placements):
+                raise FormatError(path, lineno, f"an id of the scene's placements (0..{len(scene.placements) - 1})",
+                                  shorten(toks[0]))
+            kind = scene.placements[pid].kind
+            if kind != "rba":
+                raise FormatError(path, lineno, "the id of an 'rba:' placement of the scene",
+                                  f"{pid}, a '{kind}:' placement")
+        ids.append(pid)
+        rows.append(np.concatenate([pos, scale, up, right]))
+    a = np.array(rows, dtype=np.float64).reshape(-1, 12)
+    return RbaFrame(ids, a[:, 0:3], a[:, 3:6], a[:, 6:9], a[:, 9:12])
+
+
+def write_rba(path, frame: RbaFrame, *, header: str | None = None, fmt: str = FLOAT_FMT) -> None:
+    """Write one RBA frame atomically, rows in ``frame`` order, fixed-format numbers."""
+    if len(set(frame.ids.tolist())) != len(frame.ids):
+        raise ValueError(f"{path}: repeated ids in an RBA frame")
+    out = []
+    if header:
+        out.extend(f"# {h}\n" for h in header.splitlines())
+    for k in range(len(frame)):
+        out.append(format_preamble(frame.ids[k], frame.pos[k], frame.scale[k], frame.up[k], frame.right[k], fmt) + "\n")
+    with atomic_write(path) as fh:
+        fh.write("".join(out))
+
+
+def list_rba_sequence(source) -> list[Path]:
+    """The RBA files of a sequence (folder, glob or single file), in frame order."""
+    return list_sequence(source, ".rba")
+
+
+def read_rba_sequence(source, scene=None) -> tuple[list[Path], list[RbaFrame]]:
+    """Read every frame of an RBA sequence (each checked against ``scene`` when given)."""
+    paths = list_rba_sequence(source)
+    return paths, [read_rba(p, scene) for p in paths]
+
+
+def write_rba_sequence(folder, frames, *, start: int = 0, digits: int = 4, fmt: str = FLOAT_FMT) -> list[Path]:
+    """Write frames as ``folder/0000.rba``, ``folder/0001.rba``, ... (each atomic)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for i, fr in enumerate(frames, start):
+        p = folder / frame_name(i, "", ".rba", digits)
+        write_rba(p, fr, fmt=fmt)
+        paths.append(p)
+    return paths
