@@ -157,8 +157,9 @@ def read_obj(path) -> ObjMesh:
     """
     lines = read_lines(path)
     heads = [l[:2] for l in lines]
-    v_idx = [i for i, h in enumerate(heads) if h == "v " or h == "v\t"]
-    f_idx = [i for i, h in enumerate(heads) if h == "f " or h == "f\t"]
+    h = np.array(heads) if heads else np.zeros(0, "U2")
+    v_idx = np.nonzero((h == "v ") | (h == "v\t"))[0].tolist()
+    f_idx = np.nonzero((h == "f ") | (h == "f\t"))[0].tolist()
     vn_idx = []
 
     # the other statements, in file order: groups, materials, polylines, unknown keywords
@@ -249,9 +250,13 @@ def read_obj(path) -> ObjMesh:
     )
 
 
-def _bulk_tokens(lines, idx, width):
-    """Tokens of the lines ``idx`` as an (n, width) list when every line has exactly ``width`` tokens."""
-    toks = " ".join([lines[i] for i in idx]).split()
+def _bulk_tokens(lines, idx, width, forbid: str | None = None):
+    """Tokens of the lines ``idx`` as a flat list when every line has exactly ``width`` tokens
+    (and none contains ``forbid``); None otherwise."""
+    text = " ".join([lines[i] for i in idx])
+    if forbid is not None and forbid in text:
+        return None
+    toks = text.split()
     n = len(idx)
     if len(toks) != n * width:
         return None
@@ -283,8 +288,8 @@ def _read_faces(lines, f_idx, v_line, vn_line, path):
         z = np.zeros((0, 3), np.int32)
         return z, z.astype(np.int64), np.zeros(0, np.int64)
     line = np.asarray(f_idx, dtype=np.int64)
-    toks = _bulk_tokens(lines, f_idx, 4)
-    if toks is not None and not any("/" in t for t in toks):
+    toks = _bulk_tokens(lines, f_idx, 4, forbid="/")
+    if toks is not None:
         try:
             tri = np.array(toks, dtype=object).reshape(-1, 4)[:, 1:].astype(np.int64)
         except ValueError:

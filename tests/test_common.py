@@ -1,0 +1,79 @@
+"""Shared conventions: CLI error handling and exit codes, atomic writes, sequence listing, number parsing."""
+from __future__ import annotations
+
+import click
+import pytest
+from click.testing import CliRunner
+
+from inflo.formats.atomic import atomic_write, list_sequence
+from inflo.formats.errors import FormatError, InputError, parse_float, read_lines
+from inflo.tools.common.cli import inflo_command
+
+from conftest import no_partial_files
+
+
+def make_cli(exc):
+    @inflo_command("demo")
+    @click.argument("out", type=click.Path())
+    def main(out, quiet, debug):
+        with atomic_write(out) as fh:
+            fh.write("half a file")
+            raise exc
+
+    return main
+
+
+def test_bad_input_is_one_line_exit_2(tmp_path):
+    res = CliRunner().invoke(make_cli(FormatError("in.scn", 7, "13 values", "12 values")), [str(tmp_path / "o.txt")])
+    assert res.exit_code == 2
+    assert res.output.strip() == "demo: error: in.scn:7: expected 13 values, found 12 values"
+    assert not (tmp_path / "o.txt").exists() and no_partial_files(tmp_path)
+
+
+def test_failed_run_is_one_line_exit_1_and_debug_shows_traceback(tmp_path):
+    res = CliRunner().invoke(make_cli(RuntimeError("solver diverged")), [str(tmp_path / "o.txt")])
+    assert res.exit_code == 1 and len(res.output.strip().splitlines()) == 1
+    assert "solver diverged" in res.output and "--debug" in res.output
+    res = CliRunner().invoke(make_cli(RuntimeError("solver diverged")), [str(tmp_path / "o.txt"), "--debug"])
+    assert isinstance(res.exception, RuntimeError)
+    assert not (tmp_path / "o.txt").exists() and no_partial_files(tmp_path)
+
+
+def test_interrupt_exit_130_keeps_no_partial(tmp_path):
+    res = CliRunner().invoke(make_cli(KeyboardInterrupt()), [str(tmp_path / "o.txt")])
+    assert res.exit_code == 130 and no_partial_files(tmp_path) and not (tmp_path / "o.txt").exists()
+
+
+def test_atomic_write_replaces_only_when_complete(tmp_path):
+    p = tmp_path / "a.txt"
+    p.write_text("old")
+    with pytest.raises(ValueError):
+        with atomic_write(p) as fh:
+            fh.write("new")
+            raise ValueError
+    assert p.read_text() == "old"
+    with atomic_write(p) as fh:
+        fh.write("new")
+    assert p.read_text() == "new" and no_partial_files(tmp_path)
+
+
+def test_list_sequence_natural_order_and_hidden(tmp_path):
+    for n in ["f_10.obj", "f_2.obj", "f_1.obj", ".f_3.obj.part", "notes.txt"]:
+        (tmp_path / n).write_text("")
+    assert [p.name for p in list_sequence(tmp_path, ".obj")] == ["f_1.obj", "f_2.obj", "f_10.obj"]
+    with pytest.raises(InputError):
+        list_sequence(tmp_path / "missing", ".obj")
+
+
+@pytest.mark.parametrize("tok", ["nan", "NaN", "inf", "-inf", "1e999"])
+def test_parse_float_rejects_non_finite(tok):
+    with pytest.raises(FormatError, match="finite"):
+        parse_float(tok, "f.txt", 3)
+
+
+def test_read_lines_errors(tmp_path):
+    with pytest.raises(InputError, match="is a folder"):
+        read_lines(tmp_path)
+    (tmp_path / "b").write_bytes(b"ok\n\x00\x01")
+    with pytest.raises(FormatError, match=r"b:2: expected text, found a NUL byte"):
+        read_lines(tmp_path / "b")
