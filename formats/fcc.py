@@ -1,0 +1,983 @@
+"""Canopy composer parameter file ``.fcc`` (thesis appendix C.1): reader, writer, reference check.
+
+The Floral Canopy Composer (``fccompose``) is configured by one ``key: value`` text file naming the
+scene (SCN) files, the floret animations and OBJs by id, the solver and collision parameters, the
+collision lattice and the viewer's camera and light. The spec page is ``formats/fcc.md``; it lists
+every key with its type, unit and default.
+
+Parsing (:func:`read_fcc`) does not touch the files the parameters name, so it can be tested without
+them; :func:`check_references` checks separately that every referenced file or folder exists.
+"""
+from __future__ import annotations
+
+import difflib
+import glob
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Mapping
+
+from .atomic import write_text_atomic
+from .errors import FormatError, InputError, parse_float, parse_int, read_lines, shorten
+
+__all__ = [
+    "AnimationEntry",
+    "CameraParams",
+    "CanopyParams",
+    "FilePath",
+    "LatticeParams",
+    "MissingReferenceError",
+    "RigidBodyAnimationEntry",
+    "KNOWN_KEYS",
+    "check_references",
+    "format_fcc",
+    "read_fcc",
+    "write_fcc",
+]
+
+Vec3 = tuple[float, float, float]
+
+
+# --------------------------------------------------------------------------------------------------
+# Data model
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class FilePath:
+    """A path named in a ``.fcc`` file.
+
+    Parameters
+    ----------
+    raw : str
+        The path exactly as written in the file (``./lilyAnimation/``). Only ``raw`` takes part
+        in equality: two parameter sets are equal when their files say the same thing.
+    resolved : pathlib.Path
+        ``raw`` made absolute against the folder of the ``.fcc`` file (an absolute ``raw`` stays as
+        it is), normalized (``os.path.abspath``). Not compared.
+    line : int or None
+        1-based line of the ``.fcc`` file that named it; None when built in code. Not compared.
+    """
+
+    raw: str
+    resolved: Path = field(default=None, compare=False)  # type: ignore[assignment]
+    line: int | None = field(default=None, compare=False)
+
+    def __post_init__(self):
+        if self.resolved is None:
+            object.__setattr__(self, "resolved", Path(os.path.abspath(self.raw)))
+
+    @classmethod
+    def at(cls, raw: str, base_dir=None, line: int | None = None) -> "FilePath":
+        """``raw`` resolved against ``base_dir`` (the current folder when None)."""
+        base = os.getcwd() if base_dir is None else os.fspath(base_dir)
+        return cls(raw, Path(os.path.abspath(os.path.join(base, raw))), line)
+
+
+@dataclass(frozen=True)
+class AnimationEntry:
+    """An ``animation:`` or ``obj:`` line: floret geometry that SCN placements refer to by id.
+
+    Parameters
+    ----------
+    id : int
+        Non-negative id, unique across animation, obj and rigid body animation entries.
+    scale : tuple of 3 float
+        Initial scale in x, y, z applied to the geometry on load (each > 0).
+    path : FilePath
+        ``kind == 'animation'``: a folder (or glob) of an OBJ sequence; ``kind == 'obj'``: one OBJ.
+    kind : {'animation', 'obj'}
+        Which key named it.
+    line : int or None
+        Line of the ``.fcc`` file (not compared).
+    """
+
+    id: int
+    scale: Vec3
+    path: FilePath
+    kind: str = "animation"
+    line: int | None = field(default=None, compare=False)
+
+    def __post_init__(self):
+        if self.kind not in ("animation", "obj"):
+            raise ValueError(f"AnimationEntry.kind must be 'animation' or 'obj', not {self.kind!r}")
+        object.__setattr__(self, "scale", tuple(float(s) for s in self.scale))
+
+
+@dataclass(frozen=True)
+class RigidBodyAnimationEntry:
+    """A ``rigid body animation:`` line: an RBA folder and the SCN file whose placements it moves.
+
+    Parameters
+    ----------
+    id : int
+        Non-negative id, unique across animation, obj and rigid body animation entries.
+    scale : tuple of 3 float
+        Initial scale in x, y, z (each > 0).
+    rba_folder : FilePath
+        Folder of ``NNNN.rba`` files (thesis app. C.3), one per frame.
+    scene_path : FilePath
+        The SCN file (app. C.2) whose placements the RBA entries move (its order gives the RBA ids).
+    line : int or None
+        Line of the ``.fcc`` file (not compared).
+    """
+
+    id: int
+    scale: Vec3
+    rba_folder: FilePath
+    scene_path: FilePath
+    line: int | None = field(default=None, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "scale", tuple(float(s) for s in self.scale))
+
+
+@dataclass(frozen=True)
+class LatticeParams:
+    """The collision lattice (broad phase) keys of C.1.
+
+    Parameters
+    ----------
+    size_multiply : tuple of 3 float
+        Scale of the automatically fitted bounding box in x, y, z (each > 0). Default (1, 1, 1).
+    make_cube : bool
+        Make the box a cube of its largest side. Default False.
+    origin : tuple of 3 float
+        Minimum corner of the box, scene units, used when ``auto_bounds`` is False.
+        Default (-5, -5, -5).
+    divisions : tuple of 3 int
+        Cells in x, y, z (each >= 1). Default (100, 100, 100).
+    dimensions : tuple of 3 float
+        Box size in x, y, z, scene units (each > 0), used when ``auto_bounds`` is False.
+        Default (10, 10, 10).
+    auto_bounds : bool
+        Fit the box to the geometry (times ``size_multiply``). Default True.
+    """
+
+    size_multiply: Vec3 = (1.0, 1.0, 1.0)
+    make_cube: bool = False
+    origin: Vec3 = (-5.0, -5.0, -5.0)
+    divisions: tuple[int, int, int] = (100, 100, 100)
+    dimensions: Vec3 = (10.0, 10.0, 10.0)
+    auto_bounds: bool = True
+
+    def __post_init__(self):
+        for name in ("size_multiply", "origin", "dimensions"):
+            object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
+        object.__setattr__(self, "divisions", tuple(int(v) for v in self.divisions))
+
+
+@dataclass(frozen=True)
+class CameraParams:
+    """The interactive viewer's camera and light keys of C.1, kept for ``canopy-render``.
+
+    ``None`` means "automatic": ``canopy-render`` frames the geometry itself.
+
+    Parameters
+    ----------
+    position, lookat : tuple of 3 float or None
+        Eye and target, scene units. Default None (automatic framing).
+    up : tuple of 3 float
+        Up vector (not zero). Default (0, 1, 0): the floret axis.
+    pan_speed, zoom_speed, rotate_speed : float
+        Interactive speeds (>= 0), unused by inflo's headless tools. Default 1.
+    near, far : float or None
+        Clip distances (> 0, far > near). Default None (from the scene bounds).
+    fov_deg : float
+        Vertical field of view, degrees, in (0, 180). Default 45.
+    light_position : tuple of 3 float or None
+        Light position, scene units. Default None (a light at the eye).
+    shadow_frustum : tuple of 6 float or None
+        left, right, top, bottom, back, front of the shadow map frustum. Default None.
+    """
+
+    position: Vec3 | None = None
+    up: Vec3 = (0.0, 1.0, 0.0)
+    lookat: Vec3 | None = None
+    pan_speed: float = 1.0
+    zoom_speed: float = 1.0
+    rotate_speed: float = 1.0
+    near: float | None = None
+    far: float | None = None
+    fov_deg: float = 45.0
+    light_position: Vec3 | None = None
+    shadow_frustum: tuple[float, float, float, float, float, float] | None = None
+
+    def __post_init__(self):
+        for name in ("position", "up", "lookat", "light_position", "shadow_frustum"):
+            v = getattr(self, name)
+            if v is not None:
+                object.__setattr__(self, name, tuple(float(x) for x in v))
+
+
+@dataclass(frozen=True)
+class CanopyParams:
+    """Everything a ``.fcc`` file says (thesis app. C.1); field defaults are the documented ones.
+
+    Parameters
+    ----------
+    solver_iterations : int
+        ``solver iterations``: PBD iterations over internal constraints per step (>= 0). 50.
+    collision_iterations : int
+        ``collision solver iterations`` (alias ``collision iterations``): iterations over collision
+        constraints per step (>= 0). 10.
+    max_collision_retries : int
+        ``max collision retries``: re-detect/resolve rounds when a step is still not collision-free
+        (>= 0). 20.
+    k_stretch, k_bend, k_collision : float
+        Global stiffness in [0, 1] of distance, bending and collision constraints. 0.99, 0.99, 1.0.
+    spacing : float
+        Collision thickness h, scene units (>= 0). 0.005.
+    scene_scale : tuple of 3 float
+        ``scene scale factor``: scale of all loaded geometry in x, y, z (each > 0). (1, 1, 1).
+    updates_per_frame : int
+        Simulation steps per frame (>= 1). 1.
+    run_frames : int or None
+        ``run for number of frames`` (>= 0). None: fccompose runs to the end of the longest
+        animation/RBA sequence.
+    sanity_check_every : int
+        ``sanity check per frames``: exact intersection test every N frames; 0 never. 50.
+    output_frames_number : int or None
+        ``output animation frames number``: write an OBJ every N frames (>= 1). None: not given.
+    output_obj_skip : int or None
+        ``output animation obj per frames``: frames skipped between written OBJs (>= 0). None.
+    lattice : LatticeParams
+        Collision lattice keys.
+    color_map, material_map : FilePath or None
+        ``color map file location``, ``material map file location``. None.
+    scene_files : tuple of FilePath
+        ``scene file path`` lines (the key may repeat, thesis 8 f). Empty.
+    animations : tuple of AnimationEntry
+        ``animation`` and ``obj`` lines in file order. Empty.
+    rigid_body_animations : tuple of RigidBodyAnimationEntry
+        ``rigid body animation`` lines in file order. Empty.
+    weights : mapping of int to FilePath
+        ``weight`` lines: id of an animation/obj entry -> file of fixed vertex ids. Empty.
+    bending_stiffness, distance_stiffness : mapping of int to float
+        Per-id stiffness in [0, 1] replacing ``k_bend`` / ``k_stretch``. Empty.
+    animation_output_folder : FilePath or None
+        ``animation output folder location``; the CLI's ``-o`` wins. None.
+    obj_output_file : FilePath or None
+        ``obj output file path``: the OBJ written for the current frame. None.
+    camera : CameraParams
+        Viewer keys (camera, light, shadow).
+    source : pathlib.Path or None
+        The file read (not compared).
+    lines : mapping of str to int
+        Canonical key -> line of its last occurrence in ``source`` (not compared).
+    """
+
+    solver_iterations: int = 50
+    collision_iterations: int = 10
+    max_collision_retries: int = 20
+    k_stretch: float = 0.99
+    k_bend: float = 0.99
+    k_collision: float = 1.0
+    spacing: float = 0.005
+    scene_scale: Vec3 = (1.0, 1.0, 1.0)
+    updates_per_frame: int = 1
+    run_frames: int | None = None
+    sanity_check_every: int = 50
+    output_frames_number: int | None = None
+    output_obj_skip: int | None = None
+    lattice: LatticeParams = field(default_factory=LatticeParams)
+    color_map: FilePath | None = None
+    material_map: FilePath | None = None
+    scene_files: tuple[FilePath, ...] = ()
+    animations: tuple[AnimationEntry, ...] = ()
+    rigid_body_animations: tuple[RigidBodyAnimationEntry, ...] = ()
+    weights: Mapping[int, FilePath] = field(default_factory=dict)
+    bending_stiffness: Mapping[int, float] = field(default_factory=dict)
+    distance_stiffness: Mapping[int, float] = field(default_factory=dict)
+    animation_output_folder: FilePath | None = None
+    obj_output_file: FilePath | None = None
+    camera: CameraParams = field(default_factory=CameraParams)
+    source: Path | None = field(default=None, compare=False)
+    lines: Mapping[str, int] = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        for name in ("scene_files", "animations", "rigid_body_animations"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+        for name in ("weights", "bending_stiffness", "distance_stiffness", "lines"):
+            object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
+        object.__setattr__(self, "scene_scale", tuple(float(v) for v in self.scene_scale))
+
+    @property
+    def output_every(self) -> int:
+        """Frames between written OBJs: ``output animation frames number``, else the
+        ``output animation obj per frames`` skip + 1, else 1."""
+        if self.output_frames_number is not None:
+            return self.output_frames_number
+        if self.output_obj_skip is not None:
+            return self.output_obj_skip + 1
+        return 1
+
+    def entry(self, id: int) -> AnimationEntry | RigidBodyAnimationEntry | None:
+        """The animation, obj or rigid body animation entry with this id, or None."""
+        for e in self.animations:
+            if e.id == id:
+                return e
+        for e in self.rigid_body_animations:
+            if e.id == id:
+                return e
+        return None
+
+    def stiffness(self, id: int) -> tuple[float, float]:
+        """(distance, bending) stiffness for animation/obj ``id``: its own, else the global one."""
+        return (
+            self.distance_stiffness.get(id, self.k_stretch),
+            self.bending_stiffness.get(id, self.k_bend),
+        )
+
+
+# --------------------------------------------------------------------------------------------------
+# Keys
+# --------------------------------------------------------------------------------------------------
+
+#: Canonical keys in the order the writer writes them (the thesis's C.1 list order, with
+#: ``max collision retries`` from its example placed after the collision iterations).
+KNOWN_KEYS: tuple[str, ...] = (
+    "solver iterations",
+    "collision solver iterations",
+    "max collision retries",
+    "kStretch",
+    "kBend",
+    "kCollision",
+    "spacing",
+    "scene scale factor",
+    "updates per frame",
+    "run for number of frames",
+    "sanity check per frames",
+    "output animation frames number",
+    "output animation obj per frames",
+    "lattice size multiply",
+    "lattice make cube",
+    "origin",
+    "divisions",
+    "dimensions",
+    "lattice auto bounds",
+    "color map file location",
+    "material map file location",
+    "scene file path",
+    "animation",
+    "obj",
+    "rigid body animation",
+    "weight",
+    "bending stiffness",
+    "distance stiffness",
+    "animation output folder location",
+    "obj output file path",
+    "camera position",
+    "camera up",
+    "camera lookat",
+    "camera pan speed",
+    "camera zoom speed",
+    "camera rotate speed",
+    "near plane",
+    "far plane",
+    "camera fov",
+    "light position",
+    "shadow frustrum",
+)
+
+#: Other spellings -> canonical key.
+ALIASES: Mapping[str, str] = MappingProxyType(
+    {
+        "collision iterations": "collision solver iterations",  # the thesis's example file
+        "shadow frustum": "shadow frustrum",
+    }
+)
+
+#: Keys that may appear more than once.
+REPEATABLE = frozenset(
+    {
+        "scene file path",
+        "animation",
+        "obj",
+        "rigid body animation",
+        "weight",
+        "bending stiffness",
+        "distance stiffness",
+    }
+)
+
+
+def _norm(key: str) -> str:
+    return " ".join(key.split()).lower()
+
+
+_LOOKUP: dict[str, str] = {_norm(k): k for k in KNOWN_KEYS}
+_LOOKUP.update({_norm(a): c for a, c in ALIASES.items()})
+_SUGGEST: dict[str, str] = {_norm(k): k for k in (*KNOWN_KEYS, *ALIASES)}
+
+_SEP = re.compile(r"[,\s]+")
+_C_FLOAT = re.compile(r"^[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?[fF]$")
+_TRUE = {"true", "1", "yes", "on"}
+_FALSE = {"false", "0", "no", "off"}
+
+
+def _suggest(key: str) -> str:
+    close = difflib.get_close_matches(_norm(key), list(_SUGGEST), n=1, cutoff=0.6)
+    if close:
+        return f"a known key (did you mean {_SUGGEST[close[0]]!r}?)"
+    return "a known key (see formats/fcc.md)"
+
+
+# --------------------------------------------------------------------------------------------------
+# Reader
+# --------------------------------------------------------------------------------------------------
+
+
+class _Reader:
+    """One pass over the lines of a .fcc file, collecting fields for CanopyParams."""
+
+    def __init__(self, path):
+        self.path = os.fspath(path)
+        self.base = os.path.dirname(os.path.abspath(self.path))
+        self.values: dict[str, object] = {}
+        self.lattice: dict[str, object] = {}
+        self.camera: dict[str, object] = {}
+        self.first_line: dict[str, int] = {}
+        self.last_line: dict[str, int] = {}
+        self.scene_files: list[FilePath] = []
+        self.animations: list[AnimationEntry] = []
+        self.rbas: list[RigidBodyAnimationEntry] = []
+        self.id_lines: dict[int, tuple[str, int]] = {}
+        self.weights: dict[int, FilePath] = {}
+        self.bending: dict[int, float] = {}
+        self.distance: dict[int, float] = {}
+        self.per_id_lines: dict[tuple[str, int], int] = {}
+
+    # -- value helpers -------------------------------------------------------------------------
+
+    def err(self, line, expected, found):
+        return FormatError(self.path, line, expected, found)
+
+    def tokens(self, value: str) -> list[str]:
+        return [t for t in _SEP.split(value.strip()) if t]
+
+    def number(self, tok: str, line: int, what: str) -> float:
+        if _C_FLOAT.match(tok):
+            tok = tok[:-1]
+        return parse_float(tok, self.path, line, what)
+
+    def count_tokens(self, key, value, line, n, what) -> list[str]:
+        toks = self.tokens(value)
+        if len(toks) != n:
+            found = shorten(value) if value.strip() else "nothing"
+            raise self.err(line, f"{what} after '{key}:'", f"{len(toks)} value(s): {found}")
+        return toks
+
+    def floats(self, key, value, line, n, *, positive=False, nonneg=False) -> tuple[float, ...]:
+        what = f"{n} number{'s' if n > 1 else ''}" + (
+            " (> 0)" if positive else " (>= 0)" if nonneg else ""
+        )
+        toks = self.count_tokens(key, value, line, n, what)
+        out = []
+        for t in toks:
+            v = self.number(t, line, f"a number for '{key}'")
+            if positive and not v > 0:
+                raise self.err(line, f"a number > 0 for '{key}'", shorten(t))
+            if nonneg and v < 0:
+                raise self.err(line, f"a number >= 0 for '{key}'", shorten(t))
+            out.append(v)
+        return tuple(out)
+
+    def integer(self, key, tok, line, minimum) -> int:
+        v = parse_int(tok, self.path, line, f"an integer for '{key}'")
+        if v < minimum:
+            raise self.err(line, f"an integer >= {minimum} for '{key}'", shorten(tok))
+        return v
+
+    def count(self, key, value, line, minimum) -> int:
+        (tok,) = self.count_tokens(key, value, line, 1, f"1 integer (>= {minimum})")
+        return self.integer(key, tok, line, minimum)
+
+    def stiffness_value(self, key, tok, line) -> float:
+        v = self.number(tok, line, f"a stiffness in [0, 1] for '{key}'")
+        if not 0.0 <= v <= 1.0:
+            raise self.err(line, f"a stiffness in [0, 1] for '{key}'", shorten(tok))
+        return v
+
+    def boolean(self, key, value, line) -> bool:
+        (tok,) = self.count_tokens(key, value, line, 1, "true or false")
+        low = tok.lower()
+        if low in _TRUE:
+            return True
+        if low in _FALSE:
+            return False
+        raise self.err(line, f"true or false for '{key}'", shorten(tok))
+
+    def filepath(self, key, raw, line) -> FilePath:
+        raw = raw.strip()
+        if not raw:
+            raise self.err(line, f"a path after '{key}:'", "nothing")
+        return FilePath.at(raw, self.base, line)
+
+    def ident(self, key, tok, line) -> int:
+        return self.integer(key, tok, line, 0)
+
+    def claim_id(self, key, id_, tok, line):
+        if id_ in self.id_lines:
+            other_key, other_line = self.id_lines[id_]
+            raise self.err(
+                line,
+                f"an id not used before (id {id_} already names the '{other_key}' entry "
+                f"on line {other_line})",
+                shorten(tok),
+            )
+        self.id_lines[id_] = (key, line)
+
+    # -- one line ------------------------------------------------------------------------------
+
+    def line(self, number: int, text: str):
+        body = text.split("#", 1)[0].strip()
+        if not body:
+            return
+        if ":" not in body:
+            raise self.err(number, "'key: value'", shorten(body))
+        raw_key, value = body.split(":", 1)
+        if not raw_key.strip():
+            raise self.err(number, "a key before ':'", shorten(body))
+        key = _LOOKUP.get(_norm(raw_key))
+        if key is None:
+            raise self.err(number, _suggest(raw_key), shorten(raw_key))
+        if key not in REPEATABLE and key in self.first_line:
+            raise self.err(
+                number,
+                f"each key once ('{key}' is already set on line {self.first_line[key]})",
+                shorten(body),
+            )
+        self.first_line.setdefault(key, number)
+        self.last_line[key] = number
+        self.handle(key, value, number)
+
+    def handle(self, key: str, value: str, n: int):  # noqa: C901 - one branch per key
+        v = self.values
+        if key == "solver iterations":
+            v["solver_iterations"] = self.count(key, value, n, 0)
+        elif key == "collision solver iterations":
+            v["collision_iterations"] = self.count(key, value, n, 0)
+        elif key == "max collision retries":
+            v["max_collision_retries"] = self.count(key, value, n, 0)
+        elif key in ("kStretch", "kBend", "kCollision"):
+            (tok,) = self.count_tokens(key, value, n, 1, "1 stiffness in [0, 1]")
+            name = {"kStretch": "k_stretch", "kBend": "k_bend", "kCollision": "k_collision"}[key]
+            v[name] = self.stiffness_value(key, tok, n)
+        elif key == "spacing":
+            (v["spacing"],) = self.floats(key, value, n, 1, nonneg=True)
+        elif key == "scene scale factor":
+            v["scene_scale"] = self.floats(key, value, n, 3, positive=True)
+        elif key == "updates per frame":
+            v["updates_per_frame"] = self.count(key, value, n, 1)
+        elif key == "run for number of frames":
+            v["run_frames"] = self.count(key, value, n, 0)
+        elif key == "sanity check per frames":
+            v["sanity_check_every"] = self.count(key, value, n, 0)
+        elif key == "output animation frames number":
+            v["output_frames_number"] = self.count(key, value, n, 1)
+        elif key == "output animation obj per frames":
+            v["output_obj_skip"] = self.count(key, value, n, 0)
+        elif key == "lattice size multiply":
+            self.lattice["size_multiply"] = self.floats(key, value, n, 3, positive=True)
+        elif key == "lattice make cube":
+            self.lattice["make_cube"] = self.boolean(key, value, n)
+        elif key == "origin":
+            self.lattice["origin"] = self.floats(key, value, n, 3)
+        elif key == "divisions":
+            toks = self.tokens(value)
+            if len(toks) not in (1, 3):
+                found = shorten(value) if value.strip() else "nothing"
+                raise self.err(
+                    n, "1 or 3 integers (>= 1) after 'divisions:'", f"{len(toks)} value(s): {found}"
+                )
+            d = tuple(self.integer(key, t, n, 1) for t in toks)
+            self.lattice["divisions"] = d * 3 if len(d) == 1 else d
+        elif key == "dimensions":
+            self.lattice["dimensions"] = self.floats(key, value, n, 3, positive=True)
+        elif key == "lattice auto bounds":
+            self.lattice["auto_bounds"] = self.boolean(key, value, n)
+        elif key == "color map file location":
+            v["color_map"] = self.filepath(key, value, n)
+        elif key == "material map file location":
+            v["material_map"] = self.filepath(key, value, n)
+        elif key == "scene file path":
+            self.scene_files.append(self.filepath(key, value, n))
+        elif key in ("animation", "obj"):
+            parts = [t for t in _SEP.split(value.strip(), maxsplit=4)]
+            if len(parts) < 5 or not parts[4].strip():
+                raise self.err(
+                    n,
+                    f"'{key}: id x y z path' (an id, 3 scales, a path)",
+                    shorten(value) if value.strip() else "nothing",
+                )
+            id_ = self.ident(key, parts[0], n)
+            scale = self.floats(key, " ".join(parts[1:4]), n, 3, positive=True)
+            path = self.filepath(key, parts[4], n)
+            self.claim_id(key, id_, parts[0], n)
+            self.animations.append(AnimationEntry(id_, scale, path, key, n))
+        elif key == "rigid body animation":
+            toks = self.tokens(value)
+            if len(toks) != 6:
+                raise self.err(
+                    n,
+                    "'rigid body animation: id x y z rba-folder scene-file' (6 values)",
+                    f"{len(toks)} value(s): {shorten(value) if value.strip() else 'nothing'}",
+                )
+            id_ = self.ident(key, toks[0], n)
+            scale = self.floats(key, " ".join(toks[1:4]), n, 3, positive=True)
+            folder = self.filepath(key, toks[4], n)
+            scene = self.filepath(key, toks[5], n)
+            self.claim_id(key, id_, toks[0], n)
+            self.rbas.append(RigidBodyAnimationEntry(id_, scale, folder, scene, n))
+        elif key == "weight":
+            parts = _SEP.split(value.strip(), maxsplit=1)
+            if len(parts) < 2 or not parts[1].strip():
+                raise self.err(
+                    n, "'weight: id path'", shorten(value) if value.strip() else "nothing"
+                )
+            id_ = self.ident(key, parts[0], n)
+            self.per_id(key, id_, parts[0], n)
+            self.weights[id_] = self.filepath(key, parts[1], n)
+        elif key in ("bending stiffness", "distance stiffness"):
+            toks = self.count_tokens(key, value, n, 2, "an id and a stiffness in [0, 1]")
+            id_ = self.ident(key, toks[0], n)
+            s = self.stiffness_value(key, toks[1], n)
+            self.per_id(key, id_, toks[0], n)
+            (self.bending if key == "bending stiffness" else self.distance)[id_] = s
+        elif key == "animation output folder location":
+            v["animation_output_folder"] = self.filepath(key, value, n)
+        elif key == "obj output file path":
+            v["obj_output_file"] = self.filepath(key, value, n)
+        elif key in ("camera position", "camera lookat", "light position"):
+            name = {"camera position": "position", "camera lookat": "lookat",
+                    "light position": "light_position"}[key]
+            self.camera[name] = self.floats(key, value, n, 3)
+        elif key == "camera up":
+            up = self.floats(key, value, n, 3)
+            if not any(up):
+                raise self.err(n, "a non-zero up vector", shorten(value))
+            self.camera["up"] = up
+        elif key in ("camera pan speed", "camera zoom speed", "camera rotate speed"):
+            name = key.split()[1] + "_speed"
+            (self.camera[name],) = self.floats(key, value, n, 1, nonneg=True)
+        elif key in ("near plane", "far plane"):
+            (self.camera[key.split()[0]],) = self.floats(key, value, n, 1, positive=True)
+        elif key == "camera fov":
+            (fov,) = self.floats(key, value, n, 1)
+            if not 0.0 < fov < 180.0:
+                raise self.err(n, "a field of view in (0, 180) degrees", shorten(value))
+            self.camera["fov_deg"] = fov
+        elif key == "shadow frustrum":
+            self.camera["shadow_frustum"] = self.floats(key, value, n, 6)
+        else:  # pragma: no cover - KNOWN_KEYS and this chain are kept in step by the tests
+            raise AssertionError(key)
+
+    def per_id(self, key, id_, tok, line):
+        prev = self.per_id_lines.get((key, id_))
+        if prev is not None:
+            raise self.err(
+                line, f"one '{key}' line per id (id {id_} already has one on line {prev})",
+                shorten(tok),
+            )
+        self.per_id_lines[(key, id_)] = line
+
+    # -- whole-file checks ---------------------------------------------------------------------
+
+    def finish(self) -> CanopyParams:
+        geometry_ids = {e.id for e in self.animations}
+        for key, table in (
+            ("weight", self.weights),
+            ("bending stiffness", self.bending),
+            ("distance stiffness", self.distance),
+        ):
+            for id_ in table:
+                if id_ not in geometry_ids:
+                    raise self.err(
+                        self.per_id_lines[(key, id_)],
+                        f"the id of an 'animation' or 'obj' entry for '{key}'",
+                        f"id {id_}",
+                    )
+        cam = self.camera
+        if "near" in cam and "far" in cam and not cam["far"] > cam["near"]:
+            line = max(self.last_line["near plane"], self.last_line["far plane"])
+            raise self.err(
+                line, "far plane > near plane", f"near {cam['near']!r}, far {cam['far']!r}"
+            )
+        v = self.values
+        if "output_frames_number" in v and "output_obj_skip" in v:
+            if v["output_frames_number"] != v["output_obj_skip"] + 1:
+                line = max(
+                    self.last_line["output animation frames number"],
+                    self.last_line["output animation obj per frames"],
+                )
+                raise self.err(
+                    line,
+                    "'output animation frames number' = 'output animation obj per frames' + 1 "
+                    "when both are given",
+                    f"{v['output_frames_number']} and {v['output_obj_skip']}",
+                )
+        return CanopyParams(
+            **v,
+            lattice=LatticeParams(**self.lattice),
+            scene_files=tuple(self.scene_files),
+            animations=tuple(self.animations),
+            rigid_body_animations=tuple(self.rbas),
+            weights=self.weights,
+            bending_stiffness=self.bending,
+            distance_stiffness=self.distance,
+            camera=CameraParams(**cam),
+            source=Path(os.path.abspath(self.path)),
+            lines=self.last_line,
+        )
+
+
+def read_fcc(path) -> CanopyParams:
+    """Read a canopy composer parameter file (thesis app. C.1).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.fcc`` file. Relative paths inside it are resolved against its folder.
+
+    Returns
+    -------
+    CanopyParams
+        Every key, with the documented default for keys the file does not give.
+
+    Raises
+    ------
+    FormatError
+        A malformed line: unknown key (naming the closest known one), wrong number or type of
+        values, NaN/inf, a stiffness outside [0, 1], a negative count, a repeated key, a duplicate
+        id, a per-id setting for an id no ``animation``/``obj`` line defines.
+    InputError
+        The file is missing or unreadable.
+    """
+    reader = _Reader(path)
+    lines = read_lines(path)
+    if lines and lines[0].startswith("\ufeff"):
+        lines[0] = lines[0][1:]
+    for number, text in enumerate(lines, start=1):
+        reader.line(number, text)
+    return reader.finish()
+
+
+# --------------------------------------------------------------------------------------------------
+# Writer
+# --------------------------------------------------------------------------------------------------
+
+
+def _num(x: float) -> str:
+    """Shortest text that reads back as the same float64 (Python's ``repr``)."""
+    x = float(x)
+    if not math.isfinite(x):
+        raise ValueError(f"cannot write a non-finite number ({x!r}) to a .fcc file")
+    return repr(x)
+
+
+def _vec(values) -> str:
+    return ", ".join(_num(x) for x in values)
+
+
+def _check_raw(raw: str, key: str, *, no_space: bool = False) -> str:
+    bad = "#\n\r" + (" \t," if no_space else "")
+    if not raw or raw != raw.strip() or any(c in raw for c in bad):
+        raise ValueError(
+            f"cannot write path {raw!r} for '{key}': it must be non-empty, without surrounding "
+            f"blanks, '#' or line breaks" + (", spaces or commas" if no_space else "")
+        )
+    return raw
+
+
+def _bool(b: bool) -> str:
+    return "true" if b else "false"
+
+
+def format_fcc(params: CanopyParams) -> str:
+    """The text :func:`write_fcc` writes: every key in a fixed order, unset ones as comments.
+
+    Numbers are written as the shortest text that reads back to the same float64 (``repr``), so
+    write -> read -> write is byte-identical.
+    """
+    p = params
+    out: list[str] = [
+        "# inflo canopy composer parameters (thesis app. C.1); spec: formats/fcc.md",
+        "",
+    ]
+    add = out.append
+
+    def opt(key: str, value: str | None, unset: str):
+        add(f"{key}: {value}" if value is not None else f"# {key}: {unset}")
+
+    add("# constraints")
+    add(f"solver iterations: {int(p.solver_iterations)}")
+    add(f"collision solver iterations: {int(p.collision_iterations)}")
+    add(f"max collision retries: {int(p.max_collision_retries)}")
+    add(f"kStretch: {_num(p.k_stretch)}")
+    add(f"kBend: {_num(p.k_bend)}")
+    add(f"kCollision: {_num(p.k_collision)}")
+    add(f"spacing: {_num(p.spacing)}")
+    add("")
+    add("# simulation")
+    add(f"scene scale factor: {_vec(p.scene_scale)}")
+    add(f"updates per frame: {int(p.updates_per_frame)}")
+    opt("run for number of frames",
+        None if p.run_frames is None else str(int(p.run_frames)), "all frames")
+    add(f"sanity check per frames: {int(p.sanity_check_every)}")
+    opt("output animation frames number",
+        None if p.output_frames_number is None else str(int(p.output_frames_number)), "not set")
+    opt("output animation obj per frames",
+        None if p.output_obj_skip is None else str(int(p.output_obj_skip)), "not set")
+    add("")
+    add("# collision lattice")
+    lat = p.lattice
+    add(f"lattice size multiply: {_vec(lat.size_multiply)}")
+    add(f"lattice make cube: {_bool(lat.make_cube)}")
+    add(f"origin: {_vec(lat.origin)}")
+    add(f"divisions: {', '.join(str(int(d)) for d in lat.divisions)}")
+    add(f"dimensions: {_vec(lat.dimensions)}")
+    add(f"lattice auto bounds: {_bool(lat.auto_bounds)}")
+    add("")
+    add("# files")
+    opt("color map file location",
+        None if p.color_map is None else _check_raw(p.color_map.raw, "color map file location"),
+        "none")
+    opt("material map file location",
+        None if p.material_map is None
+        else _check_raw(p.material_map.raw, "material map file location"),
+        "none")
+    if not p.scene_files:
+        add("# scene file path: none")
+    for f in p.scene_files:
+        add(f"scene file path: {_check_raw(f.raw, 'scene file path')}")
+    for e in p.animations:
+        add(f"{e.kind}: {int(e.id)} {' '.join(_num(s) for s in e.scale)} "
+            f"{_check_raw(e.path.raw, e.kind)}")
+    for r in p.rigid_body_animations:
+        key = "rigid body animation"
+        add(f"{key}: {int(r.id)} {' '.join(_num(s) for s in r.scale)} "
+            f"{_check_raw(r.rba_folder.raw, key, no_space=True)} "
+            f"{_check_raw(r.scene_path.raw, key, no_space=True)}")
+    for id_ in sorted(p.weights):
+        add(f"weight: {int(id_)} {_check_raw(p.weights[id_].raw, 'weight')}")
+    for id_ in sorted(p.bending_stiffness):
+        add(f"bending stiffness: {int(id_)} {_num(p.bending_stiffness[id_])}")
+    for id_ in sorted(p.distance_stiffness):
+        add(f"distance stiffness: {int(id_)} {_num(p.distance_stiffness[id_])}")
+    opt("animation output folder location",
+        None if p.animation_output_folder is None
+        else _check_raw(p.animation_output_folder.raw, "animation output folder location"),
+        "none (fccompose -o)")
+    opt("obj output file path",
+        None if p.obj_output_file is None
+        else _check_raw(p.obj_output_file.raw, "obj output file path"),
+        "none")
+    add("")
+    add("# viewer: camera and light (canopy-render)")
+    c = p.camera
+    opt("camera position", None if c.position is None else _vec(c.position), "automatic")
+    add(f"camera up: {_vec(c.up)}")
+    opt("camera lookat", None if c.lookat is None else _vec(c.lookat), "automatic")
+    add(f"camera pan speed: {_num(c.pan_speed)}")
+    add(f"camera zoom speed: {_num(c.zoom_speed)}")
+    add(f"camera rotate speed: {_num(c.rotate_speed)}")
+    opt("near plane", None if c.near is None else _num(c.near), "automatic")
+    opt("far plane", None if c.far is None else _num(c.far), "automatic")
+    add(f"camera fov: {_num(c.fov_deg)}")
+    opt("light position",
+        None if c.light_position is None else _vec(c.light_position), "automatic")
+    opt("shadow frustrum",
+        None if c.shadow_frustum is None else _vec(c.shadow_frustum), "none")
+    return "\n".join(out) + "\n"
+
+
+def write_fcc(path, params: CanopyParams) -> None:
+    """Write ``params`` to ``path`` atomically (see :func:`format_fcc` for the layout).
+
+    Paths are written as their ``raw`` text, so they stay relative to the folder of the file they
+    came from; write next to the original (or rebuild the :class:`FilePath` values) to keep them
+    pointing at the same files. Raises ValueError for a value the format cannot carry (a path with
+    ``#`` or a line break, a non-finite number).
+    """
+    write_text_atomic(path, format_fcc(params))
+
+
+# --------------------------------------------------------------------------------------------------
+# References
+# --------------------------------------------------------------------------------------------------
+
+
+class MissingReferenceError(InputError):
+    """Files or folders a ``.fcc`` file names that do not exist.
+
+    Attributes
+    ----------
+    source : pathlib.Path or None
+        The ``.fcc`` file the parameters came from.
+    missing : list of tuple (int or None, str, FilePath, str)
+        (line, key, path, what was expected: "file", "folder", ...) for every missing reference,
+        in file order.
+    """
+
+    def __init__(self, source, missing):
+        self.source = source
+        self.missing = missing
+        where = os.fspath(source) if source is not None else "<parameters>"
+        parts = []
+        for line, key, fp, kind in missing:
+            loc = f"{where}:{line}" if line is not None else where
+            parts.append(f"{loc}: '{key}' names {fp.raw!r} ({fp.resolved}), no such {kind}")
+        msg = parts[0]
+        if len(parts) > 1:
+            msg += f" (and {len(parts) - 1} more: " + "; ".join(parts[1:]) + ")"
+        super().__init__(msg)
+
+
+def _exists_folder_or_glob(p: Path) -> bool:
+    if p.is_dir():
+        return True
+    if glob.has_magic(os.fspath(p)):
+        return bool(glob.glob(os.fspath(p)))
+    return False
+
+
+def check_references(params: CanopyParams) -> None:
+    """Check that every file and folder ``params`` names exists.
+
+    Scene files, OBJs, weight files, colour and material maps must be files; animation paths a
+    folder or a glob matching something; RBA paths a folder. Output locations are not checked
+    (fccompose creates them).
+
+    Raises
+    ------
+    MissingReferenceError
+        (an :class:`InputError`) naming the first missing path, the ``.fcc`` line that named it,
+        and how many more are missing; ``.missing`` lists them all.
+    """
+    missing = []
+
+    def need(key, fp: FilePath | None, kind: str, ok):
+        if fp is not None and not ok(fp.resolved):
+            missing.append((fp.line, key, fp, kind))
+
+    need("color map file location", params.color_map, "file", Path.is_file)
+    need("material map file location", params.material_map, "file", Path.is_file)
+    for f in params.scene_files:
+        need("scene file path", f, "file", Path.is_file)
+    for e in params.animations:
+        if e.kind == "obj":
+            need("obj", e.path, "file", Path.is_file)
+        else:
+            need("animation", e.path, "folder or matching glob", _exists_folder_or_glob)
+    for r in params.rigid_body_animations:
+        need("rigid body animation", r.rba_folder, "folder", Path.is_dir)
+        need("rigid body animation", r.scene_path, "file", Path.is_file)
+    for id_ in sorted(params.weights):
+        need("weight", params.weights[id_], "file", Path.is_file)
+    if missing:
+        missing.sort(key=lambda m: (m[0] is None, m[0] or 0))
+        raise MissingReferenceError(params.source, missing)
