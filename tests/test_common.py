@@ -77,3 +77,22 @@ def test_read_lines_errors(tmp_path):
     (tmp_path / "b").write_bytes(b"ok\n\x00\x01")
     with pytest.raises(FormatError, match=r"b:2: expected text, found a NUL byte"):
         read_lines(tmp_path / "b")
+
+
+def test_registry_round_trips_every_suffix(tmp_path):
+    """Each registered format reads back what it wrote, through the suffix registry."""
+    import numpy as np
+
+    from inflo.formats import FORMATS, read_any, write_any
+    from inflo.formats.func import Function
+    from inflo.formats.obj import ObjMesh
+
+    mesh = ObjMesh(np.eye(3), [[0, 1, 2]])
+    write_any(tmp_path / "m.obj", mesh)
+    np.testing.assert_array_equal(read_any(tmp_path / "m.obj").faces, mesh.faces)
+    fn = Function.from_points([[0, 0], [0.5, 1], [1, 0.25]])
+    write_any(tmp_path / "f.func", fn)
+    assert read_any(tmp_path / "f.func") == fn
+    assert {".obj", ".scn", ".rba", ".floret", ".func", ".fset", ".con", ".cset", ".s", ".fcc"} <= set(FORMATS)
+    with pytest.raises(InputError, match="unknown file type '.xyz'"):
+        read_any(tmp_path / "a.xyz")
