@@ -1,0 +1,23 @@
+"""``canopy-render``: headless, CPU-only pictures of OBJ meshes and sequences (moderngl on Mesa EGL).
+
+Modules: :mod:`.render` (the GL renderer: ``render_meshes``, ``render_sequence``, ``Renderer``,
+``RenderOptions``), :mod:`.camera` (``Camera``, named views, automatic framing, ``.fcc`` camera
+keys), :mod:`.colors` (palette, material colours, colour files), :mod:`.sheet` (contact sheets,
+frame numbers), :mod:`.output` (PNG, GIF, MP4 writers, atomic), :mod:`.inputs` (OBJ files and
+sequences as layers), :mod:`.job` (one CLI run), :mod:`.cli` (the command), :mod:`.demo`
+(synthetic flowers for tests and benchmarks).
+"""
+from .camera import Camera, camera_from_fcc, fit_camera
+from .render import GLUnavailable, Renderer, RenderOptions, auto_camera, render_meshes, render_sequence
+
+__all__ = [
+    "Camera",
+    "GLUnavailable",
+    "Renderer",
+    "RenderOptions",
+    "auto_camera",
+    "camera_from_fcc",
+    "fit_camera",
+    "render_meshes",
+    "render_sequence",
+]
