@@ -50,3 +50,18 @@ def test_non_editable_install_runs_every_cli(tmp_path):
                              capture_output=True, text=True, timeout=120)
         assert res.returncode == 0, (name, res.stderr)
         assert "Usage:" in res.stdout
+
+
+def test_every_subpackage_is_listed_in_pyproject():
+    """Packages are listed by hand (package-dir maps formats/ and tools/ into inflo.*); a new
+    subpackage missing from the list would be absent from a non-editable install."""
+    import tomllib
+
+    listed = set(tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    found = {"inflo.formats"}
+    for init in (REPO / "tools").rglob("__init__.py"):
+        if "__pycache__" in init.parts:
+            continue
+        rel = init.parent.relative_to(REPO / "tools").parts
+        found.add(".".join(("inflo", "tools") + rel))
+    assert found == listed, f"missing: {sorted(found - listed)}, stale: {sorted(listed - found)}"
