@@ -12,7 +12,8 @@ import numpy as np
 
 from .atomic import write_text_atomic
 from .errors import parse_float, parse_int, read_lines, shorten
-from .func import _check_name, _Cursor, _fmt
+from ._vlab import _Cursor, _fmt
+from .func import _check_name
 
 __all__ = [
     "BezierPatch",

@@ -22,11 +22,10 @@ import numpy as np
 
 from .atomic import write_text_atomic
 from .errors import parse_float, parse_int, read_lines, shorten
-from .func import (  # shared B-spline evaluator and line cursor of the VLab text readers
+from ._vlab import _Cursor, _fmt, read_gallery
+from .func import (  # shared B-spline evaluator and editor-line parsers of the VLab text readers
     _check_markers,
     _check_name,
-    _Cursor,
-    _fmt,
     _parse_background,
     _parse_markers,
     _parse_name,
@@ -457,17 +456,7 @@ def read_con(path) -> Contour:
 
 def read_cset(path) -> list[Contour]:
     """Read a contour gallery: ``contourgalleryver 1 1``, ``items: N``, then N ``cver`` blocks."""
-    cur = _Cursor(path, read_lines(path))
-    line, text = cur.take("'contourgalleryver 1 1'")
-    if text.split() != ["contourgalleryver", "1", "1"]:
-        raise cur.error(line, "'contourgalleryver 1 1'", shorten(text))
-    line, value = cur.field("items", "'items: N'")
-    n = parse_int(value, cur.path, line, "an integer after 'items:'")
-    if n < 0:
-        raise cur.error(line, "an item count >= 0", shorten(value))
-    contours = [_parse_contour(cur, None) for _ in range(n)]
-    cur.end(f"end of file after {n} items")
-    return contours
+    return read_gallery(path, "contourgalleryver 1 1", lambda cur: _parse_contour(cur, None))
 
 
 # --------------------------------------------------------------------------------------------

@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import write_text_atomic
-from .errors import FormatError, parse_float, parse_int, read_lines, shorten
+from ._vlab import _Cursor, _fmt, read_gallery
+from .errors import parse_float, parse_int, read_lines, shorten
 
 __all__ = [
     "Function",
@@ -327,57 +328,6 @@ class Function:
     __hash__ = object.__hash__
 
 
-# --------------------------------------------------------------------------------------------
-# Line cursor shared by the VLab text readers (func, contour, bezier_surface)
-
-
-class _Cursor:
-    """Walks the non-blank lines of a file; every error names the file and the 1-based line."""
-
-    def __init__(self, path, lines: list[str]):
-        self.path = os.fspath(path)
-        self._items = [(i + 1, s.strip()) for i, s in enumerate(lines) if s.strip()]
-        self._pos = 0
-
-    def error(self, line: int | None, expected: str, found: str) -> FormatError:
-        return FormatError(self.path, line, expected, found)
-
-    def at_end(self) -> bool:
-        return self._pos >= len(self._items)
-
-    def peek(self) -> tuple[int, str] | None:
-        return None if self.at_end() else self._items[self._pos]
-
-    def take(self, expected: str) -> tuple[int, str]:
-        """The next line as (line number, stripped text); at the end of file, an error."""
-        if self.at_end():
-            raise self.error(None, expected, "end of file")
-        item = self._items[self._pos]
-        self._pos += 1
-        return item
-
-    @staticmethod
-    def key_of(text: str) -> str | None:
-        head, sep, _ = text.partition(":")
-        return head.strip() if sep else None
-
-    def at_key(self, key: str) -> bool:
-        nxt = self.peek()
-        return nxt is not None and self.key_of(nxt[1]) == key
-
-    def field(self, key: str, expected: str | None = None) -> tuple[int, str]:
-        """The next line, which must read ``key: value``; returns (line number, value)."""
-        line, text = self.take(expected or f"'{key}: ...'")
-        if self.key_of(text) != key:
-            raise self.error(line, expected or f"'{key}: ...'", shorten(text))
-        return line, text.partition(":")[2].strip()
-
-    def end(self, expected: str = "end of file") -> None:
-        if not self.at_end():
-            line, text = self._items[self._pos]
-            raise self.error(line, expected, shorten(text))
-
-
 def _parse_flag_value(cur: _Cursor, line: int, value: str, key: str) -> bool:
     flag = _FLIP.get(value.lower())
     if flag is None:
@@ -499,27 +449,11 @@ def read_func(path) -> Function:
 
 def read_fset(path) -> list[Function]:
     """Read a function gallery: ``funcgalleryver 1 1``, ``items: N``, then N ``fver 1 1`` blocks."""
-    cur = _Cursor(path, read_lines(path))
-    line, text = cur.take("'funcgalleryver 1 1'")
-    if text.split() != ["funcgalleryver", "1", "1"]:
-        raise cur.error(line, "'funcgalleryver 1 1'", shorten(text))
-    line, value = cur.field("items", "'items: N'")
-    n = parse_int(value, cur.path, line, "an integer after 'items:'")
-    if n < 0:
-        raise cur.error(line, "an item count >= 0", shorten(value))
-    functions = [_parse_func(cur, None) for _ in range(n)]
-    cur.end(f"end of file after {n} items")
-    return functions
+    return read_gallery(path, "funcgalleryver 1 1", lambda cur: _parse_func(cur, None))
 
 
 # --------------------------------------------------------------------------------------------
 # Writing
-
-
-def _fmt(value: float) -> str:
-    """``%.6f``, with negative zero written as zero so equal values give equal text."""
-    text = "%.6f" % value
-    return "0.000000" if text == "-0.000000" else text
 
 
 def format_func(fn: Function) -> str:

@@ -10,14 +10,13 @@ Supported statements: ``v x y z [r g b]``, ``vn``, ``vt`` (skipped), ``f`` with 
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .atomic import atomic_write, frame_name, list_sequence
-from .errors import FormatError, InputError, read_lines, shorten
+from .errors import FormatError, read_lines, shorten
 
 __all__ = [
     "ObjMesh",
