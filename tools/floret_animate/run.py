@@ -1,0 +1,66 @@
+"""``floret-animate`` as a library call: key-pose files in, frame files out."""
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+from inflo.formats.atomic import frame_name
+from inflo.formats.errors import InputError
+from inflo.formats.floret import read_floret, write_floret
+from inflo.formats.func import read_func
+from inflo.tools.common.cli import progress
+
+from .animate import FloretAnimator, check_growth
+
+__all__ = ["animate_files", "write_frames", "FRAME_PREFIX"]
+
+FRAME_PREFIX = "frame_"
+
+
+def _remove_stale(folder: Path, written: list[Path], suffix: str, prefix: str = FRAME_PREFIX) -> None:
+    """Remove ``prefix####suffix`` files of an earlier, longer run that this run did not write."""
+    keep = {p.name for p in written}
+    pat = re.compile(re.escape(prefix) + r"\d+" + re.escape(suffix) + "$")
+    for p in folder.iterdir():
+        if pat.match(p.name) and p.name not in keep:
+            p.unlink()
+
+
+def write_frames(frames, output, quiet: bool = True, n_frames: int | None = None) -> list[Path]:
+    """Write Floret frames as ``output/frame_0000.floret`` ... (atomic); returns the paths."""
+    out = Path(output)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    with progress(frames, length=n_frames, label="floret-animate", quiet=quiet) as bar:
+        for i, fr in enumerate(bar):
+            p = out / frame_name(i, FRAME_PREFIX, ".floret")
+            write_floret(p, fr)
+            written.append(p)
+    _remove_stale(out, written, ".floret")
+    return written
+
+
+def animate_files(key_poses, output, *, n_frames: int = 100, growth_path=None, lu_params=None,
+                  seed: int = 0, quiet: bool = True) -> list[Path]:
+    """Read key poses (and a growth function), write ``n_frames`` frames to ``output``."""
+    paths = [os.fspath(p) for p in key_poses]
+    growth = None
+    if growth_path is not None:
+        growth = read_func(growth_path)
+        check_growth(growth, growth_path)
+    poses = [read_floret(p) for p in paths]
+    if lu_params is not None:
+        from .growth import lu_frames, read_lu_params
+
+        if len(poses) != 1:
+            raise InputError(f"--lu grows one initial pose: expected 1 key pose, found {len(poses)}")
+        params = read_lu_params(lu_params)
+        frames = lu_frames(poses[0], params, n_frames=n_frames, growth=growth, seed=seed,
+                           path=paths[0])
+    else:
+        if len(poses) < 2:
+            raise InputError(f"{paths[0]}: expected at least 2 key poses to interpolate (or --lu "
+                             "PARAMS.toml to grow one), found 1")
+        frames = FloretAnimator(poses, paths).frames(n_frames, growth)
+    return write_frames(frames, output, quiet=quiet, n_frames=n_frames)
