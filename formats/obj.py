@@ -315,11 +315,17 @@ def _read_faces(lines, f_idx, v_line, vn_line, path):
             np.array(out_line, np.int64))
 
 
-def _fmt_rows(arr: np.ndarray, prefix: str, fmt: str) -> str:
+def _fmt_rows(arr: np.ndarray, prefix: str, fmt: str, block: int = 4096) -> str:
+    """Rows of ``arr`` as ``prefix x y z\n`` lines; one %-format per block of rows (fast)."""
     if len(arr) == 0:
         return ""
     row = prefix + " ".join([fmt] * arr.shape[1]) + "\n"
-    return "".join(row % tuple(r) for r in arr.tolist())
+    flat = np.asarray(arr, dtype=np.float64).tolist()
+    out = []
+    for k in range(0, len(flat), block):
+        chunk = flat[k:k + block]
+        out.append((row * len(chunk)) % tuple(x for r in chunk for x in r))
+    return "".join(out)
 
 
 def write_obj(path, mesh: ObjMesh, *, header: str | None = None, fmt: str = FLOAT_FMT) -> None:
@@ -338,25 +344,42 @@ def write_obj(path, mesh: ObjMesh, *, header: str | None = None, fmt: str = FLOA
         parts.append(_fmt_rows(mesh.vertices, "v ", fmt))
     if mesh.normals is not None:
         parts.append(_fmt_rows(mesh.normals, "vn ", fmt))
-    f1 = (mesh.faces.astype(np.int64) + 1).tolist()
-    face_fmt = "f {0}//{0} {1}//{1} {2}//{2}\n" if mesh.normals is not None else "f {0} {1} {2}\n"
-    grp = mesh.face_group.tolist() if mesh.face_group is not None else None
-    mat = mesh.face_material.tolist() if mesh.face_material is not None else None
-    cur_g = cur_m = -1
-    out = []
-    for i, (a, b, c) in enumerate(f1):
-        if grp is not None and grp[i] != cur_g and grp[i] >= 0:
-            cur_g = grp[i]
-            out.append(f"g {mesh.groups[cur_g]}\n")
-        if mat is not None and mat[i] != cur_m and mat[i] >= 0:
-            cur_m = mat[i]
-            out.append(f"usemtl {mesh.materials[cur_m]}\n")
-        out.append(face_fmt.format(a, b, c))
-    parts.append("".join(out))
+    parts.append(_face_lines(mesh))
     for pl in mesh.lines:
         parts.append("l " + " ".join(str(int(i) + 1) for i in pl) + "\n")
     with atomic_write(path) as fh:
         fh.write("".join(parts))
+
+
+def _face_lines(mesh: ObjMesh) -> str:
+    """The ``f`` lines, with ``g``/``usemtl`` lines where a face's group or material changes."""
+    m = mesh.n_faces
+    if m == 0:
+        return ""
+    row = "f %d//%d %d//%d %d//%d\n" if mesh.normals is not None else "f %d %d %d\n"
+    f1 = mesh.faces.astype(np.int64) + 1
+    if mesh.normals is not None:
+        f1 = np.repeat(f1, 2, axis=1)
+    # runs of faces with the same (group, material): a header line before each run that changes
+    grp = mesh.face_group if mesh.face_group is not None else np.full(m, -1)
+    mat = mesh.face_material if mesh.face_material is not None else np.full(m, -1)
+    change = np.ones(m, dtype=bool)
+    change[1:] = (grp[1:] != grp[:-1]) | (mat[1:] != mat[:-1])
+    starts = np.nonzero(change)[0].tolist() + [m]
+    out = []
+    cur_g = cur_m = -1
+    for s0, s1 in zip(starts[:-1], starts[1:]):
+        g, mt = int(grp[s0]), int(mat[s0])
+        if g != cur_g and g >= 0:
+            out.append(f"g {mesh.groups[g]}\n")
+            cur_g = g
+        if mt != cur_m and mt >= 0:
+            out.append(f"usemtl {mesh.materials[mt]}\n")
+            cur_m = mt
+        for k in range(s0, s1, 8192):
+            chunk = f1[k:min(s1, k + 8192)]
+            out.append((row * len(chunk)) % tuple(chunk.ravel().tolist()))
+    return "".join(out)
 
 
 def _check_mesh(mesh: ObjMesh, path) -> None:
