@@ -1,14 +1,112 @@
-"""Command-line front end of ``dimorph`` (stage not built yet: issue 4)."""
+"""Command-line front end of ``dimorph`` (thesis ch. 6).
+
+``dimorph SCENE.scn --alpha DEG -o OUT.scn`` types the florets of a scene; ``dimorph sweep -o DIR``
+writes the canalization curves of figs. 6.2-6.3. A first argument that is not a subcommand is
+the scene file (the minimal invocation).
+"""
 from __future__ import annotations
 
 import click
 
-from inflo.tools.common.cli import inflo_command, not_implemented
+from inflo.formats.scn import read_scn, write_scn
+from inflo.tools.common.cli import inflo_command
+
+from .dimorph import DimorphOptions, dimorph_scene
+from .sweep import write_sweep
 
 
-@inflo_command("dimorph", help="Set floret types and sizes by cones (thesis ch. 6).")
+@inflo_command("dimorph", help="Set floret types and sizes by cones (thesis ch. 6).",
+               short_help="Type the florets of SCENE.scn (the default command).")
 @click.argument("scene", type=click.Path())
 @click.option("--alpha", type=float, required=True, help="Cone opening angle in degrees.")
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output scene file.")
-def main(scene, alpha, output, quiet, debug):
-    not_implemented("dimorph", 4)
+@click.option("--threshold", "thresholds", type=float, multiple=True,
+              help="Distance threshold(s): once: ray iff d_min > Th (fig. 6.4a,b); twice: Th_a < Th_b, "
+                   "large rays above Th_b, small rays (size ~ d_min) between (fig. 6.4c). Default: ray iff the cone is empty.")
+@click.option("--ray-id", type=int, default=1, show_default=True, help="Floret type id of ray florets.")
+@click.option("--disk-id", type=int, default=0, show_default=True, help="Floret type id of disk florets.")
+@click.option("--small-ray-id", type=int, default=None, help="Type id of small ray florets (default: --ray-id).")
+@click.option("--ray-scale", type=float, default=1.0, show_default=True, help="Scale factor of ray florets.")
+@click.option("--disk-scale", type=float, default=1.0, show_default=True, help="Scale factor of disk florets.")
+@click.option("--centre", type=click.Choice(["group", "top"]), default="group", show_default=True,
+              help="Cone axis away from the floret's own head/umbellet centre, or its top-level group's.")
+@click.option("--half-angle", is_flag=True, help="Read --alpha as the cone's half-angle (eq. 6.1 as printed).")
+def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, disk_scale, centre,
+        half_angle, quiet, debug):
+    from inflo.formats.errors import InputError
+
+    if len(thresholds) > 2:
+        raise InputError(f"--threshold given {len(thresholds)} times; expected at most 2")
+    for name, v in (("--ray-id", ray_id), ("--disk-id", disk_id), ("--small-ray-id", small_ray_id)):
+        if v is not None and v < 0:
+            raise InputError(f"{name} must be >= 0, found {v}")
+    for name, v in (("--ray-scale", ray_scale), ("--disk-scale", disk_scale)):
+        if not v > 0:
+            raise InputError(f"{name} must be > 0, found {v}")
+    sc = read_scn(scene)
+    opts = DimorphOptions(alpha, tuple(thresholds), ray_id, disk_id, small_ray_id, ray_scale, disk_scale,
+                          centre, half_angle)
+    out, counts = dimorph_scene(sc, opts)
+    write_scn(output, out)
+    if not quiet:
+        click.echo(f"dimorph: {counts['ray']} ray, {counts['small_ray']} small ray, {counts['disk']} disk florets -> {output}",
+                   err=True)
+
+
+@inflo_command("sweep", help="Ray floret counts vs head size (fig. 6.2) and vs cone angle (fig. 6.3): CSV + PNG.",
+               short_help="Ray counts vs n and vs alpha (figs. 6.2, 6.3): CSV + PNG.")
+@click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output folder.")
+@click.option("--alpha", type=float, default=75.0, show_default=True, help="Cone angle of the n sweep (fig. 6.2).")
+@click.option("--n-min", type=int, default=10, show_default=True)
+@click.option("--n-max", type=int, default=300, show_default=True)
+@click.option("--n", "n_fixed", type=int, default=82, show_default=True, help="Head size of the alpha sweep (fig. 6.3).")
+@click.option("--alpha-min", type=float, default=20.0, show_default=True)
+@click.option("--alpha-max", type=float, default=120.0, show_default=True)
+@click.option("--alpha-step", type=float, default=0.5, show_default=True)
+@click.option("--divergence", type=float, default=137.5, show_default=True, help="Divergence angle (degrees).")
+@click.option("--half-angle", is_flag=True, help="Read cone angles as half-angles (eq. 6.1 as printed).")
+def sweep(output, alpha, n_min, n_max, n_fixed, alpha_min, alpha_max, alpha_step, divergence, half_angle,
+          quiet, debug):
+    from inflo.formats.errors import InputError
+
+    if not 2 <= n_min <= n_max:
+        raise InputError(f"expected 2 <= --n-min <= --n-max, found {n_min}, {n_max}")
+    if n_fixed < 2:
+        raise InputError(f"--n must be >= 2, found {n_fixed}")
+    if not (0 < alpha_min <= alpha_max < 360 and 0 < alpha < 360 and alpha_step > 0):
+        raise InputError("cone angles must lie in (0, 360) degrees with --alpha-min <= --alpha-max and --alpha-step > 0")
+    if not 0 < divergence < 360:
+        raise InputError(f"--divergence {divergence} outside (0, 360) degrees")
+    res = write_sweep(output, alpha=alpha, n_range=(n_min, n_max), n_fixed=n_fixed,
+                      alpha_range=(alpha_min, alpha_max), alpha_step=alpha_step, divergence=divergence,
+                      half_angle=half_angle)
+    if not quiet:
+        for p in res["paths"]:
+            click.echo(f"dimorph sweep: wrote {p}", err=True)
+
+
+class _SceneOrSubcommand(click.Group):
+    """A group whose first argument, when it is not a subcommand, is the scene of ``run``.
+
+    Flags given before the subcommand (``dimorph --debug sweep ...``) are passed on to it.
+    """
+
+    def parse_args(self, ctx, args):
+        if not args or args[0] in ("-h", "--help"):
+            return super().parse_args(ctx, args)
+        k = next((i for i, a in enumerate(args) if not a.startswith("-")), None)
+        if k is not None and args[k] in self.commands:
+            args = [args[k], *args[:k], *args[k + 1:]]
+        else:
+            args = ["run", *args]
+        return super().parse_args(ctx, args)
+
+
+main = _SceneOrSubcommand(
+    "dimorph", commands={"run": run, "sweep": sweep},
+    params=[click.Option(["--quiet", "-q"], is_flag=True, help="No progress bar or messages (passed to the subcommand)."),
+            click.Option(["--debug"], is_flag=True, help="Show a Python traceback on errors (passed to the subcommand).")],
+    help="Set floret types and sizes by cones (thesis ch. 6).\n\n"
+         "  dimorph SCENE.scn --alpha DEG -o OUT.scn   (same as: dimorph run ...)\n\n"
+         "  dimorph sweep -o DIR                       (figs. 6.2-6.3 as CSV + PNG)",
+    context_settings={"help_option_names": ["-h", "--help"]})

@@ -1,13 +1,32 @@
-"""Command-line front end of ``phyllotaxis`` (stage not built yet: issue 4)."""
+"""Command-line front end of ``phyllotaxis`` (thesis ch. 5; parameters: formats/phyllotaxis.md)."""
 from __future__ import annotations
 
 import click
 
-from inflo.tools.common.cli import inflo_command, not_implemented
+from inflo.tools.common.cli import inflo_command, progress
+
+from .generate import generate
+from .params import read_params
 
 
 @inflo_command("phyllotaxis", help="Place florets by Ridley phyllotaxis (thesis ch. 5): scene.scn and, when dynamic, rba/NNNN.rba.")
 @click.argument("params", type=click.Path())
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output folder.")
-def main(params, output, quiet, debug):
-    not_implemented("phyllotaxis", 4)
+@click.option("--png", type=click.Path(), default=None, help="Also save a top view of the final pattern (florets as discs coloured by age).")
+def main(params, output, png, quiet, debug):
+    p = read_params(params)
+
+    def bar(length, label):
+        return progress(length=length, label=label, quiet=quiet)
+
+    summary = generate(p, output, progress=bar, header=f"phyllotaxis {params}")
+    for msg in summary.messages:
+        click.echo(f"phyllotaxis: warning: {msg}", err=True)
+    if png:
+        from .plot import plot_discs
+
+        pv = summary.preview
+        plot_discs(png, pv["pos"], pv["diameter"], pv["age"], title=f"{summary.model}: {summary.florets} florets")
+    if not quiet:
+        extra = f", {summary.frames} RBA frames" if summary.frames else ""
+        click.echo(f"phyllotaxis: {summary.model}: {summary.florets} florets{extra} -> {summary.scene}", err=True)

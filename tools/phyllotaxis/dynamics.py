@@ -1,0 +1,320 @@
+"""Dynamics of phyllotaxis: fractionation and segregation (thesis sec. 5.3, fig. 5.2).
+
+The meristem is divided into three regions along its generating curve, measured as surface area
+from the apex: the naked inner region ``[0, a_in]``, the primordium-carrying region (the sum of
+the current primordium areas) and the naked outer region. Three modes:
+
+- **centripetal fractionation** (fig. 5.2a): no outer region; beginning at the rim, a primordium
+  forms every ``interval`` frames at the inner boundary, taking its area from the inner region,
+  until the inner region is smaller than one primordium;
+- **divergent fractionation** (fig. 5.2b): inner and outer regions; every ``interval`` frames a
+  primordium forms at each front (inner and outer boundary of the primordium region) while that
+  region still has room, so the pattern grows inward and outward at once;
+- **segregation** (fig. 5.2c): a small inner region grows; a primordium forms when its area
+  exceeds ``threshold``, and the inner region loses the primordium's area; the period is set by
+  the inner region's growth rate: ``ln(T / (T - A)) / rate`` at a constant relative rate.
+
+Growth: regions grow at relative rates (per frame) that are functions of the meristem age
+``t / frames``; each primordium's relative growth rate is a function of its own age
+``age / frames``. The supporting surface is the (interpolated) generating curve scaled so that
+its area equals the sum of the regions; primordium i sits at the area coordinate
+``u_i = a_in + sum_{j before i} A_j + A_i / 2`` (Ridley's eq. 5.1 with the current areas).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from inflo.formats.atomic import frame_name
+from inflo.formats.errors import InputError
+from inflo.formats.scn import Group, Placement, Scene
+
+from .rbatext import write_rba_fast
+
+from .surface import Profile, blend_profiles
+
+__all__ = ["MODE_CODES", "simulate_regions", "DynamicPattern", "simulate", "frame_state",
+           "dynamic_scene", "write_frames"]
+
+MODE_CODES = {"centripetal": 0, "divergent": 1, "segregation": 2}
+
+
+@njit(cache=True)
+def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, outer0,
+                     inner_rate, outer_rate, threshold, max_count):
+    """The region bookkeeping of sec. 5.3 (a pure kernel).
+
+    Parameters
+    ----------
+    mode : int  0 centripetal, 1 divergent, 2 segregation (:data:`MODE_CODES`)
+    frames, substeps : int  time runs over ``frames`` frames in steps of ``1 / substeps``
+    interval : float  frames between primordia of a front (fractionation)
+    primordium_area : float  area of a new primordium
+    inner0, outer0 : float  initial areas of the inner and outer regions
+    inner_rate, outer_rate : (frames * substeps,) float64  relative growth rates per frame at
+        each step's time
+    threshold : float  inner-region area that triggers a primordium (segregation)
+    max_count : int  stop (and report) past this many primordia
+
+    Returns
+    -------
+    emergence : (k,) float64  emergence time of each primordium (frames), in order of formation
+    side : (k,) int8  -1 formed at the inner front, +1 at the outer front
+    inner, outer : (frames,) float64  region areas at each frame's time (after its events)
+    overflow : bool  True when ``max_count`` stopped the simulation
+    """
+    cap = max_count + 2
+    emergence = np.empty(cap, np.float64)
+    side = np.empty(cap, np.int8)
+    inner = np.empty(frames, np.float64)
+    outer = np.empty(frames, np.float64)
+    a_in = inner0
+    a_out = outer0
+    k = 0
+    next_emit = 0.0
+    dt = 1.0 / substeps
+    overflow = False
+    for f in range(frames):
+        for sub in range(substeps):
+            t = f + sub * dt
+            if mode == 2:
+                while a_in > threshold and not overflow:
+                    if k >= max_count:
+                        overflow = True
+                        break
+                    emergence[k] = t
+                    side[k] = -1
+                    k += 1
+                    a_in -= primordium_area
+            else:
+                while next_emit <= t + 1e-12 and not overflow:
+                    made = False
+                    if a_in >= primordium_area:
+                        if k >= max_count:
+                            overflow = True
+                            break
+                        emergence[k] = next_emit
+                        side[k] = -1
+                        k += 1
+                        a_in -= primordium_area
+                        made = True
+                    if mode == 1 and a_out >= primordium_area:
+                        if k >= max_count:
+                            overflow = True
+                            break
+                        emergence[k] = next_emit
+                        side[k] = 1
+                        k += 1
+                        a_out -= primordium_area
+                        made = True
+                    next_emit += interval
+                    if not made:
+                        next_emit = 1e300  # both fronts exhausted: fractionation is over
+            if sub == 0:
+                inner[f] = a_in
+                outer[f] = a_out
+            j = f * substeps + sub
+            a_in *= math.exp(inner_rate[j] * dt)
+            a_out *= math.exp(outer_rate[j] * dt)
+    return emergence[:k], side[:k], inner, outer, overflow
+
+
+@dataclass
+class DynamicPattern:
+    """Result of a dynamic simulation (k primordia in order of formation, F frames).
+
+    Attributes
+    ----------
+    emergence : (k,) float64  emergence time (frames)
+    side : (k,) int8  -1 inner front, +1 outer front
+    theta : (k,) float64  angle about the axis (radians)
+    order : (k,) int64  primordium indices sorted from the apex outward
+    inner, outer : (F,) float64  region areas per frame
+    age_grid, age_area : (m,) float64  primordium area as a function of age (table)
+    profiles, curve_times : the generating curves and their times (fractions of the run)
+    """
+
+    emergence: np.ndarray
+    side: np.ndarray
+    theta: np.ndarray
+    order: np.ndarray
+    inner: np.ndarray
+    outer: np.ndarray
+    age_grid: np.ndarray
+    age_area: np.ndarray
+    profiles: list
+    curve_times: list
+    frames: int
+
+    def __len__(self) -> int:
+        return len(self.emergence)
+
+
+def _rate_table(rate, times: np.ndarray, frames: int) -> np.ndarray:
+    """Relative growth rates at ``times`` (frames); ``rate`` is a number or a Function of t/frames."""
+    if isinstance(rate, (int, float)):
+        return np.full(times.shape, float(rate))
+    return np.asarray(rate(np.clip(times / frames, 0.0, 1.0)), dtype=np.float64)
+
+
+def simulate(*, mode: str, frames: int, interval: float, primordium_area: float, inner_area: float,
+             outer_area: float = 0.0, inner_growth=0.0, outer_growth=0.0, primordium_growth=0.0,
+             threshold: float = 0.0, divergence: float = 137.50776405003785, profiles: list,
+             curve_times: list | None = None, substeps: int = 0, max_count: int = 1_000_000) -> DynamicPattern:
+    """Run the region model (:func:`simulate_regions`) and assign angles and spatial order.
+
+    Parameters are those of ``[dynamics]`` (``formats/phyllotaxis.md``); growth arguments are
+    numbers or :class:`inflo.formats.func.Function` objects of normalized age. ``profiles`` are
+    :class:`~.surface.Profile` generating curves, blended over ``curve_times`` (fractions of
+    the run; one curve: fixed shape).
+    """
+    if not 0.0 < divergence < 360.0:
+        raise InputError(f"divergence angle {divergence} outside (0, 360) degrees")
+    if substeps <= 0:
+        substeps = int(min(64, max(1, math.ceil(2.0 / interval)))) if mode != "segregation" else 8
+    steps = frames * substeps
+    t = np.arange(steps, dtype=np.float64) / substeps
+    rin = _rate_table(inner_growth, t, frames)
+    rout = _rate_table(outer_growth, t, frames)
+    emergence, side, inner, outer, overflow = simulate_regions(
+        MODE_CODES[mode], int(frames), int(substeps), float(interval), float(primordium_area),
+        float(inner_area), float(outer_area), rin, rout, float(threshold), int(max_count))
+    keep = emergence <= frames - 1 + 1e-9  # the last frame's substeps run past the end
+    emergence, side = emergence[keep], side[keep]
+    if overflow:
+        raise InputError(f"more than dynamics.max_count = {max_count} primordia would form; "
+                         "raise max_count or slow the growth")
+    if len(emergence) == 0:
+        raise InputError("no primordium forms: the inner region never holds one primordium "
+                         f"(inner_area = {inner_area}, primordium_area = {primordium_area}"
+                         + (f", threshold = {threshold}" if mode == "segregation" else "") + ")")
+    phi = math.radians(divergence)
+    inner_rank = np.cumsum(side == -1) - 1
+    outer_rank = np.cumsum(side == 1) - 1
+    theta = np.where(side == -1, -inner_rank * phi, (outer_rank + 1) * phi)
+    key = np.where(side == -1, -(inner_rank + 1), outer_rank).astype(np.int64)
+    order = np.argsort(key, kind="stable")
+    age_grid = np.arange(frames * substeps + 1, dtype=np.float64) / substeps
+    grow = _rate_table(primordium_growth, age_grid, frames)
+    logs = np.concatenate([[0.0], np.cumsum(0.5 * (grow[1:] + grow[:-1]) * np.diff(age_grid))])
+    age_area = primordium_area * np.exp(logs)
+    return DynamicPattern(emergence, side, theta, order, inner, outer, age_grid, age_area,
+                          list(profiles), list(curve_times or [0.0] * len(profiles)), int(frames))
+
+
+@njit(cache=True)
+def place_primordia(order, areas, theta, a_in, prof_area, prof_s, prof_r, prof_y, prof_tr, prof_ty,
+                    size_factor, pos, up, right, scale):
+    """Place primordia along a surface of revolution by their area coordinate (eq. 5.1).
+
+    Parameters
+    ----------
+    order : (k,) int64  primordium indices from the apex outward (a permutation of 0..k-1)
+    areas : (k,) float64  their current areas, in ``order``
+    theta : (n,) float64  angle of every primordium about the axis (indexed by primordium)
+    a_in : float  area of the inner naked region
+    prof_* : (m,) float64  the scaled generating curve: cumulative area, arc length, r, y, tangent
+    size_factor : float  scale = size_factor * 2 sqrt(A / pi)
+    pos, up, right, scale : (k, 3) float64  outputs, row = primordium index
+
+    Primordium ``order[j]`` sits at area coordinate ``u = a_in + sum_{i<j} areas[i] + areas[j] / 2``;
+    u increases along ``order``, so one forward walk over the curve's samples finds every segment.
+    """
+    m = prof_area.shape[0]
+    seg = 0
+    u = a_in
+    for j in range(order.shape[0]):
+        a = areas[j]
+        uj = u + 0.5 * a
+        u += a
+        while seg < m - 2 and prof_area[seg + 1] < uj:
+            seg += 1
+        da = prof_area[seg + 1] - prof_area[seg]
+        w = (uj - prof_area[seg]) / da if da > 0 else 0.0
+        w = min(max(w, 0.0), 1.0)
+        r = prof_r[seg] + w * (prof_r[seg + 1] - prof_r[seg])
+        y = prof_y[seg] + w * (prof_y[seg + 1] - prof_y[seg])
+        tr = prof_tr[seg] + w * (prof_tr[seg + 1] - prof_tr[seg])
+        ty = prof_ty[seg] + w * (prof_ty[seg + 1] - prof_ty[seg])
+        tn = math.sqrt(tr * tr + ty * ty)
+        if tn > 0:
+            tr /= tn
+            ty /= tn
+        k = order[j]
+        c = math.cos(theta[k])
+        s = math.sin(theta[k])
+        pos[k, 0] = r * c
+        pos[k, 1] = y
+        pos[k, 2] = r * s
+        up[k, 0] = -ty * c  # normal = tangent turned +90 degrees: (nr, ny) = (-ty, tr)
+        up[k, 1] = tr
+        up[k, 2] = -ty * s
+        right[k, 0] = tr * c
+        right[k, 1] = ty
+        right[k, 2] = tr * s
+        d = size_factor * 2.0 * math.sqrt(a / math.pi)
+        scale[k, 0] = d
+        scale[k, 1] = d
+        scale[k, 2] = d
+
+
+def frame_state(pattern: DynamicPattern, frame: int, *, size_factor: float = 1.0) -> dict:
+    """Positions of every primordium emerged by ``frame``.
+
+    Returns
+    -------
+    dict with ``ids (k,) int64`` (indices in order of formation, ascending: the emerged primordia
+    are always the first k), ``pos``, ``scale``, ``up``, ``right`` ``(k, 3) float64``,
+    ``area (k,)``, ``centre (3,)`` (the apex) and ``profile`` (the scaled generating curve).
+    """
+    k = int(np.searchsorted(pattern.emergence, frame + 1e-9, side="right"))
+    order = pattern.order[pattern.order < k]
+    ages = frame - pattern.emergence[order]
+    areas = np.interp(ages, pattern.age_grid, pattern.age_area)
+    a_in, a_out = pattern.inner[frame], pattern.outer[frame]
+    total = a_in + areas.sum() + a_out
+    unit = blend_profiles(pattern.profiles, pattern.curve_times, frame / max(pattern.frames - 1, 1))
+    prof: Profile = unit.scaled(math.sqrt(total / unit.total_area))
+    pos, up, right, scale = (np.empty((k, 3)) for _ in range(4))
+    place_primordia(order, areas, pattern.theta, float(a_in), prof.area, prof.s, prof.r, prof.y, prof.tr,
+                    prof.ty, float(size_factor), pos, up, right, scale)
+    area_rows = np.empty(k)
+    area_rows[order] = areas
+    return {"ids": np.arange(k, dtype=np.int64), "pos": pos, "up": up, "right": right, "scale": scale,
+            "area": area_rows, "centre": np.array([0.0, float(prof.y[0]), 0.0]), "profile": prof}
+
+
+def dynamic_scene(pattern: DynamicPattern, final: dict, *, floret_id: int = 0) -> Scene:
+    """The SCN of a dynamic pattern: one ``rba:`` placement per primordium in order of formation.
+
+    The preamble holds the floret's placement at the last frame; ``frameStart`` is its emergence
+    frame (rounded up), ``frameEnd`` the last frame; ``#@ emergence:`` the exact time; group 0 is
+    the head with its centre at the final apex.
+    """
+    scene = Scene()
+    scene.groups[0] = Group(0, final["centre"], -1)
+    last = pattern.frames - 1
+    for k in range(len(pattern)):
+        start = min(int(math.ceil(pattern.emergence[k] - 1e-9)), last)
+        scene.placements.append(Placement(
+            "rba", int(floret_id), final["pos"][k], final["scale"][k], final["up"][k], final["right"][k],
+            frame_start=start, frame_end=last, group=0, emergence=float(pattern.emergence[k])))
+    return scene
+
+
+def write_frames(pattern: DynamicPattern, folder, *, size_factor: float = 1.0, bar=None) -> dict:
+    """Write ``folder/0000.rba ...`` (one file per frame, every emerged floret); returns the last state."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    state = None
+    for f in range(pattern.frames):
+        state = frame_state(pattern, f, size_factor=size_factor)
+        write_rba_fast(folder / frame_name(f, "", ".rba", 4), state["ids"], state["pos"], state["scale"],
+                       state["up"], state["right"])
+        if bar is not None:
+            bar.update(1)
+    return state

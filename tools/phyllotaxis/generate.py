@@ -1,0 +1,147 @@
+"""One entry point for the ``phyllotaxis`` CLI: parameters in, ``scene.scn`` (+ ``rba/``) out.
+
+Which model runs depends on the parameter file (``formats/phyllotaxis.md``):
+
+- no ``[dynamics]``/``[hierarchy]``: Ridley's static pattern (sec. 5.2) -> ``o:``/``ca:`` placements;
+- ``[dynamics]``: fractionation or segregation (sec. 5.3) -> ``rba:`` placements + ``rba/NNNN.rba``;
+- ``[compound]``: two-level pattern of conical heads (sec. 5.4, fig. 5.4) -> ``o:``/``ca:``;
+- ``[hierarchy]``: recursive segregation (sec. 5.4) -> static, or dynamic with ``dynamic = true``.
+
+Everything is computed and checked before the first file is written.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from inflo.formats.atomic import frame_name
+from inflo.formats.func import read_func
+from inflo.formats.scn import write_scn
+
+from .compound import compound_pattern, compound_scene
+from .dynamics import dynamic_scene, simulate, write_frames
+from .hierarchy import grow_hierarchy, hierarchy_scene, hierarchy_state
+from .rbatext import write_rba_fast
+from .ridley import area_function, pattern_scene, static_pattern
+from .surface import load_curve
+
+__all__ = ["Summary", "generate"]
+
+
+@dataclass
+class Summary:
+    """What :func:`generate` wrote."""
+
+    model: str
+    florets: int
+    frames: int
+    scene: Path
+    messages: list = field(default_factory=list)
+    preview: dict | None = None  # pos, diameter, age of the final pattern (for pictures)
+
+
+def _func_or_number(spec):
+    return read_func(spec) if isinstance(spec, str) else float(spec)
+
+
+def generate(params: dict, out_dir, *, progress=None, header: str | None = None) -> Summary:
+    """Run the model the parameters describe and write ``out_dir/scene.scn`` (+ ``out_dir/rba/``).
+
+    Parameters
+    ----------
+    params : dict
+        As returned by :func:`inflo.tools.phyllotaxis.params.read_params`.
+    progress : callable, optional
+        ``progress(length, label)`` returning a context manager whose object has ``update(n)``
+        (e.g. :func:`inflo.tools.common.cli.progress`); used for the RBA frames.
+    """
+    out = Path(out_dir)
+    s, pr = params["surface"], params["primordia"]
+    curve_kw = dict(radius=s["radius"], height=s["height"], angle=s["angle"], samples=s["samples"])
+    if "hierarchy" in params:
+        return _hierarchy(params, out, progress, header)
+    profile = load_curve(s["curve"], **curve_kw)
+    if "dynamics" in params:
+        d = params["dynamics"]
+        profiles = [load_curve(c, **curve_kw) for c in d["curves"]] or [profile]
+        pat = simulate(mode=d["mode"], frames=d["frames"], interval=d["interval"],
+                       primordium_area=d["primordium_area"], inner_area=d["inner_area"],
+                       outer_area=d["outer_area"], inner_growth=_func_or_number(d["inner_growth"]),
+                       outer_growth=_func_or_number(d["outer_growth"]),
+                       primordium_growth=_func_or_number(d["primordium_growth"]), threshold=d["threshold"],
+                       divergence=pr["divergence"], profiles=profiles, curve_times=d["curve_times"],
+                       substeps=d["substeps"], max_count=d["max_count"])
+        ctx = progress(d["frames"], "phyllotaxis frames") if progress else _NoBar()
+        with ctx as bar:
+            state = write_frames(pat, out / "rba", size_factor=pr["size_factor"], bar=bar)
+        scene = dynamic_scene(pat, state, floret_id=pr["floret_id"])
+        write_scn(out / "scene.scn", scene, header=header)
+        preview = {"pos": state["pos"], "diameter": state["scale"][:, 0], "age": d["frames"] - 1 - pat.emergence}
+        return Summary(f"dynamic ({d['mode']})", len(pat), d["frames"], out / "scene.scn", [], preview)
+    area = area_function(pr["area"], profile.length)
+    if "compound" in params:
+        c = params["compound"]
+        comp = compound_pattern(profile, area, head_curve=c["head_curve"], head_height=c["head_height"],
+                                head_fill=c["head_fill"], floret_fraction=c["floret_fraction"],
+                                divergence=pr["divergence"], start=pr["start"], count=pr["count"],
+                                max_count=pr["max_count"])
+        scene = compound_scene(comp, floret_id=pr["floret_id"], size_factor=pr["size_factor"],
+                               kind=pr["placement"], frame_start=pr["frame_start"], frame_end=pr["frame_end"])
+        out.mkdir(parents=True, exist_ok=True)
+        write_scn(out / "scene.scn", scene, header=header)
+        preview = {"pos": comp.floret_pos, "diameter": pr["size_factor"] * 2 * np.sqrt(comp.floret_area / np.pi),
+                   "age": comp.floret_head.astype(np.float64)}
+        return Summary(f"compound ({len(comp.head_pos)} heads)", len(comp.floret_pos), 0, out / "scene.scn", [],
+                       preview)
+    pat = static_pattern(profile, area, divergence=pr["divergence"], start=pr["start"], count=pr["count"],
+                         max_count=pr["max_count"])
+    scene = pattern_scene(pat, floret_id=pr["floret_id"], size_factor=pr["size_factor"], kind=pr["placement"],
+                          frame_start=pr["frame_start"], frame_end=pr["frame_end"])
+    out.mkdir(parents=True, exist_ok=True)
+    write_scn(out / "scene.scn", scene, header=header)
+    preview = {"pos": pat.pos, "diameter": pr["size_factor"] * 2 * np.sqrt(pat.area / np.pi),
+               "age": np.arange(len(pat.s), dtype=np.float64)}
+    return Summary("static", len(pat.s), 0, out / "scene.scn", [], preview)
+
+
+def _hierarchy(params, out: Path, progress, header) -> Summary:
+    h_p, pr = params["hierarchy"], params["primordia"]
+    h = grow_hierarchy(levels=h_p["levels"], frames=h_p["frames"], growth_rate=h_p["growth_rate"],
+                       initial_area=h_p["initial_area"], element_area=h_p["element_area"],
+                       production_threshold=h_p["production_threshold"],
+                       meristem_threshold=h_p["meristem_threshold"], divergence=h_p["divergence"],
+                       max_count=h_p["max_count"])
+    final = hierarchy_state(h, h_p["frames"], size_factor=pr["size_factor"])
+    frames = 0
+    if h_p["dynamic"]:
+        frames = int(math.floor(h_p["frames"])) + 1
+        rba = out / "rba"
+        rba.mkdir(parents=True, exist_ok=True)
+        ctx = progress(frames, "phyllotaxis frames") if progress else _NoBar()
+        with ctx as bar:
+            for f in range(frames):
+                st = hierarchy_state(h, float(f), size_factor=pr["size_factor"])
+                write_rba_fast(rba / frame_name(f, "", ".rba", 4), st["ids"], st["pos"], st["scale"],
+                               st["up"], st["right"])
+                bar.update(1)
+    scene = hierarchy_scene(h, final, floret_id=pr["floret_id"], dynamic=h_p["dynamic"])
+    out.mkdir(parents=True, exist_ok=True)
+    write_scn(out / "scene.scn", scene, header=header)
+    birth = h.element_birth[h.florets[final["ids"]]]
+    preview = {"pos": final["pos"], "diameter": final["scale"][:, 0], "age": h_p["frames"] - birth}
+    return Summary(f"hierarchy ({h_p['levels']} levels)", len(final["ids"]), frames, out / "scene.scn",
+                   list(h.messages), preview)
+
+
+class _NoBar:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def update(self, n):
+        pass

@@ -1,0 +1,318 @@
+"""The phyllotaxis TOML parameter file (spec: ``formats/phyllotaxis.md``).
+
+Reads a ``.toml`` file with the stdlib :mod:`tomllib`, checks every key against :data:`SCHEMA`
+(unknown keys are rejected naming the closest known one, with ``file:line``), fills defaults and
+returns a plain nested dict ``{section: {key: value}}``. Paths to ``.con``/``.func`` files are
+resolved relative to the parameter file.
+
+Sections (thesis chapter 5):
+
+- ``[surface]``   the generating curve C of the supporting surface (sec. 5.2, fig. 5.1);
+- ``[primordia]`` primordium area A(s), divergence angle, floret type and placement (eq. 5.1-5.2);
+- ``[dynamics]``  optional: fractionation / segregation over frames (sec. 5.3, fig. 5.2);
+- ``[compound]``  optional: two-level pattern of conical heads (sec. 5.4, fig. 5.4);
+- ``[hierarchy]`` optional: recursive segregation on a flat growing meristem (sec. 5.4, fig. 5.3).
+"""
+from __future__ import annotations
+
+import difflib
+import math
+import os
+import re
+import tomllib
+from pathlib import Path
+
+from inflo.formats.errors import FormatError, InputError, shorten
+
+__all__ = ["SCHEMA", "read_params", "parse_params", "BUILTIN_CURVES", "DYNAMIC_MODES"]
+
+BUILTIN_CURVES = ("disk", "cone", "sphere_cap", "paraboloid")
+DYNAMIC_MODES = ("centripetal", "divergent", "segregation")
+GOLDEN_ANGLE = 137.50776405003785  # 360 (1 - 1/tau), degrees
+
+_NUM = (int, float)
+_FUNC = "number-or-func"  # a number or the path of a .func file
+_CURVE = "curve"  # a built-in name or the path of a .con file
+
+# section -> key -> (kind, default); kind: "float", "int", "str", "bool", _FUNC, _CURVE,
+# "curves" (list of curve names), "floats" (list of numbers), ("choice", options)
+SCHEMA: dict[str, dict[str, tuple]] = {
+    "surface": {
+        "curve": (_CURVE, "disk"),
+        "radius": ("float", 1.0),
+        "height": ("float", 0.0),
+        "angle": ("float", 90.0),
+        "samples": ("int", 2048),
+    },
+    "primordia": {
+        "area": (_FUNC, 0.01),
+        "count": ("int", 0),
+        "start": ("float", 0.0),
+        "divergence": ("float", GOLDEN_ANGLE),
+        "floret_id": ("int", 0),
+        "size_factor": ("float", 1.0),
+        "placement": (("choice", ("o", "ca")), "o"),
+        "frame_start": ("int", 0),
+        "frame_end": ("int", 100),
+        "max_count": ("int", 1_000_000),
+    },
+    "dynamics": {
+        "mode": (("choice", DYNAMIC_MODES), "centripetal"),
+        "frames": ("int", 100),
+        "interval": ("float", 1.0),
+        "primordium_area": ("float", 0.01),
+        "primordium_growth": (_FUNC, 0.0),
+        "inner_area": ("float", 1.0),
+        "outer_area": ("float", 0.0),
+        "inner_growth": (_FUNC, 0.0),
+        "outer_growth": (_FUNC, 0.0),
+        "threshold": ("float", 0.0),
+        "curves": ("curves", []),
+        "curve_times": ("floats", []),
+        "substeps": ("int", 0),
+        "max_count": ("int", 1_000_000),
+    },
+    "compound": {
+        "head_curve": (_CURVE, "cone"),
+        "head_height": ("float", 0.5),
+        "head_fill": ("float", 1.0),
+        "floret_fraction": ("float", 0.03),
+    },
+    "hierarchy": {
+        "levels": ("int", 2),
+        "frames": ("float", 100.0),
+        "growth_rate": ("float", 0.05),
+        "initial_area": ("float", 1.0),
+        "element_area": ("floats", [1.0]),
+        "production_threshold": ("floats", [1.5]),
+        "meristem_threshold": ("floats", [8.0]),
+        "divergence": ("float", GOLDEN_ANGLE),
+        "dynamic": ("bool", False),
+        "max_count": ("int", 200_000),
+    },
+}
+
+_OPTIONAL = ("dynamics", "compound", "hierarchy")
+
+
+def _line_of(text: str, section: str | None, key: str | None) -> int | None:
+    """1-based line of ``key`` inside ``[section]`` (or of the section header), best effort."""
+    lines = text.splitlines()
+    current = None
+    for i, raw in enumerate(lines, 1):
+        s = raw.strip()
+        m = re.match(r"^\[\s*([^\]]+?)\s*\]", s)
+        if m:
+            current = m.group(1).strip().strip('"')
+            if key is None and current == section:
+                return i
+            continue
+        if key is not None and current == section and re.match(rf"^\"?{re.escape(key)}\"?\s*=", s):
+            return i
+    return None
+
+
+def _closest(word: str, options) -> str:
+    best = difflib.get_close_matches(word, list(options), n=1, cutoff=0.0)
+    return f" (did you mean '{best[0]}'?)" if best else ""
+
+
+def _resolve(base: Path, value: str) -> str:
+    p = Path(value)
+    return str(p if p.is_absolute() else (base / p))
+
+
+def parse_params(text: str, path="<params>") -> dict:
+    """Parse and check TOML ``text``; returns ``{section: {key: value}}`` with defaults filled.
+
+    Sections ``dynamics`` and ``hierarchy`` are present in the result only when the file has
+    them. Relative ``.con``/``.func`` paths are resolved against the folder of ``path``.
+
+    Raises
+    ------
+    FormatError
+        TOML syntax errors, unknown sections or keys (naming the closest known one), values of
+        the wrong type or out of range, both ``[dynamics]`` and ``[hierarchy]``.
+    """
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"line (\d+)", str(exc))
+        raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None
+    base = Path(os.fspath(path)).resolve().parent
+    out: dict = {}
+    for section, table in raw.items():
+        if section not in SCHEMA:
+            raise FormatError(path, _line_of(text, section, None),
+                              f"a section of {list(SCHEMA)}{_closest(section, SCHEMA)}", f"[{section}]")
+        if not isinstance(table, dict):
+            raise FormatError(path, None, f"[{section}] as a table", shorten(repr(table)))
+        schema = SCHEMA[section]
+        for key in table:
+            if key not in schema:
+                raise FormatError(path, _line_of(text, section, key),
+                                  f"a key of [{section}]{_closest(key, schema)}", repr(key))
+    for section, schema in SCHEMA.items():
+        if section in _OPTIONAL and section not in raw:
+            continue
+        table = raw.get(section, {})
+        values = {}
+        for key, (kind, default) in schema.items():
+            if key not in table:
+                values[key] = list(default) if isinstance(default, list) else default
+                continue
+            values[key] = _check(table[key], kind, section, key, text, path, base)
+        out[section] = values
+    present = [sec for sec in _OPTIONAL if sec in out]
+    if len(present) > 1:
+        raise FormatError(path, _line_of(text, present[1], None),
+                          "at most one of [dynamics], [compound], [hierarchy]", f"[{present[0]}] and [{present[1]}]")
+    _check_ranges(out, text, path)
+    return out
+
+
+def _check(value, kind, section, key, text, path, base):
+    line = _line_of(text, section, key)
+
+    def bad(expected):
+        return FormatError(path, line, f"{section}.{key} as {expected}", shorten(repr(value)))
+
+    if isinstance(kind, tuple) and kind[0] == "choice":
+        if value not in kind[1]:
+            raise bad(f"one of {list(kind[1])}{_closest(str(value), kind[1])}")
+        return value
+    if kind == "float":
+        if isinstance(value, bool) or not isinstance(value, _NUM) or not math.isfinite(value):
+            raise bad("a finite number")
+        return float(value)
+    if kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise bad("an integer")
+        return int(value)
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise bad("true or false")
+        return value
+    if kind == "str":
+        if not isinstance(value, str):
+            raise bad("a string")
+        return value
+    if kind == _FUNC:
+        if isinstance(value, str):
+            return _resolve(base, value)
+        if isinstance(value, bool) or not isinstance(value, _NUM) or not math.isfinite(value):
+            raise bad("a number or the path of a .func file")
+        return float(value)
+    if kind == _CURVE:
+        if not isinstance(value, str):
+            raise bad(f"one of {list(BUILTIN_CURVES)} or the path of a .con file")
+        return value if value in BUILTIN_CURVES else _resolve(base, value)
+    if kind == "curves":
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise bad("a list of curve names or .con paths")
+        return [v if v in BUILTIN_CURVES else _resolve(base, v) for v in value]
+    if kind == "floats":
+        if isinstance(value, _NUM) and not isinstance(value, bool):
+            value = [value]
+        if not isinstance(value, list) or not value or not all(
+                isinstance(v, _NUM) and not isinstance(v, bool) and math.isfinite(v) for v in value):
+            raise bad("a number or a non-empty list of numbers")
+        return [float(v) for v in value]
+    raise AssertionError(kind)  # pragma: no cover
+
+
+def _check_ranges(p: dict, text: str, path) -> None:
+    def fail(section, key, expected):
+        raise FormatError(path, _line_of(text, section, key), f"{section}.{key} {expected}",
+                          shorten(repr(p[section][key])))
+
+    s, pr = p["surface"], p["primordia"]
+    if s["radius"] <= 0:
+        fail("surface", "radius", "> 0")
+    if s["curve"] == "sphere_cap" and not 0 < s["angle"] <= 180:
+        fail("surface", "angle", "in (0, 180] degrees")
+    if s["samples"] < 16:
+        fail("surface", "samples", ">= 16")
+    if not 0 < pr["divergence"] < 360:
+        fail("primordia", "divergence", "in (0, 360) degrees")
+    if isinstance(pr["area"], float) and pr["area"] <= 0:
+        fail("primordia", "area", "> 0 (A(s) is a primordium area)")
+    if pr["count"] < 0:
+        fail("primordia", "count", ">= 0 (0: fill the surface)")
+    if not 0 <= pr["start"] < 1:
+        fail("primordia", "start", "in [0, 1) (fraction of the curve length)")
+    if pr["floret_id"] < 0:
+        fail("primordia", "floret_id", ">= 0")
+    if pr["size_factor"] <= 0:
+        fail("primordia", "size_factor", "> 0")
+    if not 0 <= pr["frame_start"] <= pr["frame_end"]:
+        fail("primordia", "frame_end", ">= frame_start >= 0")
+    if "dynamics" in p:
+        d = p["dynamics"]
+        if d["frames"] < 1:
+            fail("dynamics", "frames", ">= 1")
+        if d["interval"] <= 0:
+            fail("dynamics", "interval", "> 0 frames")
+        if d["primordium_area"] <= 0:
+            fail("dynamics", "primordium_area", "> 0")
+        if d["inner_area"] < 0:
+            fail("dynamics", "inner_area", ">= 0")
+        if d["outer_area"] < 0:
+            fail("dynamics", "outer_area", ">= 0")
+        if d["mode"] == "segregation" and d["threshold"] <= d["primordium_area"]:
+            fail("dynamics", "threshold", "> primordium_area (segregation needs room for a primordium)")
+        if len(d["curves"]) != len(d["curve_times"]):
+            fail("dynamics", "curve_times", f"one time per curve ({len(d['curves'])} curves)")
+        if d["curve_times"] and any(b <= a for a, b in zip(d["curve_times"], d["curve_times"][1:])):
+            fail("dynamics", "curve_times", "increasing")
+        if d["substeps"] < 0:
+            fail("dynamics", "substeps", ">= 0 (0: automatic)")
+    if "compound" in p:
+        c = p["compound"]
+        if c["head_fill"] <= 0:
+            fail("compound", "head_fill", "> 0")
+        if not 0 < c["floret_fraction"] < 1:
+            fail("compound", "floret_fraction", "in (0, 1)")
+    if "hierarchy" in p:
+        h = p["hierarchy"]
+        if h["levels"] < 1:
+            fail("hierarchy", "levels", ">= 1")
+        if h["frames"] <= 0:
+            fail("hierarchy", "frames", "> 0")
+        if h["initial_area"] <= 0:
+            fail("hierarchy", "initial_area", "> 0")
+        for key in ("element_area", "production_threshold", "meristem_threshold"):
+            if any(v <= 0 for v in h[key]):
+                fail("hierarchy", key, "> 0")
+        for a, t in zip(_per_level(h["element_area"], h["levels"]), _per_level(h["production_threshold"], h["levels"])):
+            if t <= a:
+                fail("hierarchy", "production_threshold", "> element_area at every level")
+        if not 0 < h["divergence"] < 360:
+            fail("hierarchy", "divergence", "in (0, 360) degrees")
+
+
+def _per_level(values: list, levels: int) -> list:
+    """A per-level list: the last value repeats (a scalar means the same at every level)."""
+    return [values[min(i, len(values) - 1)] for i in range(levels)]
+
+
+def per_level(values: list, levels: int) -> list:
+    """Public form of the per-level expansion used by :mod:`.hierarchy`."""
+    return _per_level(values, levels)
+
+
+def read_params(path) -> dict:
+    """Read and check a phyllotaxis parameter file (see :func:`parse_params`)."""
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a folder, expected a .toml file") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise FormatError(path, None, "UTF-8 TOML text", "undecodable bytes") from None
+    return parse_params(text, path)
