@@ -1,14 +1,64 @@
-"""Command-line front end of ``branch-gen`` (stage not built yet: issue 7)."""
+"""Command-line front end of ``branch-gen`` (issue 7; thesis ch. 7 and 8 g, Runions ch. 3).
+
+    branch-gen SCENE.scn [PARAMS.toml] -o OUT_DIR [--rba DIR] [--algorithm rodkaew|sca] [--seed N]
+               [--base X Y Z]
+
+Writes ``OUT_DIR/skeleton.obj`` (``l`` polylines), ``OUT_DIR/skeleton.radii``,
+``OUT_DIR/branches.obj`` (generalized cylinders) and, with ``--rba``,
+``OUT_DIR/frames/branches_NNNN.obj``. Parameters: ``formats/branch_gen.md``.
+"""
 from __future__ import annotations
+
+import warnings
 
 import click
 
-from inflo.tools.common.cli import inflo_command, not_implemented
+from inflo.formats.rba import read_rba_sequence
+from inflo.formats.scn import read_scn
+from inflo.tools.common.cli import inflo_command, progress
+
+from .generate import branch_gen, write_branch_gen
+from .params import read_params
 
 
-@inflo_command("branch-gen", help="Grow the branching structure under the florets (thesis ch. 7) or a space-colonization tree.")
+@inflo_command("branch-gen", help="Grow the branching structure under the florets (thesis ch. 7) or a "
+                                  "space-colonization tree (--algorithm sca).")
 @click.argument("scene", type=click.Path())
 @click.argument("params", required=False, type=click.Path())
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output folder.")
-def main(scene, params, output, quiet, debug):
-    not_implemented("branch-gen", 7)
+@click.option("--rba", "rba", type=click.Path(), default=None,
+              help="RBA frames folder of the canopy: emergence from first appearance, one branches OBJ per frame.")
+@click.option("--frame-step", type=click.IntRange(min=1), default=1, show_default=True,
+              help="With --rba: write every N-th frame (and the last).")
+@click.option("--algorithm", type=click.Choice(["rodkaew", "sca"]), default=None,
+              help="Override the parameter file's algorithm.")
+@click.option("--seed", type=int, default=None, help="Override the parameter file's seed.")
+@click.option("--base", type=float, nargs=3, default=None, help="Inflorescence base point (default 0 0 0).")
+def main(scene, params, output, rba, frame_step, algorithm, seed, base, quiet, debug):
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", UserWarning)
+        warnings.showwarning = _one_line_warning
+        _run(scene, params, output, rba, frame_step, algorithm, seed, base, quiet)
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    click.echo(f"branch-gen: warning: {message}", err=True)
+
+
+def _run(scene, params, output, rba, frame_step, algorithm, seed, base, quiet):
+    p = read_params(params)
+    if seed is not None:
+        p.seed = seed
+    if base is not None:
+        p.base = list(base)
+    algo = algorithm or p.algorithm
+    sc = read_scn(scene) if algo == "rodkaew" else None
+    frames = read_rba_sequence(rba, sc)[1] if rba and algo == "rodkaew" else None
+    total = len(sc) if sc is not None else p.sca.n_points
+    with progress(length=max(total, 1), label="branch-gen", quiet=quiet) as bar:
+        result = branch_gen(sc, p, rba_frames=frames, algorithm=algo, frame_step=frame_step,
+                            progress=bar.update)
+    write_branch_gen(output, result, p)
+    if not quiet:
+        click.echo(f"branch-gen: {result.node_pos.shape[0]} skeleton nodes, {len(result.chain_list)} branches, "
+                   f"{result.branches_mesh.n_faces} triangles -> {output}", err=True)

@@ -1,0 +1,222 @@
+"""branch-gen --algorithm sca: space colonization and envelopes (Runions ch. 3, issue 7)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from inflo.formats.contour import Contour, write_con
+from inflo.formats.errors import FormatError
+from inflo.formats.obj import read_obj
+from inflo.tools.branch_gen.envelope import HERMITE, Envelope, catmull_rom, profile_from_contour
+from inflo.tools.branch_gen.params import params_from_dict
+from inflo.tools.branch_gen.pipe import check_forest, pipe_radii
+from inflo.tools.branch_gen.sca import attraction_points, colonize, grow_sca
+
+from conftest import run_cli
+
+
+def test_branch_gen_sca_kill_distance_removes_points():
+    rng = np.random.default_rng(0)
+    env = Envelope("sphere", (0, 0, 0), radius=1.0)
+    pts = attraction_points(env, 600, rng)
+    d_k = 0.05
+    res = colonize(pts, [[0.0, 0.0, 0.0]], step=0.02, kill_distance=d_k)
+    check_forest(res.node_parent)
+    d, _ = cKDTree(res.node_pos).query(res.points)
+    # dead <=> some node came within d_k (exact, against a fresh kd-tree of all nodes)
+    assert np.all(d[~res.alive] < d_k)
+    assert np.all(d[res.alive] >= d_k)
+    np.testing.assert_allclose(res.near_d[res.alive], d[res.alive], rtol=1e-12, atol=1e-15)
+    # with d_I = inf every point is reached in the end
+    assert not res.alive.any()
+    # segments are exactly D long
+    kids = np.nonzero(res.node_parent >= 0)[0]
+    seg = np.linalg.norm(res.node_pos[kids] - res.node_pos[res.node_parent[kids]], axis=1)
+    np.testing.assert_allclose(seg, 0.02, rtol=1e-12)
+
+
+def test_branch_gen_sca_points_out_of_reach_stay():
+    """Points farther than d_I from every node never influence growth."""
+    rng = np.random.default_rng(1)
+    env = Envelope("sphere", (0, 0, 0), radius=1.0)
+    pts = attraction_points(env, 400, rng)
+    res = colonize(pts, [[0.0, 0.0, 0.0]], step=0.02, kill_distance=0.05, influence_radius=0.25)
+    live = res.alive
+    assert np.all(res.near_d[live] >= 0.05)
+    assert np.all(res.near_d[live] >= 0.25), "killed or out of reach"
+    assert 0 < live.sum() < len(pts)
+
+
+def test_branch_gen_sca_tree_stays_inside_envelope():
+    p = params_from_dict({"algorithm": "sca", "seed": 3,
+                          "sca": {"n_points": 800, "step": 0.02, "kill_distance": 0.04, "roots": [[0.0, 0.0, 0.0]]},
+                          "envelope": {"shape": "ellipsoid", "centre": [0.0, 0.5, 0.0], "radii": [0.5, 0.5, 0.3]}})
+    env = Envelope("ellipsoid", (0, 0.5, 0), radii=(0.5, 0.5, 0.3))
+    sk, res = grow_sca(p, env)
+    assert sk.n_nodes > 200
+    # no node outside the envelope by more than D: test points D inward of each node's
+    # projection... simpler and stricter: the node shrunk toward the centre by D is inside
+    c = np.array([0.0, 0.5, 0.0])
+    q = (sk.node_pos - c) / np.array([0.5, 0.5, 0.3])
+    rad = np.linalg.norm(q, axis=1)
+    pulled = c + (sk.node_pos - c) * np.clip((rad - 0.02 / 0.3) / np.maximum(rad, 1e-12), 0, 1)[:, None]
+    assert np.all(env.contains(pulled) | (rad <= 1.0))
+    assert np.all(env.contains(res.points))
+
+
+def test_branch_gen_sca_tropism_bends_as_fig_3_4():
+    """One root, one attraction point: g up bends the branch above the straight path, g down the
+    mirror image below it; both reach the point."""
+    pts = np.array([[1.0, 0.0, 0.0]])
+    paths = {}
+    for sign in (1, -1):
+        res = colonize(pts, [[0.0, 0.0, 0.0]], step=0.01, kill_distance=0.02, tropism=(0.0, 0.35 * sign, 0.0))
+        assert not res.alive[0]
+        paths[sign] = res.node_pos
+    assert paths[1][:, 1].max() > 0.05 and paths[1][:, 1].min() >= -1e-12
+    mirror = paths[-1] * [1, -1, 1]
+    np.testing.assert_allclose(paths[1], mirror, atol=1e-12)
+    straight = colonize(pts, [[0.0, 0.0, 0.0]], step=0.01, kill_distance=0.02).node_pos
+    assert np.abs(straight[:, 1]).max() < 1e-12
+
+
+def test_branch_gen_sca_hedge_and_obstacle():
+    """Several roots compete for the points (fig. 3.20); a plane removes points behind it."""
+    rng = np.random.default_rng(2)
+    env = Envelope("cylinder", (-1, 0, -0.2), radius=1.0, height=1.0)
+    pts = attraction_points(env, 500, rng, obstacles=[[0.0, 0.0, 1.0, 0.0]])
+    assert np.all(pts[:, 2] <= 0.0)
+    roots = [[-1.5, 0.0, -0.2], [-1.0, 0.0, -0.2], [-0.5, 0.0, -0.2]]
+    res = colonize(pts, roots, step=0.02, kill_distance=0.04)
+    root_of = np.arange(len(res.node_pos))
+    for _ in range(len(res.node_pos)):
+        nxt = np.where(res.node_parent[root_of] >= 0, res.node_parent[root_of], root_of)
+        if np.array_equal(nxt, root_of):
+            break
+        root_of = nxt
+    assert set(np.unique(root_of)) == {0, 1, 2}, "every root grows a tree"
+
+
+def test_branch_gen_overdispersed_points_keep_min_distance():
+    rng = np.random.default_rng(4)
+    env = Envelope("sphere", (0, 0, 0), radius=1.0)
+    pts = attraction_points(env, 500, rng, min_distance=0.1)
+    d, _ = cKDTree(pts).query(pts, k=2)
+    assert d[:, 1].min() >= 0.1
+    assert np.all(env.contains(pts))
+
+
+# --------------------------------------------------------------------------------------------
+# envelopes
+
+
+def test_branch_gen_catmull_rom_eq_3_4():
+    h1, h2, h3, h4 = HERMITE(np.array([0.0, 1.0]))
+    np.testing.assert_array_equal(h1, [1, 0])
+    np.testing.assert_array_equal(h2, [0, 1])
+    np.testing.assert_array_equal(h3, [0, 0])
+    np.testing.assert_array_equal(h4, [0, 0])
+    angles = np.radians([0.0, 100.0, 200.0, 280.0])
+    vals = np.array([[1.0], [2.0], [0.5], [1.5]])
+    # interpolates the curves at their angles
+    for i, a in enumerate(angles):
+        assert catmull_rom(vals, angles, np.array([a]))[0] == pytest.approx(vals[i, 0], abs=1e-12)
+    # first-order continuity across every theta_i, including the wrap at 2 pi (eq. 3.4's tangents
+    # are in t, so the slope in theta is continuous for equally spaced curves)
+    eps = 1e-6
+    even = np.radians([0.0, 90.0, 180.0, 270.0])
+    for a in even:
+        left = (catmull_rom(vals, even, np.array([a])) - catmull_rom(vals, even, np.array([a - eps]))) / eps
+        right = (catmull_rom(vals, even, np.array([a + eps])) - catmull_rom(vals, even, np.array([a]))) / eps
+        assert left[0] == pytest.approx(right[0], abs=1e-4)
+    # a slow scalar transcription of eq. 3.4 at a point between theta_4 and theta_1 + 2 pi
+    th = np.radians(330.0)
+    t = (th - angles[3]) / (angles[0] + 2 * np.pi - angles[3])
+    c = vals[:, 0]
+    ref = (c[3] * (2 * t**3 - 3 * t**2 + 1) + c[0] * (-2 * t**3 + 3 * t**2)
+           + (c[0] - c[2]) / 2 * (t**3 - 2 * t**2 + t) + (c[1] - c[3]) / 2 * (t**3 - t**2))
+    assert catmull_rom(vals, angles, np.array([th]))[0] == pytest.approx(ref, abs=1e-12)
+
+
+def _profile_contour(radius_scale):
+    # x = radius, y = height: a bulb from (0, 0) over radius r to (0, 1)
+    pts = [[0.0, 0.0], [0.5 * radius_scale, 0.1], [radius_scale, 0.5], [0.6 * radius_scale, 0.9], [0.0, 1.0]]
+    return Contour.from_points(pts, type="oe", name="profile")
+
+
+def test_branch_gen_surface_of_revolution_contains_generating_points():
+    profiles = [profile_from_contour(_profile_contour(s)) for s in (0.5, 0.8, 0.35)]
+    angles = [0.0, 120.0, 240.0]
+    env = Envelope("contours", (0, 0, 0), profiles=profiles, angles=angles)
+    for (hgt, rad), a in zip(profiles, np.radians(angles)):
+        sel = slice(20, -20, 10)
+        z, r = hgt[sel], rad[sel]
+        on = np.c_[r * np.cos(a), z, r * np.sin(a)]
+        assert np.all(env.contains(on * [1 - 1e-6, 1, 1 - 1e-6]))
+        assert not np.any(env.contains(on * [1 + 1e-3, 1, 1 + 1e-3]))
+        np.testing.assert_allclose(env.surface_radius(np.full(len(z), a), z), r, atol=1e-12)
+    lo, hi = env.bounds()
+    rng = np.random.default_rng(5)
+    pts = attraction_points(env, 300, rng)
+    assert np.all((pts >= lo) & (pts <= hi))
+
+
+def test_branch_gen_contour_not_a_function_of_height(tmp_path):
+    circle = Contour.from_points([[1, 0], [0, 1], [-1, 0], [0, -1]], type="cr", name="circle")
+    with pytest.raises(FormatError, match="function of height"):
+        profile_from_contour(circle, tmp_path / "c.con")
+
+
+def test_branch_gen_cli_sca_with_contours(tmp_path, write):
+    for k, s in enumerate((0.5, 0.8, 0.35)):
+        write_con(tmp_path / f"c{k}.con", _profile_contour(s))
+    prm = write("tree.toml", """algorithm = "sca"
+seed = 2
+[sca]
+n_points = 300
+step = 0.03
+kill_distance = 0.06
+roots = [[0.0, 0.0, 0.0]]
+[envelope]
+shape = "contours"
+centre = [0.0, 0.3, 0.0]
+contours = [{file = "c0.con", angle = 0.0}, {file = "c1.con", angle = 120.0}, {file = "c2.con", angle = 240.0}]
+[post]
+decimate = 0.06
+relocate = true
+subdivide = 1
+""")
+    scn = write("empty.scn", "# SCA ignores the florets\n")
+    out = tmp_path / "out"
+    r = run_cli("branch-gen", scn, prm, "-o", out, "-q")
+    assert r.returncode == 0, r.stderr
+    skel = read_obj(out / "skeleton.obj")
+    radii = np.array([float(x) for x in (out / "skeleton.radii").read_text().splitlines() if x[0] != "#"])
+    assert len(radii) == skel.n_vertices and skel.n_vertices > 50
+    assert radii.max() > 3 * radii.min()
+    # a bad contour is one clear line
+    write_con(tmp_path / "c1.con", Contour.from_points([[1, 0], [0, 1], [-1, 0], [0, -1]], type="cr", name="o"))
+    r = run_cli("branch-gen", scn, prm, "-o", tmp_path / "bad")
+    assert r.returncode == 2 and "function of height" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_branch_gen_sca_pipe_radii_on_tree():
+    rng = np.random.default_rng(6)
+    env = Envelope("sphere", (0, 1, 0), radius=0.5)
+    res = colonize(attraction_points(env, 300, rng), [[0.0, 0.0, 0.0]], step=0.05, kill_distance=0.1)
+    r = pipe_radii(res.node_parent, np.zeros(len(res.node_pos), bool), 0.01, 2.0)
+    n_leaves = np.sum(np.bincount(res.node_parent[res.node_parent >= 0], minlength=len(r)) == 0)
+    assert r[0] == pytest.approx(0.01 * np.sqrt(n_leaves), rel=1e-12)
+
+
+def test_branch_gen_sca_points_added_during_the_run():
+    p = params_from_dict({"algorithm": "sca", "seed": 5,
+                          "sca": {"n_points": 200, "step": 0.03, "kill_distance": 0.06, "add_points": 20,
+                                  "add_iterations": 5, "min_distance": 0.02},
+                          "envelope": {"shape": "sphere", "centre": [0.0, 0.5, 0.0], "radius": 0.5}})
+    sk, res = grow_sca(p, Envelope("sphere", (0, 0.5, 0), radius=0.5))
+    assert len(res.points) == 300
+    assert not res.alive.any()
+    check_forest(sk.node_parent)

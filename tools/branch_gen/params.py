@@ -1,0 +1,374 @@
+"""branch-gen parameter files (TOML). Spec: ``formats/branch_gen.md``.
+
+Every key has a default, so an empty file (or no file) is valid. Unknown keys and sections are
+rejected naming the closest known one; wrong types and out-of-range values are rejected naming the
+file, the key's line and what was expected (ARCHITECTURE.md, "Errors").
+
+Sections (thesis ch. 7 for ``rodkaew``, Runions ch. 3 for ``sca``/``envelope``):
+
+- top level: ``algorithm``, ``seed``, ``base``;
+- ``[rodkaew]``: extended Rodkaew particles (eq. 7.1, fig. 7.4, fig. 7.5, fig. 7.2b);
+- ``[growth]``: uniform or allometric expansion of space (7.2 "Growth");
+- ``[sca]``: space colonization (eq. 3.1, 3.3; kill distance, radius of influence);
+- ``[envelope]``: crown envelope (generalized surface of revolution, eq. 3.4, or a built-in);
+- ``[post]``: skeleton post-processing (decimation fig. 3.8, relocation, subdivision);
+- ``[pipe]``: branch width by the pipe model (7.2 "Branch width", eq. 3.5);
+- ``[cylinder]``: generalized-cylinder mesh.
+"""
+from __future__ import annotations
+
+import difflib
+import math
+import os
+import re
+import tomllib
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from inflo.formats.errors import FormatError, InputError, read_lines
+
+__all__ = [
+    "Params",
+    "RodkaewParams",
+    "GrowthParams",
+    "ScaParams",
+    "EnvelopeParams",
+    "ContourSpec",
+    "PostParams",
+    "PipeParams",
+    "CylinderParams",
+    "read_params",
+    "params_from_dict",
+    "ALGORITHMS",
+]
+
+ALGORITHMS = ("rodkaew", "sca")
+INF = math.inf
+
+
+@dataclass
+class RodkaewParams:
+    """Extended Rodkaew algorithm (thesis 7.2)."""
+
+    step: float = 0.01  # particle step length per simulation step (scene units)
+    merge_distance: float = 0.015  # graft when another tree is this close (fig. 7.5b)
+    w_a: float = 1.0  # weight of A, toward the base (eq. 7.1)
+    w_b: float = 0.6  # weight of B, toward the nearest other tree (eq. 7.1)
+    w_h: float = 0.6  # weight of H, previous direction (eq. 7.1)
+    w_b_func: str = ""  # .func file: w_b(d) = w_b * f(d / w_b_range) (fig. 7.4); "" = constant
+    w_b_range: float = 1.0  # distance d mapped to x = 1 of w_b_func
+    perception_radius: float = INF  # B is the nearest other tree within this distance ("inf")
+    initial_direction: str = "floret"  # "floret": H starts along -up of the floret; "base": along A
+    steps_per_frame: int = 10  # simulation steps per frame of emergence time
+    max_steps: int = 200000  # hard stop
+    hierarchy: bool = True  # groups (umbellets, heads) converge on their centres first (fig. 7.2b)
+
+
+@dataclass
+class GrowthParams:
+    """Expansion of space over time (thesis 7.2 "Growth"): S(t) = (1 + rate)^t per axis, or per-axis
+    scale functions."""
+
+    mode: str = "none"  # "none", "uniform", "allometric" or "functions"
+    rate: float = 0.0  # uniform: relative expansion per frame
+    rates: list = field(default_factory=lambda: [0.0, 0.0, 0.0])  # allometric: per-axis rates
+    funcs: list = field(default_factory=list)  # functions: three .func files, scale over t / frames
+    frames: float = -1.0  # growth stops at this frame; -1: the last emergence / last RBA frame
+    _functions: object = None  # the loaded funcs (not a file key)
+
+
+@dataclass
+class ScaParams:
+    """Space colonization (Runions ch. 3)."""
+
+    n_points: int = 1000  # N attraction points
+    min_distance: float = 0.0  # b_d: minimum distance between attraction points (0: uniform)
+    influence_radius: float = INF  # d_I, radius of influence
+    kill_distance: float = 0.02  # d_k
+    step: float = 0.01  # D, the basic unit
+    tropism: list = field(default_factory=lambda: [0.0, 0.0, 0.0])  # g, eq. 3.3
+    roots: list = field(default_factory=lambda: [[0.0, 0.0, 0.0]])  # initial tree nodes
+    obstacles: list = field(default_factory=list)  # planes [nx, ny, nz, c]: remove points n.p > c
+    add_points: int = 0  # attraction points added per iteration
+    add_iterations: int = 0  # ... during this many first iterations
+    max_iterations: int = 100000
+
+
+@dataclass
+class ContourSpec:
+    file: str
+    angle: float  # degrees
+
+
+@dataclass
+class EnvelopeParams:
+    """Crown envelope: a built-in shape or a generalized surface of revolution (eq. 3.4)."""
+
+    shape: str = "sphere"  # sphere, ellipsoid, cone, cylinder, contours
+    centre: list = field(default_factory=lambda: [0.0, 1.0, 0.0])  # built-ins; contours: axis origin
+    radius: float = 1.0  # sphere, cone (at its base), cylinder
+    radii: list = field(default_factory=lambda: [1.0, 1.0, 1.0])  # ellipsoid semi-axes
+    height: float = 1.0  # cone, cylinder (along +Y from centre)
+    contours: list = field(default_factory=list)  # [{file = "c.con", angle = 0.0}, ...]
+
+
+@dataclass
+class PostParams:
+    """Skeleton post-processing (Runions fig. 3.1 e-g, fig. 3.8)."""
+
+    decimate: float = 0.0  # tau_d; 0: off
+    relocate: bool = False  # move interior nodes half way toward their basal neighbour
+    subdivide: int = 0  # levels of curve subdivision
+
+
+@dataclass
+class PipeParams:
+    """Pipe model d^p = d_1^p + ... + d_m^p (thesis 7.2, Runions eq. 3.5)."""
+
+    tip_diameter: float = 0.004
+    exponent: float = 2.5
+
+
+@dataclass
+class CylinderParams:
+    sides: int = 8
+    caps: bool = True
+
+
+@dataclass
+class Params:
+    """All branch-gen parameters."""
+
+    algorithm: str = "rodkaew"
+    seed: int = 1
+    base: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    rodkaew: RodkaewParams = field(default_factory=RodkaewParams)
+    growth: GrowthParams = field(default_factory=GrowthParams)
+    sca: ScaParams = field(default_factory=ScaParams)
+    envelope: EnvelopeParams = field(default_factory=EnvelopeParams)
+    post: PostParams = field(default_factory=PostParams)
+    pipe: PipeParams = field(default_factory=PipeParams)
+    cylinder: CylinderParams = field(default_factory=CylinderParams)
+    source: str | None = None  # the file read, for error messages
+    folder: Path = field(default_factory=Path)  # relative paths are relative to this
+
+
+_SECTIONS = {
+    "rodkaew": RodkaewParams,
+    "growth": GrowthParams,
+    "sca": ScaParams,
+    "envelope": EnvelopeParams,
+    "post": PostParams,
+    "pipe": PipeParams,
+    "cylinder": CylinderParams,
+}
+_TOP = ("algorithm", "seed", "base")
+
+
+class _Where:
+    """Finds the line of a key in the TOML text, for error messages."""
+
+    def __init__(self, path, lines):
+        self.path = path
+        self.lines = lines
+
+    def line(self, section: str | None, key: str) -> int | None:
+        cur = None
+        pat = re.compile(rf"^\s*[\"']?{re.escape(key)}[\"']?\s*=")
+        for i, raw in enumerate(self.lines, 1):
+            s = raw.strip()
+            m = re.match(r"^\[+\s*([^\]]+?)\s*\]+", s)
+            if m:
+                cur = m.group(1).split(".")[0]
+                continue
+            if cur == section and pat.match(raw):
+                return i
+        if section is not None:
+            for i, raw in enumerate(self.lines, 1):
+                if re.match(rf"^\s*\[+\s*{re.escape(section)}\s*[\].]", raw.strip()):
+                    return i
+        return None
+
+    def error(self, section, key, expected, found) -> FormatError:
+        name = key if section is None else f"{section}.{key}"
+        return FormatError(self.path, self.line(section, key), f"{expected} for '{name}'", found)
+
+
+def _closest(name: str, known) -> str:
+    best = difflib.get_close_matches(name, list(known), n=1, cutoff=0.0)
+    return f" (did you mean '{best[0]}'?)" if best else ""
+
+
+def _num(w, sec, key, v, *, integer=False, allow_inf=False):
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        if allow_inf and isinstance(v, str) and v.strip().lower() in ("inf", "infinity"):
+            return INF
+        raise w.error(sec, key, "an integer" if integer else "a number", repr(v))
+    if integer:
+        if isinstance(v, float):
+            raise w.error(sec, key, "an integer", repr(v))
+        return int(v)
+    v = float(v)
+    if math.isnan(v) or (math.isinf(v) and not allow_inf):
+        raise w.error(sec, key, "a finite number", repr(v))
+    return v
+
+
+def _vec(w, sec, key, v, n=3):
+    if not isinstance(v, list) or len(v) != n:
+        raise w.error(sec, key, f"a list of {n} numbers", repr(v))
+    return [_num(w, sec, key, x) for x in v]
+
+
+def params_from_dict(data: dict, *, path="<params>", lines=None, folder=None) -> Params:
+    """Build :class:`Params` from a parsed TOML mapping, validating every key.
+
+    Raises
+    ------
+    FormatError
+        Unknown key/section (naming the closest known one), wrong type, out-of-range value.
+    """
+    w = _Where(path, lines or [])
+    p = Params(source=os.fspath(path), folder=Path(folder) if folder is not None else Path("."))
+    known_top = list(_TOP) + list(_SECTIONS)
+    for key, v in data.items():
+        if key not in known_top:
+            raise FormatError(path, w.line(None, key) or w.line(key, ""),
+                              "a known key or section" + _closest(key, known_top), repr(key))
+        if key in _SECTIONS:
+            if not isinstance(v, dict):
+                raise w.error(None, key, "a [section]", repr(v))
+            obj = getattr(p, key)
+            fields = [f for f in obj.__dataclass_fields__ if not f.startswith("_")]
+            for k, val in v.items():
+                if k not in fields:
+                    raise FormatError(path, w.line(key, k), f"a key of [{key}]" + _closest(k, fields),
+                                      repr(k))
+                setattr(obj, k, _convert(w, key, k, val, getattr(obj, k)))
+        elif key == "algorithm":
+            if v not in ALGORITHMS:
+                raise w.error(None, key, "'rodkaew' or 'sca'", repr(v))
+            p.algorithm = v
+        elif key == "seed":
+            p.seed = _num(w, None, key, v, integer=True)
+        elif key == "base":
+            p.base = _vec(w, None, key, v)
+    _validate(p, w)
+    return p
+
+
+def _convert(w, sec, key, val, default):
+    if sec == "envelope" and key == "contours":
+        if not isinstance(val, list):
+            raise w.error(sec, key, "a list of {file = ..., angle = ...} tables", repr(val))
+        out = []
+        for item in val:
+            if not isinstance(item, dict) or set(item) != {"file", "angle"} or not isinstance(item["file"], str):
+                raise w.error(sec, key, "tables {file = \"name.con\", angle = degrees}", repr(item))
+            out.append(ContourSpec(item["file"], _num(w, sec, key, item["angle"])))
+        return out
+    if sec == "sca" and key in ("roots", "obstacles"):
+        n = 3 if key == "roots" else 4
+        if not isinstance(val, list):
+            raise w.error(sec, key, f"a list of [{'x, y, z' if n == 3 else 'nx, ny, nz, c'}] lists", repr(val))
+        return [_vec(w, sec, key, x, n) for x in val]
+    if isinstance(default, bool):
+        if not isinstance(val, bool):
+            raise w.error(sec, key, "true or false", repr(val))
+        return val
+    if isinstance(default, int):
+        return _num(w, sec, key, val, integer=True)
+    if isinstance(default, float):
+        return _num(w, sec, key, val, allow_inf=math.isinf(default) or key in ("perception_radius", "influence_radius"))
+    if isinstance(default, str):
+        if not isinstance(val, str):
+            raise w.error(sec, key, "a string", repr(val))
+        return val
+    if sec == "growth" and key == "funcs":
+        if not isinstance(val, list) or len(val) != 3 or not all(isinstance(x, str) for x in val):
+            raise w.error(sec, key, "three .func file names (X, Y, Z scale)", repr(val))
+        return list(val)
+    if isinstance(default, list):
+        return _vec(w, sec, key, val, len(default))
+    raise AssertionError(key)  # pragma: no cover
+
+
+def _validate(p: Params, w: _Where) -> None:
+    r = p.rodkaew
+
+    def need(ok, sec, key, expected, found):
+        if not ok:
+            raise w.error(sec, key, expected, repr(found))
+
+    need(r.step > 0, "rodkaew", "step", "a step length > 0", r.step)
+    need(r.merge_distance > 0, "rodkaew", "merge_distance", "a merge distance > 0", r.merge_distance)
+    for k in ("w_a", "w_b", "w_h"):
+        need(getattr(r, k) >= 0, "rodkaew", k, "a weight >= 0", getattr(r, k))
+    need(r.w_a + r.w_b + r.w_h > 0, "rodkaew", "w_a", "weights w_a + w_b + w_h > 0", r.w_a + r.w_b + r.w_h)
+    need(r.w_b_range > 0, "rodkaew", "w_b_range", "a distance > 0", r.w_b_range)
+    need(r.perception_radius > 0, "rodkaew", "perception_radius", "a radius > 0", r.perception_radius)
+    need(r.initial_direction in ("floret", "base"), "rodkaew", "initial_direction", "'floret' or 'base'",
+         r.initial_direction)
+    need(r.steps_per_frame >= 1, "rodkaew", "steps_per_frame", "an integer >= 1", r.steps_per_frame)
+    need(r.max_steps >= 1, "rodkaew", "max_steps", "an integer >= 1", r.max_steps)
+    if r.step > r.merge_distance:
+        warnings.warn(f"{p.source}: rodkaew.step {r.step} is larger than merge_distance {r.merge_distance}: "
+                      "particles may jump across branches without grafting", UserWarning, stacklevel=3)
+    g = p.growth
+    need(g.mode in ("none", "uniform", "allometric", "functions"), "growth", "mode",
+         "'none', 'uniform', 'allometric' or 'functions'", g.mode)
+    if g.mode == "functions":
+        need(len(g.funcs) == 3, "growth", "funcs", "three .func files for mode 'functions'", g.funcs)
+    need(g.rate > -1, "growth", "rate", "a rate > -1", g.rate)
+    need(all(x > -1 for x in g.rates), "growth", "rates", "rates > -1", g.rates)
+    s = p.sca
+    need(s.n_points >= 0, "sca", "n_points", "an integer >= 0", s.n_points)
+    need(s.min_distance >= 0, "sca", "min_distance", "a distance >= 0", s.min_distance)
+    need(s.influence_radius > 0, "sca", "influence_radius", "a radius > 0", s.influence_radius)
+    need(s.kill_distance > 0, "sca", "kill_distance", "a distance > 0", s.kill_distance)
+    need(s.step > 0, "sca", "step", "a step D > 0", s.step)
+    need(len(s.roots) >= 1, "sca", "roots", "at least one root [x, y, z]", s.roots)
+    need(s.add_points >= 0 and s.add_iterations >= 0, "sca", "add_points", "counts >= 0", s.add_points)
+    need(s.max_iterations >= 1, "sca", "max_iterations", "an integer >= 1", s.max_iterations)
+    e = p.envelope
+    need(e.shape in ("sphere", "ellipsoid", "cone", "cylinder", "contours"), "envelope", "shape",
+         "'sphere', 'ellipsoid', 'cone', 'cylinder' or 'contours'", e.shape)
+    need(e.radius > 0, "envelope", "radius", "a radius > 0", e.radius)
+    need(all(x > 0 for x in e.radii), "envelope", "radii", "semi-axes > 0", e.radii)
+    need(e.height > 0, "envelope", "height", "a height > 0", e.height)
+    if e.shape == "contours":
+        need(len(e.contours) >= 1, "envelope", "contours", "at least one {file, angle} contour", e.contours)
+    q = p.post
+    need(q.decimate >= 0, "post", "decimate", "tau_d >= 0", q.decimate)
+    need(0 <= q.subdivide <= 4, "post", "subdivide", "0..4 levels", q.subdivide)
+    pp = p.pipe
+    need(pp.tip_diameter > 0, "pipe", "tip_diameter", "a diameter > 0", pp.tip_diameter)
+    need(pp.exponent > 0, "pipe", "exponent", "an exponent > 0", pp.exponent)
+    need(3 <= p.cylinder.sides <= 64, "cylinder", "sides", "3..64 sides", p.cylinder.sides)
+
+
+def read_params(path=None) -> Params:
+    """Read a branch-gen TOML parameter file (None: all defaults)."""
+    if path is None:
+        return params_from_dict({})
+    lines = read_lines(path)
+    try:
+        data = tomllib.loads("\n".join(lines))
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"line (\d+)", str(exc))
+        raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None
+    return params_from_dict(data, path=path, lines=lines, folder=Path(path).parent)
+
+
+def resolve(p: Params, name: str) -> Path:
+    """A path named in the parameter file, relative to that file's folder."""
+    q = Path(name)
+    return q if q.is_absolute() else p.folder / q
+
+
+def check_file(p: Params, sec: str, key: str, name: str) -> Path:
+    q = resolve(p, name)
+    if not q.is_file():
+        raise InputError(f"{p.source}: {sec}.{key} names {name!r}, which is not a file")
+    return q
