@@ -17,15 +17,6 @@ def test_editable_cli_help(name):
     assert "Usage:" in res.stdout and "--debug" in res.stdout
 
 
-def test_unbuilt_stage_exits_2_with_one_line(tmp_path):
-    res = run_cli("fccompose", tmp_path / "x.fcc", "-o", tmp_path / "out")
-    if "not implemented yet" not in res.stderr:
-        pytest.skip("fccompose is built; its own tests cover its errors")
-    assert res.returncode == 2
-    assert len(res.stderr.strip().splitlines()) == 1
-    assert "Traceback" not in res.stderr
-
-
 @pytest.mark.slow
 def test_non_editable_install_runs_every_cli(tmp_path):
     """`pip install .` (not editable) into a separate target; its scripts import the installed copy."""
