@@ -1,13 +1,31 @@
-"""Command-line front end of ``fccompose`` (stage not built yet: issue 5)."""
+"""Command-line front end of ``fccompose`` (issue 5): parse the ``.fcc``, compose, report."""
 from __future__ import annotations
 
 import click
 
-from inflo.tools.common.cli import inflo_command, not_implemented
+from inflo.formats.fcc import read_fcc
+from inflo.tools.common.cli import inflo_command, progress
+
+from .compose import compose_canopy
 
 
-@inflo_command("fccompose", help="Floral Canopy Composer: grow the canopy by PBD with continuous collision handling (thesis ch. 3-4).")
+@inflo_command("fccompose", help="Floral Canopy Composer: grow the canopy by PBD with continuous collision "
+                                 "handling (thesis ch. 3-4). Writes OUT_DIR/frame_NNNN.obj per output frame, "
+                                 "OUT_DIR/log.csv and OUT_DIR/state/ (for --resume).")
 @click.argument("params", type=click.Path())
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Folder for the canopy OBJ frames.")
-def main(params, output, quiet, debug):
-    not_implemented("fccompose", 5)
+@click.option("--resume", is_flag=True, help="Continue from the last complete output frame of an earlier run.")
+@click.option("--strict", is_flag=True, help="Stop (exit 1) when collisions remain after the retries "
+                                             "or the sanity check finds intersections.")
+@click.option("--allow-initial-intersections", is_flag=True,
+              help="Go on even when the first frame is not collision-free.")
+def main(params, output, resume, strict, allow_initial_intersections, quiet, debug):
+    p = read_fcc(params)
+    warn = (lambda msg: None) if quiet else (lambda msg: click.echo(f"fccompose: warning: {msg}", err=True))
+    res = compose_canopy(
+        p, output, resume=resume, strict=strict, allow_initial_intersections=allow_initial_intersections,
+        progress=lambda total: progress(length=total, label="fccompose frames", quiet=quiet), warn=warn,
+    )
+    if not quiet:
+        click.echo(f"fccompose: {len(res.frames_written)} frames written to {output} "
+                   f"({res.n_triangles} triangles, {res.steps} steps, {res.seconds:.1f} s)", err=True)

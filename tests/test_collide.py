@@ -1,0 +1,323 @@
+"""Collision detection and response (thesis ch. 4, appendix B): narrow phase on hand-built cases with
+known time of impact, cross-checks against brute-force references and the ipctk CCD, broad phase,
+the exact static triangle-triangle test, collision constraints and the resolution loop."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from inflo.tools.collide import (
+    box_pairs,
+    cubic_roots_01,
+    cubic_vertex_triangle,
+    cull_cubic,
+    detect_collisions,
+    edge_edge_ccd,
+    intersecting_pairs,
+    intersecting_pairs_brute,
+    resolve_collisions,
+    solve_ee_collision_constraint,
+    solve_vt_collision_constraint,
+    triangle_boxes,
+    triangles_intersect,
+    vertex_triangle_ccd,
+)
+from inflo.tools.collide.broad import box_pairs_brute
+from inflo.tools.pbd import mesh_edges
+
+A = np.array([0.0, 0.0, 0.0])
+B = np.array([1.0, 0.0, 0.0])
+C = np.array([0.0, 1.0, 0.0])
+TOL = 1e-9
+
+
+def v(*xs):
+    return np.array(xs, dtype=float)
+
+
+def vt(p0, p1, a0=A, b0=B, c0=C, a1=None, b1=None, c1=None, tol=TOL):
+    out = np.zeros(4)
+    n = vertex_triangle_ccd(p0, a0, b0, c0, p1, a0 if a1 is None else a1, b0 if b1 is None else b1,
+                            c0 if c1 is None else c1, tol, out)
+    return n, out
+
+
+def ee(a0, b0, c0, d0, a1, b1, c1, d1, tol=TOL):
+    out = np.zeros(4)
+    n = edge_edge_ccd(a0, b0, c0, d0, a1, b1, c1, d1, tol, out)
+    return n, out
+
+
+# -- narrow phase: hand-built cases ------------------------------------------------------------------
+
+
+def test_vertex_through_face_centre():
+    n, out = vt(v(1 / 3, 1 / 3, 1.0), v(1 / 3, 1 / 3, -3.0))
+    assert n == 1
+    assert out[0] == pytest.approx(0.25, abs=1e-14)
+    np.testing.assert_allclose(out[1:], [1 / 3, 1 / 3, 1 / 3], atol=1e-12)
+
+
+def test_vertex_missing_the_face_and_moving_triangle():
+    assert vt(v(2.0, 2.0, 1.0), v(2.0, 2.0, -1.0))[0] == 0
+    # the triangle moves up through a resting vertex: impact at t = 0.4
+    n, out = vt(v(0.2, 0.2, 0.4), v(0.2, 0.2, 0.4), a1=A + [0, 0, 1], b1=B + [0, 0, 1], c1=C + [0, 0, 1])
+    assert n == 1 and out[0] == pytest.approx(0.4, abs=1e-14)
+
+
+def test_edge_crossing_edge():
+    # edge ab sweeps down through the fixed edge cd at t = 1/3
+    a0, b0 = v(-1, 0.5, 1), v(1, 0.5, 1)
+    c0, d0 = v(0, -1, 0), v(0, 1, 0)
+    n, out = ee(a0, b0, c0, d0, a0 - [0, 0, 3], b0 - [0, 0, 3], c0, d0)
+    assert n == 1
+    assert out[0] == pytest.approx(1 / 3, abs=1e-14)
+    np.testing.assert_allclose(out[1:3], [0.5, 0.75], atol=1e-12)
+    # passing beside the other edge's end: no collision
+    assert ee(a0 + [0, 5, 0], b0 + [0, 5, 0], c0, d0, a0 + [0, 5, -3], b0 + [0, 5, -3], c0, d0)[0] == 0
+
+
+def test_grazing_within_the_tolerance_but_not_beyond():
+    """A vertex crossing the triangle's plane just outside its edge counts as touching when it is
+    within the inside-test tolerance (app. B.2) of the triangle, and not when it is farther."""
+    tol = 1e-3
+    for gap, hit in ((0.5e-3, 1), (2e-3, 0)):
+        n, _ = vt(v(0.5, -gap, 1.0), v(0.5, -gap, -1.0), tol=tol)
+        assert n == hit, gap
+
+
+def test_tangential_touch_is_a_crossing():
+    """A coplanarity cubic that touches zero without changing sign (a double root: the vertex
+    reaches the plane and turns back) yields one root, so the pair counts as crossing once (odd)
+    and gets a response."""
+    roots = np.zeros(6)
+    n = cubic_roots_01(0.25, -1.0, 1.0, 0.0, roots)  # (t - 1/2)^2
+    assert n == 1 and roots[0] == pytest.approx(0.5, abs=1e-6)
+
+
+def test_parallel_edges():
+    # coplanar parallel edges sliding into overlap within their common plane (degenerate cubic)
+    a0, b0 = v(0, 0, 0), v(1, 0, 0)
+    c0, d0 = v(3, 0.5, 0), v(4, 0.5, 0)
+    n, out = ee(a0, b0, c0, d0, a0, b0, c0 + [-3.5, -0.5, 0], d0 + [-3.5, -0.5, 0])
+    assert n == 1
+    # parallel edges in parallel planes moving side by side: never touch
+    assert ee(a0, b0, c0 + [0, 0, 1], d0 + [0, 0, 1], a0, b0, c0 + [-3.5, 0, 1], d0 + [-3.5, 0, 1])[0] == 0
+    # parallel edges, one passing through the other (crossing planes)
+    n, out = ee(a0, b0, v(0.2, 1, 0.0), v(0.8, 1, 0.0), a0, b0, v(0.2, -1, 0.0), v(0.8, -1, 0.0))
+    assert n == 1 and out[0] == pytest.approx(0.5, abs=1e-9)
+
+
+def test_degenerate_triangle():
+    # all three corners on one line: the cubic vanishes identically; the vertex through the segment
+    a, b, c = v(0, 0, 0), v(1, 0, 0), v(2, 0, 0)
+    n, out = vt(v(0.5, 0, 1), v(0.5, 0, -1), a, b, c)
+    assert n == 1 and out[0] == pytest.approx(0.5, abs=1e-12)
+    assert vt(v(0.5, 1, 1), v(0.5, 1, -1), a, b, c)[0] == 0
+    # a point-sized triangle and a zero-length edge do not crash
+    assert vt(v(0.5, 0, 1), v(0.5, 0, -1), a, a, a)[0] == 0
+    assert ee(a, a, c, c, a, a, c, c)[0] == 0
+
+
+def test_enter_and_leave_within_one_step_is_even():
+    p0 = np.array([[0.72, 0.08, -0.63], [-0.13, -0.29, 0.16], [0.4, 0.81, -0.31], [-0.14, 0.82, -0.89]])
+    p1 = np.array([[-0.76, 1.07, 0.42], [-0.09, 0.29, -0.29], [1.44, 1.17, -1.28], [-0.38, 1.91, 1.08]])
+    n, out = vt(p0[0], p1[0], p0[1], p0[2], p0[3], p1[1], p1[2], p1[3])
+    assert n == 2  # in and out again: no response needed (4.2.2.3)
+    assert reference_vt_crossings(p0, p1) == 2
+    assert 0.0 < out[0] < 1.0
+
+
+def test_tiny_motions():
+    for z in (0.5e-9, 1e-9 / 3):
+        n, out = vt(v(0.3, 0.3, z), v(0.3, 0.3, z - 1e-9))
+        assert n == 1 and out[0] == pytest.approx(z / 1e-9, rel=1e-6)
+    assert vt(v(0.3, 0.3, 2e-9), v(0.3, 0.3, 1e-9))[0] == 0
+
+
+# -- narrow phase: references -----------------------------------------------------------------------
+
+
+def reference_vt_crossings(p0, p1, samples=200001, tol=1e-6):
+    """Sign changes of the coplanarity volume on a fine grid whose crossing point lies in the triangle."""
+    t = np.linspace(0.0, 1.0, samples)[:, None]
+    x = p0[None] + t[:, :, None] * (p1 - p0)[None]
+    vol = np.einsum("ij,ij->i", x[:, 0] - x[:, 1], np.cross(x[:, 2] - x[:, 1], x[:, 3] - x[:, 1]))
+    idx = np.nonzero(np.sign(vol[1:]) != np.sign(vol[:-1]))[0]
+    hits = 0
+    for i in idx:
+        q, a, b, c = x[i]
+        n = np.cross(b - a, c - a)
+        n2 = n @ n
+        if n2 == 0:
+            continue
+        q = q - ((q - a) @ n) / n2 * n
+        w1 = np.cross(c - b, q - b) @ n / n2
+        w2 = np.cross(a - c, q - c) @ n / n2
+        w3 = 1 - w1 - w2
+        if min(w1, w2, w3) >= -tol:
+            hits += 1
+    return hits
+
+
+def test_cubic_against_direct_evaluation_and_roots_against_numpy():
+    rng = np.random.default_rng(0)
+    roots = np.zeros(6)
+    for _ in range(300):
+        p0, p1 = rng.normal(size=(4, 3)), rng.normal(size=(4, 3))
+        k = np.array(cubic_vertex_triangle(p0[0], p0[1], p0[2], p0[3], p1[0], p1[1], p1[2], p1[3]))
+        for t in (0.0, 0.3, 1.0):
+            x = p0 + t * (p1 - p0)
+            direct = (x[0] - x[1]) @ np.cross(x[2] - x[1], x[3] - x[1])
+            assert np.polyval(k[::-1], t) == pytest.approx(direct, abs=1e-12)
+        n = cubic_roots_01(*k, roots)
+        ref = np.sort([r.real for r in np.roots(k[::-1]) if abs(r.imag) < 1e-9 and -1e-12 <= r.real <= 1 + 1e-12])
+        assert n == len(ref)
+        np.testing.assert_allclose(roots[:n], ref, atol=1e-8)
+        if cull_cubic(*k):
+            assert len(ref) == 0
+
+
+def test_culling_never_culls_a_cubic_with_a_root():
+    rng = np.random.default_rng(1)
+    culled = 0
+    for _ in range(3000):
+        k = rng.normal(size=4) * rng.choice([1e-3, 1.0, 1e3], size=4)
+        r = [x.real for x in np.roots(k[::-1]) if abs(x.imag) < 1e-12 and 0.0 <= x.real <= 1.0]
+        if cull_cubic(*k):
+            culled += 1
+            assert not r, k
+    assert culled > 500  # and it culls a good share
+
+
+def test_randomized_against_ipctk_misses_nothing():
+    ipctk = pytest.importorskip("ipctk")
+    ccd = ipctk.TightInclusionCCD()
+    rng = np.random.default_rng(7)
+    hits = missed = 0
+    for _ in range(1500):
+        p0 = rng.uniform(-1, 1, (4, 3))
+        p1 = p0 + rng.uniform(-1, 1, (4, 3))
+        ours = vt(p0[0], p1[0], p0[1], p0[2], p0[3], p1[1], p1[2], p1[3])[0]
+        theirs, _ = ccd.point_triangle_ccd(p0[0], p0[1], p0[2], p0[3], p1[0], p1[1], p1[2], p1[3])
+        hits += theirs
+        missed += bool(theirs) and ours == 0
+        ours = ee(*p0, *p1)[0]
+        theirs, _ = ccd.edge_edge_ccd(*p0, *p1)
+        hits += theirs
+        missed += bool(theirs) and ours == 0
+    assert hits > 100
+    assert missed == 0
+
+
+# -- broad phase and static test --------------------------------------------------------------------
+
+
+def random_soup(n, rng, size=0.3, extent=3.0):
+    x = rng.uniform(0, extent, (n, 1, 3)) + size * rng.uniform(-1, 1, (n, 3, 3))
+    return x.reshape(-1, 3), np.arange(3 * n, dtype=np.int32).reshape(n, 3)
+
+
+def test_box_pairs_match_brute_force():
+    rng = np.random.default_rng(3)
+    x, tri = random_soup(250, rng)
+    b = triangle_boxes(x, x + rng.normal(scale=0.05, size=x.shape), tri, 0.01)
+    for cell in (None, 0.05, 0.5, 5.0):
+        np.testing.assert_array_equal(box_pairs(b, None, cell_size=cell), box_pairs_brute(b, b, True))
+        np.testing.assert_array_equal(box_pairs(b[:40], b, cell_size=cell), box_pairs_brute(b[:40], b, False))
+
+
+def test_triangles_intersect_hand_cases():
+    t = [v(0, 0, 0), v(1, 0, 0), v(0, 1, 0)]
+    assert triangles_intersect(*t, v(0.2, 0.2, -1), v(0.2, 0.2, 1), v(0.3, 0.9, 1))  # pierced
+    assert not triangles_intersect(*t, v(2, 2, -1), v(2, 2, 1), v(3, 2, 1))  # beside
+    assert not triangles_intersect(*t, v(0, 0, 0.1), v(1, 0, 0.1), v(0, 1, 0.1))  # parallel above
+    assert triangles_intersect(*t, v(0.5, 0.5, 0), v(0.5, 0.5, 1), v(1, 1, 1))  # touching at a point
+    assert triangles_intersect(*t, v(0.2, 0.1, 0), v(2, 0.1, 0), v(0.2, 2, 0))  # coplanar overlap
+    assert not triangles_intersect(*t, v(2, 2, 0), v(3, 2, 0), v(2, 3, 0))  # coplanar apart
+    assert triangles_intersect(*t, v(0.1, 0.1, 0), v(0.2, 0.1, 0), v(0.1, 0.2, 0))  # coplanar inside
+
+
+def test_intersecting_pairs_match_brute_force():
+    rng = np.random.default_rng(4)
+    x, tri = random_soup(300, rng)
+    tri[5] = [0, 1, 17]  # shares vertices with triangles 0 and 5: skipped
+    fast = intersecting_pairs(x, tri)
+    np.testing.assert_array_equal(fast, intersecting_pairs_brute(x, tri))
+    assert len(fast) > 10
+
+
+# -- collision constraints and the resolution loop -------------------------------------------------
+
+
+def test_vt_constraint_pushes_to_the_thickness_and_conserves_momentum():
+    q, a, b, c = v(0.3, 0.3, -0.1), A.copy(), B.copy(), C.copy()
+    bary = np.array([0.4, 0.3, 0.3])
+    n = v(0, 0, 1)  # q came from above
+    w = np.array([1.0, 2.0, 0.5, 1.0])
+    corr = [np.zeros(3) for _ in range(4)]
+    assert solve_vt_collision_constraint(q, w[0], a, w[1], b, w[2], c, w[3], bary, n, 0.01, 1.0, *corr)
+    q2, a2, b2, c2 = q + corr[0], a + corr[1], b + corr[2], c + corr[3]
+    tri_pt = bary[0] * a2 + bary[1] * b2 + bary[2] * c2
+    assert (q2 - tri_pt) @ n == pytest.approx(0.01, abs=1e-15)
+    np.testing.assert_allclose(sum(c_ / w_ for c_, w_ in zip(corr, w)), 0.0, atol=1e-15)
+    # satisfied constraint: nothing to do; fixed triangle: only q moves
+    assert not solve_vt_collision_constraint(q2, 1, a2, 1, b2, 1, c2, 1, bary, n, 0.0, 1.0, *corr)
+    assert solve_vt_collision_constraint(q, 1.0, a, 0.0, b, 0.0, c, 0.0, bary, n, 0.01, 1.0, *corr)
+    assert not corr[1].any() and corr[0][2] == pytest.approx(0.11)
+
+
+def test_ee_constraint_separates_the_edges():
+    a, b, c, d = v(-1, 0, -0.05), v(1, 0, -0.05), v(0, -1, 0), v(0, 1, 0)
+    corr = [np.zeros(3) for _ in range(4)]
+    assert solve_ee_collision_constraint(a, 1, b, 1, c, 1, d, 1, 0.5, 0.5, v(0, 0, 1), 0.02, 1.0, *corr)
+    mid_ab = 0.5 * (a + corr[0] + b + corr[1])
+    mid_cd = 0.5 * (c + corr[2] + d + corr[3])
+    assert (mid_ab - mid_cd)[2] == pytest.approx(0.02, abs=1e-15)
+
+
+def sheets(nx=6, gap=0.05, shift=0.0):
+    """Two parallel grid sheets, the upper one above the lower by ``gap``."""
+    from inflo.tools.canopy_render.demo import grid_faces
+
+    u, w = np.meshgrid(np.linspace(0, 1, nx), np.linspace(0, 1, nx), indexing="ij")
+    lower = np.stack([u, w, 0 * u], -1).reshape(-1, 3)
+    upper = np.stack([u + shift, w + 0.5 * shift, 0 * u + gap], -1).reshape(-1, 3)
+    tri = grid_faces(nx, nx)
+    return np.concatenate([lower, upper]), np.concatenate([tri, tri + nx * nx]).astype(np.int32)
+
+
+def test_resolve_collisions_leaves_the_step_collision_free():
+    rng = np.random.default_rng(5)
+    x0, tri = sheets(gap=0.05, shift=0.03)
+    edges = mesh_edges(tri)
+    n = len(x0) // 2
+    x1 = x0.copy()
+    # the middle of the upper sheet is pushed down through the lower one
+    r2 = ((x0[n:, :2] - 0.5) ** 2).sum(axis=1)
+    x1[n:, 2] -= 0.15 * np.exp(-r2 / 0.08) + 0.01 * rng.uniform(size=n)
+    w = np.ones(len(x0))
+    w[:6] = 0.0
+    assert len(intersecting_pairs(x0, tri)) == 0
+    assert len(intersecting_pairs(x1, tri)) > 0
+    before, _ = detect_collisions(x0, x1, tri, edges, tolerance=1e-9)
+    assert len(before) > 0
+    res = resolve_collisions(x0, x1, w, tri, edges, thickness=0.005, iterations=10, max_retries=20)
+    after, _ = detect_collisions(x0, x1, tri, edges, tolerance=1e-9)
+    assert len(after) == 0
+    assert len(intersecting_pairs(x1, tri)) == 0
+    assert res.found[0] == len(before) and res.constraints > 0
+    np.testing.assert_array_equal(x1[:6], x0[:6])  # fixed vertices never move
+
+
+def test_fallback_reverts_when_retries_run_out():
+    x0, tri = sheets(gap=0.05)
+    edges = mesh_edges(tri)
+    n = len(x0) // 2
+    x1 = x0.copy()
+    x1[n:, 2] -= 0.2
+    res = resolve_collisions(x0, x1, np.ones(len(x0)), tri, edges, thickness=0.005, iterations=0,
+                             max_retries=0)
+    assert len(res.remaining) > 0 and res.reverted > 0
+    assert len(detect_collisions(x0, x1, tri, edges, tolerance=1e-9)[0]) == 0
+    assert len(intersecting_pairs(x1, tri)) == 0

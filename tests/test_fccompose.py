@@ -1,0 +1,222 @@
+"""fccompose end to end (issue 5): template reproduction, the dense two-floret scene stays
+intersection-free, --resume is bit-identical, RBA motion, and bad input."""
+from __future__ import annotations
+
+import csv
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import no_partial_files, run_cli
+from inflo.formats.fcc import read_fcc
+from inflo.formats.obj import read_obj, read_obj_sequence, write_obj
+from inflo.formats.rba import RbaFrame, write_rba_sequence
+from inflo.formats.scn import Placement
+from inflo.tools.collide import intersecting_pairs
+from inflo.tools.fccompose.compose import compose_canopy
+from inflo.tools.fccompose.synthetic import (
+    opening_floret,
+    two_floret_scene,
+    write_fcc_text,
+    write_floret_animation,
+    write_scene,
+)
+
+N_FRAMES = 8
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    d = tmp_path_factory.mktemp("fcc_inputs")
+    frames, faces, fixed = opening_floret(N_FRAMES)
+    write_floret_animation(d / "anim", frames, faces, fixed, d / "petal_base.txt")
+    placements = two_floret_scene(N_FRAMES)
+    write_scene(d / "scene.scn", placements)
+    write_scene(d / "single.scn", placements[:1])
+    write_fcc_text(d / "dense.fcc")
+    write_fcc_text(d / "single.fcc", scene="single.scn")
+    return {"dir": d, "frames": frames, "faces": faces, "fixed": fixed, "placements": placements}
+
+
+def read_log(folder) -> list[dict]:
+    with open(Path(folder) / "log.csv", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def kabsch_rms(a: np.ndarray, b: np.ndarray) -> float:
+    """RMS distance between point sets after the best rigid motion of ``a`` onto ``b``."""
+    ca, cb = a.mean(axis=0), b.mean(axis=0)
+    u, _, vt = np.linalg.svd((a - ca).T @ (b - cb))
+    d = np.sign(np.linalg.det(u @ vt))
+    r = u @ np.diag([1, 1, d]) @ vt
+    return float(np.sqrt((((a - ca) @ r - (b - cb)) ** 2).sum(axis=1).mean()))
+
+
+def test_single_floret_reproduces_its_template(inputs, tmp_path):
+    out = tmp_path / "single"
+    res = run_cli("fccompose", inputs["dir"] / "single.fcc", "-o", out, "-q")
+    assert res.returncode == 0, res.stderr
+    paths, meshes = read_obj_sequence(out)
+    assert [p.name for p in paths] == [f"frame_{k:04d}.obj" for k in range(N_FRAMES)]
+    size = np.ptp(np.concatenate(inputs["frames"]), axis=0).max()
+    for k, mesh in enumerate(meshes):
+        np.testing.assert_array_equal(mesh.faces, inputs["faces"])
+        assert kabsch_rms(mesh.vertices, inputs["frames"][k]) < 0.01 * size
+    log = read_log(out)
+    assert [int(r["frame"]) for r in log] == list(range(N_FRAMES))
+    assert max(float(r["rms_edge_error"]) for r in log) < 1e-3
+
+
+@pytest.fixture(scope="module")
+def dense_run(inputs, tmp_path_factory):
+    out = tmp_path_factory.mktemp("dense") / "out"
+    res = run_cli("fccompose", inputs["dir"] / "dense.fcc", "-o", out)
+    assert res.returncode == 0, res.stderr
+    return out, res
+
+
+def test_dense_scene_ends_every_frame_without_intersections(inputs, dense_run):
+    out, _ = dense_run
+    paths, meshes = read_obj_sequence(out)
+    assert len(paths) == N_FRAMES
+    # the placed templates alone would run through each other: the test is not vacuous
+    last = []
+    for k, p in enumerate(inputs["placements"]):
+        m = p.matrix()
+        last.append(inputs["frames"][-1] @ m[:3, :3].T + m[:3, 3])
+    two = np.concatenate([inputs["faces"], inputs["faces"] + len(inputs["frames"][0])])
+    assert len(intersecting_pairs(np.concatenate(last), two)) > 10
+    for mesh in meshes:
+        assert len(intersecting_pairs(mesh.vertices, mesh.faces)) == 0
+    log = read_log(out)
+    assert all(int(r["intersecting_pairs"]) == 0 for r in log)
+    assert sum(int(r["collisions_found"]) for r in log) > 20
+    mesh = meshes[-1]
+    assert mesh.groups == ["floret_0", "floret_1"]
+    assert mesh.materials == ["mtl1", "mtl2"]
+    assert no_partial_files(out)
+
+
+def test_resume_continues_bit_identically(inputs, dense_run, tmp_path):
+    out_full, _ = dense_run
+    out = tmp_path / "resumed"
+    params = read_fcc(inputs["dir"] / "dense.fcc")
+
+    class Interrupt:
+        def __init__(self, total):
+            self.done = 0
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def update(self, n):
+            self.done += n
+            if self.done == 3:
+                raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        compose_canopy(params, out, progress=Interrupt)
+    assert sorted(p.name for p in out.glob("*.obj")) == [f"frame_{k:04d}.obj" for k in range(4)]
+    res = run_cli("fccompose", inputs["dir"] / "dense.fcc", "-o", out, "--resume", "-q")
+    assert res.returncode == 0, res.stderr
+    full = sorted(out_full.glob("*.obj"))
+    assert [p.name for p in sorted(out.glob("*.obj"))] == [p.name for p in full]
+    for p in full:
+        assert (out / p.name).read_bytes() == p.read_bytes(), p.name
+    assert len(read_log(out)) == N_FRAMES
+
+
+def test_rigid_body_animation_moves_the_floret(inputs, tmp_path):
+    d = inputs["dir"]
+    shutil.copytree(d / "anim", tmp_path / "anim")
+    shutil.copy(d / "petal_base.txt", tmp_path / "petal_base.txt")
+    write_scene(tmp_path / "rba.scn", [Placement("rba", 0, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0],
+                                                 frame_start=0, frame_end=3, material=4)])
+    frames = [RbaFrame([0], [[0.5 * k, 0.0, 0.0]], [[1, 1, 1]], [[0, 1, 0]], [[1, 0, 0]]) for k in range(4)]
+    write_rba_sequence(tmp_path / "rba", frames)
+    write_fcc_text(tmp_path / "rba.fcc", scene="rba.scn",
+                   extra="rigid body animation: 7 1 1 1 rba rba.scn\n")
+    out = tmp_path / "out"
+    res = run_cli("fccompose", tmp_path / "rba.fcc", "-o", out, "-q")
+    assert res.returncode == 0, res.stderr
+    _, meshes = read_obj_sequence(out)
+    assert len(meshes) == 4
+    tpl = opening_floret(N_FRAMES)[0]
+    u = np.arange(4) / 3 * (N_FRAMES - 1)
+    for k, mesh in enumerate(meshes):
+        a = int(np.floor(u[k]))
+        b = min(a + 1, N_FRAMES - 1)
+        expect = (1 - (u[k] - a)) * tpl[a] + (u[k] - a) * tpl[b] + [0.5 * k, 0, 0]
+        assert np.abs(mesh.vertices - expect).max() < 0.01  # rest values interpolate, positions do not
+
+
+# -- bad input ---------------------------------------------------------------------------------------
+
+
+def bad_case(inputs, tmp_path, *, fcc_extra="", scene=None, edit=None, **fcc):
+    d = tmp_path / "case"
+    shutil.copytree(inputs["dir"], d, ignore=shutil.ignore_patterns("*.fcc"))
+    if scene is not None:
+        write_scene(d / "scene.scn", scene)
+    if edit:
+        edit(d)
+    write_fcc_text(d / "p.fcc", extra=fcc_extra, **fcc)
+    out = tmp_path / "out"
+    res = run_cli("fccompose", d / "p.fcc", "-o", out)
+    return res, out
+
+
+def assert_input_error(res, out, *words):
+    assert res.returncode == 2, res.stderr
+    line = res.stderr.strip()
+    assert len(line.splitlines()) == 1 and "Traceback" not in line
+    for w in words:
+        assert w in line, line
+    assert not out.exists() or not list(out.glob("*.obj"))
+
+
+def test_topology_change_in_the_animation_names_the_frame(inputs, tmp_path):
+    def edit(d):
+        p = d / "anim" / "frame_0003.obj"
+        m = read_obj(p)
+        m.faces = m.faces[::-1].copy()
+        write_obj(p, m)
+
+    res, out = bad_case(inputs, tmp_path, edit=edit)
+    assert_input_error(res, out, "frame_0003.obj", "topology")
+
+
+def test_scene_id_without_animation(inputs, tmp_path):
+    pl = two_floret_scene(N_FRAMES)
+    pl[1].id = 3
+    res, out = bad_case(inputs, tmp_path, scene=pl)
+    assert_input_error(res, out, "scene.scn", "id 3")
+
+
+def test_rba_id_missing_from_scene(inputs, tmp_path):
+    def edit(d):
+        frames = [RbaFrame([5], [[0, 0, 0]], [[1, 1, 1]], [[0, 1, 0]], [[1, 0, 0]])]
+        write_rba_sequence(d / "rba", frames)
+
+    res, out = bad_case(inputs, tmp_path, edit=edit, fcc_extra="rigid body animation: 9 1 1 1 rba scene.scn\n")
+    assert_input_error(res, out, "0000.rba", "5")
+
+
+@pytest.mark.parametrize("kw, word", [({"k_stretch": 1.5}, "kStretch"), ({"spacing": -0.1}, "spacing")])
+def test_bad_parameters(inputs, tmp_path, kw, word):
+    res, out = bad_case(inputs, tmp_path, **kw)
+    assert_input_error(res, out, "p.fcc", word)
+
+
+def test_initial_intersections_are_refused_then_allowed(inputs, tmp_path):
+    pl = two_floret_scene(N_FRAMES, distance=0.3)
+    res, out = bad_case(inputs, tmp_path, scene=pl)
+    assert_input_error(res, out, "collision-free", "0-1")
+    write_fcc_text(tmp_path / "case" / "p.fcc", frames=1)
+    res = run_cli("fccompose", tmp_path / "case" / "p.fcc", "-o", out, "--allow-initial-intersections", "-q")
+    assert res.returncode == 0, res.stderr

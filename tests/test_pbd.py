@@ -1,0 +1,232 @@
+"""PBD constraint kernels (thesis ch. 3, eqs. 3.3-3.13, appendix A) on tiny cases, and the sweeps."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from inflo.tools.pbd import (
+    colour_constraints,
+    dihedral_angle_gradients,
+    init_bending_constraint,
+    mesh_edges,
+    mesh_hinges,
+    project_bending_constraints,
+    project_bending_constraints_coloured,
+    project_distance_constraints,
+    project_distance_constraints_coloured,
+    signed_dihedral_angle,
+    solve_attachment_constraint,
+    solve_bending_constraint,
+    solve_distance_constraint,
+    wrap_angle,
+)
+from inflo.tools.pbd.solver import hinge_angles
+
+
+def hinge(angle_deg: float) -> np.ndarray:
+    """Hinge (p1, p2, p3, p4) on the edge p1 = 0 -> p2 = +X, with signed dihedral angle ``angle``."""
+    a = math.radians(angle_deg)
+    p1 = np.array([0.0, 0.0, 0.0])
+    p2 = np.array([1.0, 0.0, 0.0])
+    p3 = np.array([0.5, 1.0, 0.0])  # wing of triangle (p1, p2, p3)
+    # wing of (p1, p4, p2): the mirror of p3 across the edge, turned about +X by the angle
+    p4 = np.array([0.5, -math.cos(a), -math.sin(a)])
+    return np.array([p1, p2, p3, p4])
+
+
+def test_stretched_edge_returns_to_rest_length_in_one_projection():
+    p0, p1 = np.array([0.0, 0.0, 0.0]), np.array([2.0, 0.0, 0.0])
+    c0, c1 = np.zeros(3), np.zeros(3)
+    assert solve_distance_constraint(p0, 1.0, p1, 1.0, 1.0, 1.0, c0, c1)
+    q0, q1 = p0 + c0, p1 + c1
+    assert np.linalg.norm(q1 - q0) == pytest.approx(1.0, abs=1e-15)
+    np.testing.assert_allclose(c0, [0.5, 0, 0])
+    np.testing.assert_allclose(c1, [-0.5, 0, 0])
+
+
+def test_fixed_vertex_never_moves():
+    rng = np.random.default_rng(1)
+    c = [np.zeros(3) for _ in range(4)]
+    for _ in range(20):
+        p = rng.normal(size=(4, 3))
+        solve_distance_constraint(p[0], 0.0, p[1], 1.0, 0.3, 1.0, c[0], c[1])
+        assert not c[0].any() and c[1].any()
+        solve_bending_constraint(p[0], 0.0, p[1], 1.0, p[2], 0.0, p[3], 2.0, 0.7, 1.0, *c)
+        assert not c[0].any() and not c[2].any()
+    # both fixed: degenerate, reported as such
+    assert not solve_distance_constraint(p[0], 0.0, p[1], 0.0, 0.3, 1.0, c[0], c[1])
+    assert not c[0].any() and not c[1].any()
+
+
+def test_attachment_constraint_moves_only_fixed_vertices():
+    corr = np.zeros(3)
+    assert solve_attachment_constraint(np.zeros(3), 0.0, np.array([1.0, 2.0, 3.0]), corr)
+    np.testing.assert_array_equal(corr, [1, 2, 3])
+    assert not solve_attachment_constraint(np.zeros(3), 1.0, np.array([1.0, 2.0, 3.0]), corr)
+    assert not corr.any()
+
+
+@pytest.mark.parametrize("angle", [-170.0, -90.0, -30.0, 0.0, 15.0, 90.0, 135.0, 179.0])
+def test_signed_dihedral_angle_measures_the_hinge(angle):
+    p = hinge(angle)
+    assert math.degrees(signed_dihedral_angle(*p)) == pytest.approx(angle, abs=1e-9)
+
+
+def test_mirror_configurations_have_opposite_signs():
+    """Fig. 3.2: the unsigned angle of eq. 3.12 cannot tell them apart, eq. 3.13 can."""
+    a, b = hinge(40.0), hinge(-40.0)
+    n = lambda p, q, r: np.cross(q - p, r - p) / np.linalg.norm(np.cross(q - p, r - p))  # noqa: E731
+    unsigned = lambda h: math.acos(np.dot(n(h[0], h[2], h[1]), n(h[0], h[1], h[3])))  # noqa: E731
+    assert unsigned(a) == pytest.approx(unsigned(b))
+    assert signed_dihedral_angle(*a) == pytest.approx(-signed_dihedral_angle(*b))
+
+
+def test_gradients_match_finite_differences():
+    rng = np.random.default_rng(2)
+    g = np.zeros((4, 3))
+    for _ in range(20):
+        p = rng.normal(size=(4, 3))
+        dihedral_angle_gradients(p[0], p[1], p[2], p[3], g[0], g[1], g[2], g[3])
+        fd = np.zeros((4, 3))
+        h = 1e-6
+        for i in range(4):
+            for c in range(3):
+                q = p.copy()
+                q[i, c] += h
+                f1 = signed_dihedral_angle(*q)
+                q[i, c] -= 2 * h
+                f0 = signed_dihedral_angle(*q)
+                fd[i, c] = wrap_angle(f1 - f0) / (2 * h)
+        np.testing.assert_allclose(g, fd, atol=1e-6 * max(1.0, np.abs(fd).max()))
+
+
+def test_hinge_bent_through_zero_keeps_the_sign_of_its_rest_angle():
+    """Mirror case: rest +30 deg, pushed to -10 deg (through flat). The projection must bring it
+    back to +30, never to the mirror -30 (which is what the unsigned eq. 3.12 converges to)."""
+    rest = math.radians(30.0)
+    p = hinge(-10.0)
+    c = [np.zeros(3) for _ in range(4)]
+    angles = []
+    for _ in range(30):
+        solve_bending_constraint(p[0], 1.0, p[1], 1.0, p[2], 1.0, p[3], 1.0, rest, 1.0, *c)
+        p = p + np.array(c)
+        angles.append(math.degrees(signed_dihedral_angle(*p)))
+    assert angles[-1] == pytest.approx(30.0, abs=1e-3)
+    assert all(a > -10.0 - 1e-9 for a in angles)
+
+
+def test_bending_takes_the_short_way_round_near_180():
+    """Rest +175 deg, current -175 deg: 10 deg apart through 180, not 350 deg through 0."""
+    p = hinge(-175.0)
+    c = [np.zeros(3) for _ in range(4)]
+    solve_bending_constraint(p[0], 1.0, p[1], 1.0, p[2], 1.0, p[3], 1.0, math.radians(175.0), 1.0, *c)
+    q = p + np.array(c)
+    assert abs(wrap_angle(signed_dihedral_angle(*q) - math.radians(175.0))) < math.radians(10.0)
+    assert abs(math.degrees(signed_dihedral_angle(*q))) > 170.0
+
+
+@pytest.mark.parametrize("kind", ["distance", "bending"])
+def test_internal_constraints_conserve_linear_and_angular_momentum(kind):
+    """Eqs. 3.3-3.4: sum m_i dp_i = 0 and sum m_i p_i x dp_i = 0."""
+    rng = np.random.default_rng(3)
+    c = [np.zeros(3) for _ in range(4)]
+    for _ in range(50):
+        p = rng.normal(size=(4, 3))
+        w = rng.uniform(0.2, 3.0, 4)
+        if kind == "distance":
+            assert solve_distance_constraint(p[0], w[0], p[1], w[1], 0.5, 1.0, c[0], c[1])
+            k = 2
+        else:
+            assert solve_bending_constraint(p[0], w[0], p[1], w[1], p[2], w[2], p[3], w[3],
+                                            rng.uniform(-3, 3), 1.0, *c)
+            k = 4
+        m = 1.0 / w[:k]
+        dp = np.array(c[:k])
+        lin = (m[:, None] * dp).sum(axis=0)
+        ang = (m[:, None] * np.cross(p[:k], dp)).sum(axis=0)
+        scale = np.abs(m[:, None] * dp).max()
+        assert np.abs(lin).max() <= 1e-12 * max(scale, 1e-300) + 1e-15
+        assert np.abs(ang).max() <= 1e-11 * max(scale, 1e-300) + 1e-14
+
+
+def strip(nu=6, nv=4, rng=None):
+    """A bumpy grid mesh and its topology."""
+    u, v = np.meshgrid(np.linspace(0, 1, nu), np.linspace(0, 0.6, nv), indexing="ij")
+    x = np.stack([u, v, 0.1 * np.sin(3 * u) * np.cos(2 * v)], -1).reshape(-1, 3)
+    if rng is not None:
+        x = x + rng.normal(scale=0.01, size=x.shape)
+    from inflo.tools.canopy_render.demo import grid_faces
+
+    tri = grid_faces(nu, nv)
+    return x, tri
+
+
+def test_mesh_hinges_flat_grid_is_zero_and_matches_init():
+    from inflo.tools.canopy_render.demo import grid_faces
+
+    tri = grid_faces(4, 3)
+    u, v = np.meshgrid(np.arange(4.0), np.arange(3.0), indexing="ij")
+    x = np.stack([u, v, 0 * u], -1).reshape(-1, 3)
+    h = mesh_hinges(tri)
+    e = mesh_edges(tri)
+    assert len(e) == 3 * 2 + 4 * 2 + 6 + 3 * 2 * 1 - 3  # grid edges + diagonals
+    assert len(h) == len(e) - (2 * 3 + 2 * 2)  # interior edges
+    np.testing.assert_allclose(hinge_angles(x, h), 0.0, atol=1e-15)
+    for k in range(len(h)):
+        assert init_bending_constraint(*x[h[k]]) == pytest.approx(0.0, abs=1e-15)
+
+
+def test_sweeps_equal_a_loop_over_the_pure_kernels():
+    rng = np.random.default_rng(4)
+    x, tri = strip(rng=rng)
+    e, h = mesh_edges(tri), mesh_hinges(tri)
+    w = rng.uniform(0.0, 2.0, len(x))
+    w[:3] = 0.0
+    rest_l = rng.uniform(0.1, 0.3, len(e))
+    rest_a = rng.uniform(-1, 1, len(h))
+    k_e, k_h = np.full(len(e), 0.9), np.full(len(h), 0.8)
+    fast = x.copy()
+    project_distance_constraints(fast, w, e, rest_l, k_e)
+    project_bending_constraints(fast, w, h, rest_a, k_h)
+    ref = x.copy()
+    c = [np.zeros(3) for _ in range(4)]
+    for i, (a, b) in enumerate(e):
+        solve_distance_constraint(ref[a], w[a], ref[b], w[b], rest_l[i], 0.9, c[0], c[1])
+        ref[a] += c[0]
+        ref[b] += c[1]
+    for i, q in enumerate(h):
+        solve_bending_constraint(ref[q[0]], w[q[0]], ref[q[1]], w[q[1]], ref[q[2]], w[q[2]], ref[q[3]], w[q[3]],
+                                 rest_a[i], 0.8, *c)
+        for j in range(4):
+            ref[q[j]] += c[j]
+    np.testing.assert_allclose(fast, ref, rtol=0, atol=1e-13)
+
+
+def test_colouring_separates_constraints_and_coloured_sweeps_converge_deterministically():
+    rng = np.random.default_rng(5)
+    x, tri = strip(8, 5, rng=rng)
+    e, h = mesh_edges(tri), mesh_hinges(tri)
+    for idx in (e, h):
+        order, offsets = colour_constraints(idx, len(x))
+        assert sorted(order.tolist()) == list(range(len(idx)))
+        for c in range(len(offsets) - 1):
+            members = idx[order[offsets[c]:offsets[c + 1]]].ravel()
+            assert len(np.unique(members)) == len(members)
+    target_l = np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1)
+    target_a = hinge_angles(x, h)
+    w = np.ones(len(x))
+    w[:5] = 0.0
+    start = x + rng.normal(scale=0.02, size=x.shape)
+    start[:5] = x[:5]
+    runs = []
+    for _ in range(2):
+        y = start.copy()
+        ce, ch = colour_constraints(e, len(x)), colour_constraints(h, len(x))
+        for _ in range(200):
+            project_distance_constraints_coloured(y, w, e, target_l, np.ones(len(e)), *ce)
+            project_bending_constraints_coloured(y, w, h, target_a, np.ones(len(h)), *ch)
+        runs.append(y)
+    np.testing.assert_array_equal(runs[0], runs[1])
+    assert np.abs(np.linalg.norm(runs[0][e[:, 0]] - runs[0][e[:, 1]], axis=1) - target_l).max() < 1e-4

@@ -1,0 +1,37 @@
+"""Collision detection and response shared by ``fccompose`` and ``subdivide`` (thesis ch. 4).
+
+- :mod:`.ccd`: continuous narrow phase (coplanarity cubic, culling, roots, inside tests).
+- :mod:`.broad`: broad phase on a hashed uniform grid.
+- :mod:`.tritri`: exact static triangle-triangle intersection test.
+- :mod:`.response`: collision constraints C_vt (eq. 4.6) and C_ee (eq. 4.7).
+- :mod:`.resolve`: detection over a mesh and the retry loop of Algorithm 1.
+"""
+from .broad import box_pairs, edge_boxes, lattice_cell_size, triangle_boxes, vertex_boxes
+from .ccd import (
+    cubic_edge_edge,
+    cubic_roots_01,
+    cubic_vertex_triangle,
+    cull_cubic,
+    edge_edge_ccd,
+    point_triangle_distance,
+    segment_segment_distance,
+    vertex_triangle_ccd,
+)
+from .resolve import CollisionResult, Contacts, default_tolerance, detect_collisions, resolve_collisions
+from .response import (
+    project_collision_constraints,
+    solve_collision_constraint,
+    solve_ee_collision_constraint,
+    solve_vt_collision_constraint,
+)
+from .tritri import intersecting_pairs, intersecting_pairs_brute, triangles_intersect
+
+__all__ = [
+    "box_pairs", "edge_boxes", "lattice_cell_size", "triangle_boxes", "vertex_boxes",
+    "cubic_edge_edge", "cubic_roots_01", "cubic_vertex_triangle", "cull_cubic", "edge_edge_ccd",
+    "point_triangle_distance", "segment_segment_distance", "vertex_triangle_ccd",
+    "CollisionResult", "Contacts", "default_tolerance", "detect_collisions", "resolve_collisions",
+    "project_collision_constraints", "solve_collision_constraint", "solve_ee_collision_constraint",
+    "solve_vt_collision_constraint",
+    "intersecting_pairs", "intersecting_pairs_brute", "triangles_intersect",
+]

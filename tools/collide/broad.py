@@ -1,0 +1,281 @@
+"""Broad phase: candidate pairs of overlapping boxes on a hashed uniform grid (thesis 4.2.1).
+
+The thesis's collision lattice (app. C.1 keys ``origin``, ``dimensions``, ``divisions``) is a
+uniform grid over the scene; here the grid is unbounded and hashed (Teschner et al. 2003, spatial
+hashing), so geometry outside the lattice box is still found: the lattice keys only choose the
+cell size (:func:`lattice_cell_size`). Each element is given its axis-aligned box (swept over the
+step for continuous detection: the box of its positions at t = 0 and t = 1, grown by a pad);
+boxes of one set are inserted into every cell they overlap, the other set's boxes look up their
+cells. A pair found in several cells is reported once: only in the cell that holds the minimum
+corner of the two boxes' intersection. Output pairs are sorted, so the result does not depend on
+thread timing; two passes (count, then fill) over the queries run in parallel.
+
+Boxes are ``(k, 6) float64`` rows ``[min_x, min_y, min_z, max_x, max_y, max_z]``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+__all__ = [
+    "vertex_boxes",
+    "edge_boxes",
+    "triangle_boxes",
+    "box_pairs",
+    "box_pairs_brute",
+    "lattice_cell_size",
+]
+
+
+@njit(cache=True)
+def vertex_boxes(x0, x1, pad):
+    """(n, 6): box of every vertex's segment from ``x0`` to ``x1``, grown by ``pad``."""
+    n = x0.shape[0]
+    out = np.empty((n, 6))
+    for i in range(n):
+        for d in range(3):
+            out[i, d] = min(x0[i, d], x1[i, d]) - pad
+            out[i, d + 3] = max(x0[i, d], x1[i, d]) + pad
+    return out
+
+
+@njit(cache=True)
+def edge_boxes(x0, x1, edge_indices, pad):
+    """(e, 6): box of each edge's two vertices at t = 0 and t = 1, grown by ``pad``."""
+    n = edge_indices.shape[0]
+    out = np.empty((n, 6))
+    for e in range(n):
+        for d in range(3):
+            lo = np.inf
+            hi = -np.inf
+            for k in range(2):
+                v = edge_indices[e, k]
+                lo = min(lo, x0[v, d], x1[v, d])
+                hi = max(hi, x0[v, d], x1[v, d])
+            out[e, d] = lo - pad
+            out[e, d + 3] = hi + pad
+    return out
+
+
+@njit(cache=True)
+def triangle_boxes(x0, x1, tri_indices, pad):
+    """(m, 6): box of each triangle's three vertices at t = 0 and t = 1, grown by ``pad``."""
+    n = tri_indices.shape[0]
+    out = np.empty((n, 6))
+    for t in range(n):
+        for d in range(3):
+            lo = np.inf
+            hi = -np.inf
+            for k in range(3):
+                v = tri_indices[t, k]
+                lo = min(lo, x0[v, d], x1[v, d])
+                hi = max(hi, x0[v, d], x1[v, d])
+            out[t, d] = lo - pad
+            out[t, d + 3] = hi + pad
+    return out
+
+
+def lattice_cell_size(lattice, bounds_min, bounds_max, boxes) -> float:
+    """Cell size of the hashed grid from the collision lattice keys (app. C.1).
+
+    With ``auto_bounds`` the lattice box is the geometry's bounding box times ``size_multiply``
+    (a cube of its largest side with ``make_cube``), else ``dimensions``; the cell is the box over
+    ``divisions``, largest axis. It is never taken below the mean box extent of the elements
+    (smaller cells only multiply the cells each element visits).
+    """
+    lo = np.asarray(bounds_min, float)
+    hi = np.asarray(bounds_max, float)
+    if lattice.auto_bounds:
+        dims = (hi - lo) * np.asarray(lattice.size_multiply, float)
+        if lattice.make_cube:
+            dims = np.full(3, dims.max())
+    else:
+        dims = np.asarray(lattice.dimensions, float)
+    cell = float(np.max(dims / np.asarray(lattice.divisions, float)))
+    return max(cell, _mean_extent(boxes))
+
+
+def _mean_extent(boxes) -> float:
+    if len(boxes) == 0:
+        return 1.0
+    ext = (boxes[:, 3:] - boxes[:, :3]).max(axis=1)
+    m = float(ext.mean())
+    return m if m > 0 else 1.0
+
+
+@njit(cache=True, inline="always")
+def _hash(ix, iy, iz, mask):
+    h = (ix * np.int64(73856093)) ^ (iy * np.int64(19349663)) ^ (iz * np.int64(83492791))
+    return h & mask
+
+
+@njit(cache=True, inline="always")
+def _cell(v, o, inv):
+    return np.int64(math.floor((v - o) * inv))
+
+
+@njit(cache=True)
+def _build(boxes, origin, inv):
+    n = boxes.shape[0]
+    total = 0
+    for i in range(n):
+        c = 1
+        for d in range(3):
+            c *= _cell(boxes[i, d + 3], origin[d], inv) - _cell(boxes[i, d], origin[d], inv) + 1
+        total += c
+    size = 1
+    while size < 2 * total:
+        size *= 2
+    mask = np.int64(size - 1)
+    counts = np.zeros(size + 1, np.int64)
+    for i in range(n):
+        lx = _cell(boxes[i, 0], origin[0], inv)
+        ly = _cell(boxes[i, 1], origin[1], inv)
+        lz = _cell(boxes[i, 2], origin[2], inv)
+        hx = _cell(boxes[i, 3], origin[0], inv)
+        hy = _cell(boxes[i, 4], origin[1], inv)
+        hz = _cell(boxes[i, 5], origin[2], inv)
+        for ix in range(lx, hx + 1):
+            for iy in range(ly, hy + 1):
+                for iz in range(lz, hz + 1):
+                    counts[_hash(ix, iy, iz, mask) + 1] += 1
+    for h in range(size):
+        counts[h + 1] += counts[h]
+    fill = counts[:-1].copy()
+    elem = np.empty(total, np.int32)
+    cells = np.empty((total, 3), np.int64)
+    for i in range(n):
+        lx = _cell(boxes[i, 0], origin[0], inv)
+        ly = _cell(boxes[i, 1], origin[1], inv)
+        lz = _cell(boxes[i, 2], origin[2], inv)
+        hx = _cell(boxes[i, 3], origin[0], inv)
+        hy = _cell(boxes[i, 4], origin[1], inv)
+        hz = _cell(boxes[i, 5], origin[2], inv)
+        for ix in range(lx, hx + 1):
+            for iy in range(ly, hy + 1):
+                for iz in range(lz, hz + 1):
+                    h = _hash(ix, iy, iz, mask)
+                    k = fill[h]
+                    elem[k] = i
+                    cells[k, 0] = ix
+                    cells[k, 1] = iy
+                    cells[k, 2] = iz
+                    fill[h] = k + 1
+    return counts, elem, cells, mask
+
+
+@njit(cache=True, inline="always")
+def _overlap(a, i, b, j):
+    for d in range(3):
+        if a[i, d] > b[j, d + 3] or b[j, d] > a[i, d + 3]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _query_one(a, boxes_a, boxes_b, same, origin, inv, starts, elem, cells, mask, out, base, write):
+    lx = _cell(boxes_a[a, 0], origin[0], inv)
+    ly = _cell(boxes_a[a, 1], origin[1], inv)
+    lz = _cell(boxes_a[a, 2], origin[2], inv)
+    hx = _cell(boxes_a[a, 3], origin[0], inv)
+    hy = _cell(boxes_a[a, 4], origin[1], inv)
+    hz = _cell(boxes_a[a, 5], origin[2], inv)
+    n = 0
+    for ix in range(lx, hx + 1):
+        for iy in range(ly, hy + 1):
+            for iz in range(lz, hz + 1):
+                h = _hash(ix, iy, iz, mask)
+                for k in range(starts[h], starts[h + 1]):
+                    if cells[k, 0] != ix or cells[k, 1] != iy or cells[k, 2] != iz:
+                        continue
+                    b = elem[k]
+                    if same and b <= a:
+                        continue
+                    if not _overlap(boxes_a, a, boxes_b, b):
+                        continue
+                    # report once: in the cell of the intersection box's minimum corner
+                    if _cell(max(boxes_a[a, 0], boxes_b[b, 0]), origin[0], inv) != ix:
+                        continue
+                    if _cell(max(boxes_a[a, 1], boxes_b[b, 1]), origin[1], inv) != iy:
+                        continue
+                    if _cell(max(boxes_a[a, 2], boxes_b[b, 2]), origin[2], inv) != iz:
+                        continue
+                    if write:
+                        out[base + n, 0] = a
+                        out[base + n, 1] = b
+                    n += 1
+    return n
+
+
+@njit(cache=True, parallel=True)
+def _query(boxes_a, boxes_b, same, origin, inv, starts, elem, cells, mask):
+    na = boxes_a.shape[0]
+    counts = np.zeros(na + 1, np.int64)
+    dummy = np.empty((0, 2), np.int32)
+    for a in prange(na):
+        counts[a + 1] = _query_one(a, boxes_a, boxes_b, same, origin, inv, starts, elem, cells,
+                                   mask, dummy, 0, False)
+    for a in range(na):
+        counts[a + 1] += counts[a]
+    out = np.empty((counts[na], 2), np.int32)
+    for a in prange(na):
+        _query_one(a, boxes_a, boxes_b, same, origin, inv, starts, elem, cells, mask, out,
+                   counts[a], True)
+    return out
+
+
+def box_pairs(boxes_a: np.ndarray, boxes_b: np.ndarray | None = None, *,
+              cell_size: float | None = None) -> np.ndarray:
+    """All pairs of overlapping boxes (closed boxes: touching counts).
+
+    Parameters
+    ----------
+    boxes_a : (na, 6) float64
+    boxes_b : (nb, 6) float64 or None
+        None: pairs within ``boxes_a`` (``i < j``).
+    cell_size : float or None
+        Grid cell edge; None: the mean largest box extent.
+
+    Returns
+    -------
+    (k, 2) int32
+        ``(i, j)``: box i of ``boxes_a`` overlaps box j of ``boxes_b``; sorted, no duplicates.
+    """
+    a = np.ascontiguousarray(boxes_a, dtype=np.float64).reshape(-1, 6)
+    same = boxes_b is None
+    b = a if same else np.ascontiguousarray(boxes_b, dtype=np.float64).reshape(-1, 6)
+    if len(a) == 0 or len(b) == 0:
+        return np.zeros((0, 2), np.int32)
+    if cell_size is None or not cell_size > 0:
+        cell_size = _mean_extent(b)
+    origin = np.minimum(a[:, :3].min(axis=0), b[:, :3].min(axis=0))
+    inv = 1.0 / float(cell_size)
+    # guard against absurd cell counts for a too-small cell (an element spanning > 64 cells per axis)
+    span = float(np.max(np.concatenate([a[:, 3:] - a[:, :3], b[:, 3:] - b[:, :3]]).max(axis=0)))
+    if span * inv > 64.0:
+        inv = 64.0 / span
+    starts, elem, cells, mask = _build(b, origin, inv)
+    pairs = _query(a, b, same, origin, inv, starts, elem, cells, mask)
+    if len(pairs) > 1:
+        order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+        pairs = pairs[order]
+    return pairs
+
+
+@njit(cache=True)
+def box_pairs_brute(boxes_a, boxes_b, same):
+    """Reference for tests: every pair tested, O(na nb)."""
+    out = []
+    for i in range(boxes_a.shape[0]):
+        for j in range(boxes_b.shape[0]):
+            if same and j <= i:
+                continue
+            if _overlap(boxes_a, i, boxes_b, j):
+                out.append((i, j))
+    res = np.zeros((len(out), 2), np.int32)
+    for k in range(len(out)):
+        res[k, 0] = out[k][0]
+        res[k, 1] = out[k][1]
+    return res

@@ -1,0 +1,465 @@
+"""Continuous collision detection over a mesh and the collision-resolution loop (thesis 4.2-4.3, Alg. 1).
+
+:func:`detect_collisions` runs the broad phase (:mod:`.broad`) and the narrow phase (:mod:`.ccd`) for
+every vertex-triangle and edge-edge pair of a triangle mesh moving linearly from ``x0`` to ``x1``
+and returns the pairs that need a response (an odd number of crossings, 4.2.2.3) as collision
+constraints (:mod:`.response`). Pairs sharing a vertex are skipped (a triangle's own vertices, two
+edges of one triangle fan): self-collisions within one floret count like any other.
+
+:func:`resolve_collisions` is lines 10-20 of Algorithm 1 with the retries of the ``max collision
+retries`` key: detect, add the new collision constraints to the set, solve the set for
+``collision iterations`` sweeps, re-detect; pairs still crossing after the last retry are reported
+and, so that the output stays collision-free, their vertices are put back where they were at the
+start of the step (``x0`` is collision-free; repeated while crossings are left, at most 10 times,
+then the whole step is put back). Used by
+``fccompose`` (growth) and ``subdivide`` (from the in-plane quadrisected mesh to the Loop positions).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit, prange
+
+from .broad import box_pairs, edge_boxes, triangle_boxes, vertex_boxes
+from .ccd import edge_edge_ccd, vertex_triangle_ccd
+from .response import project_collision_constraints
+
+__all__ = ["Contacts", "CollisionResult", "detect_collisions", "resolve_collisions", "default_tolerance"]
+
+KIND_VT = 0
+KIND_EE = 1
+#: detect/solve rounds without fewer crossing pairs after which the retries stop early
+STALL_ROUNDS = 4
+
+
+@dataclass
+class Contacts:
+    """Collision constraints as structure of arrays (one row per colliding pair).
+
+    Attributes
+    ----------
+    kind : (k,) int8
+        0 vertex-triangle (C_vt, eq. 4.6), 1 edge-edge (C_ee, eq. 4.7).
+    indices : (k, 4) int32
+        (q, a, b, c) for vertex q and triangle abc; (a, b, c, d) for edges ab and cd.
+    coef : (k, 4) float64
+        Constraint coefficients (see :mod:`.response`).
+    normal : (k, 3) float64
+        Unit contact normals, pointing to the side the first element came from.
+    toi : (k,) float64
+        First time of impact in the step.
+    element : (k, 2) int32
+        (vertex, triangle) or (edge, edge) indices of the pair.
+    """
+
+    kind: np.ndarray
+    indices: np.ndarray
+    coef: np.ndarray
+    normal: np.ndarray
+    toi: np.ndarray
+    element: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.kind)
+
+    @staticmethod
+    def empty() -> "Contacts":
+        return Contacts(np.zeros(0, np.int8), np.zeros((0, 4), np.int32), np.zeros((0, 4)),
+                        np.zeros((0, 3)), np.zeros(0), np.zeros((0, 2), np.int32))
+
+    def concat(self, other: "Contacts") -> "Contacts":
+        """Rows of ``self`` then the new rows of ``other``; a pair already in ``self`` (same kind
+        and indices) found again takes ``other``'s newer normal, coefficients and time of impact
+        (the one it was found with may point the wrong way once the elements have turned)."""
+        if len(other) == 0:
+            return self
+        if len(self) == 0:
+            return other
+        key_a = np.concatenate([self.kind[:, None].astype(np.int64), self.indices], axis=1)
+        key_b = np.concatenate([other.kind[:, None].astype(np.int64), other.indices], axis=1)
+        row = {tuple(r): i for i, r in enumerate(key_a.tolist())}
+        where = np.array([row.get(tuple(r), -1) for r in key_b.tolist()], dtype=np.int64)
+        new = where < 0
+        old = ~new
+        merged = Contacts(*(getattr(self, f).copy() for f in ("kind", "indices", "coef", "normal", "toi", "element")))
+        for f in ("coef", "normal", "toi", "element"):
+            getattr(merged, f)[where[old]] = getattr(other, f)[old]
+        return Contacts(*(np.concatenate([getattr(merged, f), getattr(other, f)[new]])
+                          for f in ("kind", "indices", "coef", "normal", "toi", "element")))
+
+
+def default_tolerance(x0: np.ndarray, thickness: float) -> float:
+    """Inside-test tolerance of the narrow phase: 1e-6 of the scene's size, at most half the
+    thickness h.
+
+    The tolerance only absorbs rounding at the moment of coplanarity (a vertex through a triangle's
+    edge, two edges crossing end to end); the distance h is kept by the collision constraints,
+    which push to ``max(h, 2 tol)``. A tolerance as large as h would report every vertex within h
+    of a neighbouring triangle of its own mesh (e.g. near a petal's narrow base) as a collision.
+    """
+    if len(x0) == 0:
+        return 1e-12
+    size = float(np.max(x0.max(axis=0) - x0.min(axis=0)))
+    tol = max(1e-6 * size, 1e-12)
+    if thickness > 0:
+        tol = min(tol, 0.5 * float(thickness))
+    return tol
+
+
+# --------------------------------------------------------------------------------------------------
+# Narrow phase over candidate pairs
+# --------------------------------------------------------------------------------------------------
+
+
+@njit(cache=True, parallel=True)
+def _narrow_vt(x0, x1, tri, pairs, tol, hits, info):
+    for k in prange(pairs.shape[0]):
+        v = pairs[k, 0]
+        t = pairs[k, 1]
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        out = np.zeros(4)
+        if v == a or v == b or v == c:
+            hits[k] = 0
+        else:
+            hits[k] = vertex_triangle_ccd(x0[v], x0[a], x0[b], x0[c], x1[v], x1[a], x1[b], x1[c],
+                                          tol, out)
+        for j in range(4):
+            info[k, j] = out[j]
+
+
+@njit(cache=True, parallel=True)
+def _narrow_ee(x0, x1, edges, pairs, tol, hits, info):
+    for k in prange(pairs.shape[0]):
+        e = pairs[k, 0]
+        f = pairs[k, 1]
+        a = edges[e, 0]
+        b = edges[e, 1]
+        c = edges[f, 0]
+        d = edges[f, 1]
+        out = np.zeros(4)
+        if a == c or a == d or b == c or b == d:
+            hits[k] = 0
+        else:
+            hits[k] = edge_edge_ccd(x0[a], x0[b], x0[c], x0[d], x1[a], x1[b], x1[c], x1[d], tol, out)
+        for j in range(4):
+            info[k, j] = out[j]
+
+
+@njit(cache=True)
+def _build_contacts(x0, x1, kind, idx, coef, toi, normal, ok):
+    """Contact normal at the time of impact, oriented to the side the pair started on."""
+    n = idx.shape[0]
+    p = np.empty((4, 3))
+    for k in range(n):
+        t = toi[k]
+        for j in range(4):
+            v = idx[k, j]
+            for d in range(3):
+                p[j, d] = x0[v, d] + t * (x1[v, d] - x0[v, d])
+        # plane normal: triangle (vt, j = 1..3) or the two edges (ee), from coef signs
+        if kind[k] == 0:
+            ux = p[2, 0] - p[1, 0]
+            uy = p[2, 1] - p[1, 1]
+            uz = p[2, 2] - p[1, 2]
+            wx = p[3, 0] - p[1, 0]
+            wy = p[3, 1] - p[1, 1]
+            wz = p[3, 2] - p[1, 2]
+        else:
+            ux = p[1, 0] - p[0, 0]
+            uy = p[1, 1] - p[0, 1]
+            uz = p[1, 2] - p[0, 2]
+            wx = p[3, 0] - p[2, 0]
+            wy = p[3, 1] - p[2, 1]
+            wz = p[3, 2] - p[2, 2]
+        nx = uy * wz - uz * wy
+        ny = uz * wx - ux * wz
+        nz = ux * wy - uy * wx
+        ln = math.sqrt(nx * nx + ny * ny + nz * nz)
+        # separation at t = 0 along the closest-point direction (fallback normal)
+        sx = 0.0
+        sy = 0.0
+        sz = 0.0
+        vx = 0.0
+        vy = 0.0
+        vz = 0.0
+        for j in range(4):
+            v = idx[k, j]
+            sx += coef[k, j] * x0[v, 0]
+            sy += coef[k, j] * x0[v, 1]
+            sz += coef[k, j] * x0[v, 2]
+            vx += coef[k, j] * (x1[v, 0] - x0[v, 0])
+            vy += coef[k, j] * (x1[v, 1] - x0[v, 1])
+            vz += coef[k, j] * (x1[v, 2] - x0[v, 2])
+        scale = 0.0
+        for j in range(4):
+            for d in range(3):
+                scale = max(scale, abs(p[j, d] - p[0, d]))
+        if ln <= 1e-12 * scale * scale or ln == 0.0:
+            ls = math.sqrt(sx * sx + sy * sy + sz * sz)
+            if ls == 0.0:
+                lv = math.sqrt(vx * vx + vy * vy + vz * vz)
+                if lv == 0.0:
+                    ok[k] = False
+                    continue
+                nx, ny, nz, ln = -vx, -vy, -vz, lv
+            else:
+                nx, ny, nz, ln = sx, sy, sz, ls
+        nx /= ln
+        ny /= ln
+        nz /= ln
+        side = sx * nx + sy * ny + sz * nz
+        if side < 0.0 or (side == 0.0 and (vx * nx + vy * ny + vz * nz) > 0.0):
+            nx = -nx
+            ny = -ny
+            nz = -nz
+        normal[k, 0] = nx
+        normal[k, 1] = ny
+        normal[k, 2] = nz
+        ok[k] = True
+
+
+def _candidates(x0, x1, tri, edges, pad, cell_size, active):
+    vb = vertex_boxes(x0, x1, pad)
+    tb = triangle_boxes(x0, x1, tri, pad)
+    eb = edge_boxes(x0, x1, edges, pad)
+    if active is None:
+        return box_pairs(vb, tb, cell_size=cell_size), box_pairs(eb, None, cell_size=cell_size)
+    av = np.nonzero(active)[0]
+    at = np.nonzero(active[tri].any(axis=1))[0]
+    ae = np.nonzero(active[edges].any(axis=1))[0]
+    # the grids are built on the (few) active elements and queried by all boxes
+    parts = []
+    if len(av):
+        p = box_pairs(tb, vb[av], cell_size=cell_size)
+        parts.append(np.stack([av[p[:, 1]], p[:, 0]], axis=1))
+    if len(at):
+        p = box_pairs(vb, tb[at], cell_size=cell_size)
+        parts.append(np.stack([p[:, 0], at[p[:, 1]]], axis=1))
+    vt = np.unique(np.concatenate(parts), axis=0) if parts else np.zeros((0, 2), np.int32)
+    ee = np.zeros((0, 2), np.int32)
+    if len(ae):
+        p = box_pairs(eb, eb[ae], cell_size=cell_size)
+        p = np.stack([p[:, 0], ae[p[:, 1]]], axis=1)
+        p = p[p[:, 0] != p[:, 1]]
+        p.sort(axis=1)
+        ee = np.unique(p, axis=0)
+    return np.ascontiguousarray(vt, dtype=np.int32), np.ascontiguousarray(ee, dtype=np.int32)
+
+
+def detect_collisions(x0: np.ndarray, x1: np.ndarray, tri_indices: np.ndarray, edge_indices: np.ndarray,
+                      *, tolerance: float, cell_size: float | None = None,
+                      active: np.ndarray | None = None) -> tuple[Contacts, dict]:
+    """Continuous collision detection of a triangle mesh moving from ``x0`` to ``x1`` (4.2).
+
+    Parameters
+    ----------
+    x0, x1 : (n, 3) float64
+        Positions at the start (collision-free) and end of the step.
+    tri_indices : (m, 3) int32
+    edge_indices : (e, 2) int32
+        Unique edges of the mesh (:func:`inflo.tools.pbd.mesh_edges`).
+    tolerance : float
+        Inside-test tolerance (:func:`default_tolerance`); also pads the broad-phase boxes.
+    cell_size : float or None
+        Broad-phase cell (None: the mean box size).
+    active : (n,) bool or None
+        Only pairs with at least one active vertex are tested (None: all). The resolution loop
+        re-detects only around the vertices its constraints moved: pairs of unmoved vertices
+        cannot have changed.
+
+    Returns
+    -------
+    contacts : Contacts
+        Pairs with an odd number of crossings (need a response), vertex-triangle first, each in
+        sorted pair order.
+    stats : dict
+        ``vt_candidates``, ``ee_candidates`` (broad phase), ``vt_hits``, ``ee_hits`` (pairs with
+        any crossing), ``vt_even``, ``ee_even`` (pairs crossing an even number of times: ignored).
+    """
+    x0 = np.ascontiguousarray(x0, dtype=np.float64)
+    x1 = np.ascontiguousarray(x1, dtype=np.float64)
+    tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
+    edges = np.ascontiguousarray(edge_indices, dtype=np.int32)
+    pad = 0.5 * tolerance
+    vt_pairs, ee_pairs = _candidates(x0, x1, tri, edges, pad, cell_size,
+                                     None if active is None else np.asarray(active, dtype=bool))
+    vt_hits = np.zeros(len(vt_pairs), np.int32)
+    vt_info = np.zeros((len(vt_pairs), 4))
+    ee_hits = np.zeros(len(ee_pairs), np.int32)
+    ee_info = np.zeros((len(ee_pairs), 4))
+    if len(vt_pairs):
+        _narrow_vt(x0, x1, tri, vt_pairs, float(tolerance), vt_hits, vt_info)
+    if len(ee_pairs):
+        _narrow_ee(x0, x1, edges, ee_pairs, float(tolerance), ee_hits, ee_info)
+    stats = {
+        "vt_candidates": int(len(vt_pairs)),
+        "ee_candidates": int(len(ee_pairs)),
+        "vt_hits": int(np.count_nonzero(vt_hits)),
+        "ee_hits": int(np.count_nonzero(ee_hits)),
+        "vt_even": int(np.count_nonzero((vt_hits > 0) & (vt_hits % 2 == 0))),
+        "ee_even": int(np.count_nonzero((ee_hits > 0) & (ee_hits % 2 == 0))),
+    }
+    sv = np.nonzero(vt_hits % 2 == 1)[0]
+    se = np.nonzero(ee_hits % 2 == 1)[0]
+    k = len(sv) + len(se)
+    idx = np.zeros((k, 4), np.int32)
+    coef = np.zeros((k, 4))
+    toi = np.zeros(k)
+    element = np.zeros((k, 2), np.int32)
+    kind = np.zeros(k, np.int8)
+    if len(sv):
+        p = vt_pairs[sv]
+        idx[: len(sv), 0] = p[:, 0]
+        idx[: len(sv), 1:] = tri[p[:, 1]]
+        coef[: len(sv), 0] = 1.0
+        coef[: len(sv), 1:] = -vt_info[sv, 1:4]
+        toi[: len(sv)] = vt_info[sv, 0]
+        element[: len(sv)] = p
+    if len(se):
+        p = ee_pairs[se]
+        o = len(sv)
+        idx[o:, :2] = edges[p[:, 0]]
+        idx[o:, 2:] = edges[p[:, 1]]
+        s = ee_info[se, 1]
+        t = ee_info[se, 2]
+        coef[o:] = np.stack([1.0 - s, s, -(1.0 - t), -t], axis=1)
+        toi[o:] = ee_info[se, 0]
+        element[o:] = p
+        kind[o:] = KIND_EE
+    normal = np.zeros((k, 3))
+    ok = np.zeros(k, np.bool_)
+    if k:
+        _build_contacts(x0, x1, kind, idx, coef, toi, normal, ok)
+    contacts = Contacts(kind, idx, coef, normal, toi, element)
+    if not ok.all():
+        stats["degenerate"] = int(np.count_nonzero(~ok))
+    return contacts, stats
+
+
+# --------------------------------------------------------------------------------------------------
+# Algorithm 1, collision part
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class CollisionResult:
+    """What :func:`resolve_collisions` did in one step.
+
+    Attributes
+    ----------
+    rounds : int
+        Detection rounds run (1 when the step was free at once).
+    found : list of int
+        Pairs needing a response found in each round.
+    constraints : int
+        Collision constraints in the set at the end.
+    remaining : Contacts
+        Pairs still crossing after ``max_retries`` (reported; their vertices were reverted).
+    reverted : int
+        Vertices put back to their start-of-step position by the fallback.
+    stats : dict
+        Broad/narrow phase counts of the first round.
+    """
+
+    rounds: int = 0
+    found: list = field(default_factory=list)
+    constraints: int = 0
+    remaining: Contacts = field(default_factory=Contacts.empty)
+    reverted: int = 0
+    stats: dict = field(default_factory=dict)
+
+
+def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarray,
+                       tri_indices: np.ndarray, edge_indices: np.ndarray, *, thickness: float,
+                       stiffness: float = 1.0, iterations: int = 10, max_retries: int = 20,
+                       tolerance: float | None = None, cell_size: float | None = None) -> CollisionResult:
+    """Move ``x1`` (in place) until the step from ``x0`` is collision-free (Alg. 1 lines 10-20).
+
+    Parameters
+    ----------
+    x0 : (n, 3) float64
+        Collision-free positions at the start of the step.
+    x1 : (n, 3) float64
+        Predicted positions (after the internal constraints); corrected in place.
+    vertex_inv_mass : (n,) float64
+        Inverse masses (0: fixed; collision constraints do not move those vertices).
+    tri_indices : (m, 3) int32
+    edge_indices : (e, 2) int32
+    thickness : float
+        ``h`` (``spacing``): distance the constraints keep (at least twice the tolerance).
+    stiffness : float
+        ``kCollision``.
+    iterations : int
+        ``collision iterations``: sweeps over the collision constraints per round.
+    max_retries : int
+        ``max collision retries``: detect/solve rounds after the first. The rounds stop early
+        when the number of crossing pairs has not gone down for ``STALL_ROUNDS`` (4) rounds.
+    tolerance : float or None
+        Inside-test tolerance; None: :func:`default_tolerance`.
+    cell_size : float or None
+        Broad-phase cell size.
+
+    Returns
+    -------
+    CollisionResult
+    """
+    tol = default_tolerance(x0, thickness) if tolerance is None else float(tolerance)
+    h = max(float(thickness), 2.0 * tol)
+    res = CollisionResult()
+    w = np.ascontiguousarray(vertex_inv_mass, dtype=np.float64)
+    tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
+    edges = np.ascontiguousarray(edge_indices, dtype=np.int32)
+    constraints = Contacts.empty()
+    found = Contacts.empty()
+    active = None
+    best, stalled = None, 0
+    for r in range(max_retries + 1):
+        found, stats = detect_collisions(x0, x1, tri, edges, tolerance=tol, cell_size=cell_size,
+                                         active=active)
+        res.rounds += 1
+        res.found.append(len(found))
+        if r == 0:
+            res.stats = stats
+        if len(found) == 0:
+            res.constraints = len(constraints)
+            return res
+        if r == max_retries:
+            break
+        if best is None or len(found) < best:
+            best, stalled = len(found), 0
+        else:
+            stalled += 1
+            if stalled >= STALL_ROUNDS:  # the same pairs keep crossing: retrying will not help
+                break
+        constraints = constraints.concat(found)
+        before = x1.copy()
+        project_collision_constraints(x1, w, constraints.indices, constraints.coef,
+                                      constraints.normal, h, float(stiffness),
+                                      int(iterations))
+        moved = (x1 != before).any(axis=1)
+        # still-crossing pairs whose vertices did not move are re-found too
+        moved[found.indices.ravel()] = True
+        active = moved
+    res.constraints = len(constraints)
+    res.remaining = found
+    # fallback: put the vertices of the pairs still crossing back to their start positions
+    reverted = np.zeros(len(x1), np.bool_)
+    for _ in range(10):
+        verts = np.unique(found.indices)
+        reverted[verts] = True
+        x1[verts] = x0[verts]
+        active = np.zeros(len(x1), np.bool_)
+        active[verts] = True
+        found, _ = detect_collisions(x0, x1, tri, edges, tolerance=tol, cell_size=cell_size,
+                                     active=active)
+        if len(found) == 0:
+            break
+    else:
+        x1[:] = x0
+        reverted[:] = True
+    res.reverted = int(np.count_nonzero(reverted))
+    return res

@@ -1,0 +1,272 @@
+"""Static triangle-triangle intersection test (the sanity check of issue 5 and the tests' judge).
+
+Two triangles intersect when they share at least one point. The test is built on orientation
+predicates (signs of 3x3 determinants), not on distances with a tolerance: two non-coplanar
+triangles intersect if and only if an edge of one meets the other (their intersection segment
+ends on edges); segment-triangle and coplanar cases are decided by signs of ``orient3d`` and,
+in the plane, ``orient2d``. The determinants are evaluated in float64 and each sign is certified
+by Shewchuk's forward error bound for orient3d, ``(7 + 56 eps) eps * permanent``: when every
+determinant the test can use has a certified sign, the float answer is exact; otherwise (coplanar
+or touching configurations) the pair is decided in rational arithmetic by
+:func:`inflo.tools.collide.exact.triangles_intersect_exact`. So :func:`intersecting_pairs` is an
+exact test. Triangles that share a vertex index are not tested by the callers (adjacent triangles
+touch by construction).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+__all__ = ["orient3d", "triangles_intersect", "certified", "intersecting_pairs", "intersecting_pairs_brute"]
+
+_EPS = 2.0 ** -53
+_O3D_ERRBOUND = (7.0 + 56.0 * _EPS) * _EPS
+
+
+@njit(cache=True, inline="always")
+def orient3d(a, b, c, d):
+    """``det[b - a, c - a, d - a]``: > 0 when d is on the side of abc's normal (b-a)x(c-a)."""
+    bx = b[0] - a[0]
+    by = b[1] - a[1]
+    bz = b[2] - a[2]
+    cx = c[0] - a[0]
+    cy = c[1] - a[1]
+    cz = c[2] - a[2]
+    dx = d[0] - a[0]
+    dy = d[1] - a[1]
+    dz = d[2] - a[2]
+    return bx * (cy * dz - cz * dy) + by * (cz * dx - cx * dz) + bz * (cx * dy - cy * dx)
+
+
+@njit(cache=True, inline="always")
+def _o2(ax, ay, bx, by, cx, cy):
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+
+
+@njit(cache=True, inline="always")
+def _sgn(x):
+    return 1 if x > 0.0 else (-1 if x < 0.0 else 0)
+
+
+@njit(cache=True)
+def _seg_seg_2d(p, q, r, s, i, j):
+    """Closed segments pq and rs (coordinates i, j) share a point."""
+    d1 = _sgn(_o2(r[i], r[j], s[i], s[j], p[i], p[j]))
+    d2 = _sgn(_o2(r[i], r[j], s[i], s[j], q[i], q[j]))
+    d3 = _sgn(_o2(p[i], p[j], q[i], q[j], r[i], r[j]))
+    d4 = _sgn(_o2(p[i], p[j], q[i], q[j], s[i], s[j]))
+    if d1 * d2 < 0 and d3 * d4 < 0:
+        return True
+    if d1 == 0 and d2 == 0 and d3 == 0 and d4 == 0:
+        # collinear: overlap of the projections on both axes
+        for k in (i, j):
+            lo1 = min(p[k], q[k])
+            hi1 = max(p[k], q[k])
+            lo2 = min(r[k], s[k])
+            hi2 = max(r[k], s[k])
+            if hi1 < lo2 or hi2 < lo1:
+                return False
+        return True
+    if d1 == 0 and _on_seg(r, s, p, i, j):
+        return True
+    if d2 == 0 and _on_seg(r, s, q, i, j):
+        return True
+    if d3 == 0 and _on_seg(p, q, r, i, j):
+        return True
+    if d4 == 0 and _on_seg(p, q, s, i, j):
+        return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _on_seg(a, b, p, i, j):
+    return (min(a[i], b[i]) <= p[i] <= max(a[i], b[i])) and (min(a[j], b[j]) <= p[j] <= max(a[j], b[j]))
+
+
+@njit(cache=True)
+def _point_in_tri_2d(p, a, b, c, i, j):
+    d1 = _sgn(_o2(a[i], a[j], b[i], b[j], p[i], p[j]))
+    d2 = _sgn(_o2(b[i], b[j], c[i], c[j], p[i], p[j]))
+    d3 = _sgn(_o2(c[i], c[j], a[i], a[j], p[i], p[j]))
+    has_neg = d1 < 0 or d2 < 0 or d3 < 0
+    has_pos = d1 > 0 or d2 > 0 or d3 > 0
+    return not (has_neg and has_pos)
+
+
+@njit(cache=True)
+def _drop_axes(a, b, c):
+    nx = (b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1])
+    ny = (b[2] - a[2]) * (c[0] - a[0]) - (b[0] - a[0]) * (c[2] - a[2])
+    nz = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    ax, ay, az = abs(nx), abs(ny), abs(nz)
+    if ax >= ay and ax >= az:
+        return 1, 2
+    if ay >= az:
+        return 0, 2
+    return 0, 1
+
+
+@njit(cache=True)
+def _seg_tri_coplanar(p, q, a, b, c, i, j):
+    if _point_in_tri_2d(p, a, b, c, i, j) or _point_in_tri_2d(q, a, b, c, i, j):
+        return True
+    return (_seg_seg_2d(p, q, a, b, i, j) or _seg_seg_2d(p, q, b, c, i, j)
+            or _seg_seg_2d(p, q, c, a, i, j))
+
+
+@njit(cache=True)
+def _seg_tri(p, q, a, b, c):
+    """Closed segment pq and closed triangle abc share a point."""
+    dp = _sgn(orient3d(a, b, c, p))
+    dq = _sgn(orient3d(a, b, c, q))
+    if dp * dq > 0:
+        return False
+    if dp == 0 and dq == 0:
+        i, j = _drop_axes(a, b, c)
+        return _seg_tri_coplanar(p, q, a, b, c, i, j)
+    s1 = _sgn(orient3d(p, q, a, b))
+    s2 = _sgn(orient3d(p, q, b, c))
+    s3 = _sgn(orient3d(p, q, c, a))
+    if (s1 >= 0 and s2 >= 0 and s3 >= 0) or (s1 <= 0 and s2 <= 0 and s3 <= 0):
+        if s1 == 0 and s2 == 0 and s3 == 0:  # degenerate triangle on the segment's line
+            i, j = _drop_axes(p, q, a)
+            return _seg_tri_coplanar(p, q, a, b, c, i, j)
+        return True
+    return False
+
+
+@njit(cache=True)
+def triangles_intersect(p0, p1, p2, q0, q1, q2):
+    """True when closed triangles p0p1p2 and q0q1q2 share a point (touching counts).
+
+    Parameters
+    ----------
+    p0, p1, p2, q0, q1, q2 : (3,) float64
+    """
+    s0 = _sgn(orient3d(p0, p1, p2, q0))
+    s1 = _sgn(orient3d(p0, p1, p2, q1))
+    s2 = _sgn(orient3d(p0, p1, p2, q2))
+    if (s0 > 0 and s1 > 0 and s2 > 0) or (s0 < 0 and s1 < 0 and s2 < 0):
+        return False
+    t0 = _sgn(orient3d(q0, q1, q2, p0))
+    t1 = _sgn(orient3d(q0, q1, q2, p1))
+    t2 = _sgn(orient3d(q0, q1, q2, p2))
+    if (t0 > 0 and t1 > 0 and t2 > 0) or (t0 < 0 and t1 < 0 and t2 < 0):
+        return False
+    return (_seg_tri(p0, p1, q0, q1, q2) or _seg_tri(p1, p2, q0, q1, q2)
+            or _seg_tri(p2, p0, q0, q1, q2) or _seg_tri(q0, q1, p0, p1, p2)
+            or _seg_tri(q1, q2, p0, p1, p2) or _seg_tri(q2, q0, p0, p1, p2))
+
+
+@njit(cache=True, inline="always")
+def _orient3d_certain(a, b, c, d):
+    """True when the float sign of orient3d(a, b, c, d) is the exact sign (Shewchuk's bound)."""
+    bx = b[0] - a[0]
+    by = b[1] - a[1]
+    bz = b[2] - a[2]
+    cx = c[0] - a[0]
+    cy = c[1] - a[1]
+    cz = c[2] - a[2]
+    dx = d[0] - a[0]
+    dy = d[1] - a[1]
+    dz = d[2] - a[2]
+    det = bx * (cy * dz - cz * dy) + by * (cz * dx - cx * dz) + bz * (cx * dy - cy * dx)
+    perm = (abs(bx) * (abs(cy * dz) + abs(cz * dy)) + abs(by) * (abs(cz * dx) + abs(cx * dz))
+            + abs(bz) * (abs(cx * dy) + abs(cy * dx)))
+    return abs(det) > _O3D_ERRBOUND * perm
+
+
+@njit(cache=True)
+def certified(p0, p1, p2, q0, q1, q2):
+    """True when every orientation the float test may evaluate has a certified sign.
+
+    Those are the six vertex-against-plane determinants and the nine edge-against-edge ones
+    (``orient3d(p, q, a, b)`` for an edge pq of one triangle and ab of the other). With all of them
+    certified non-zero, no coplanar branch is taken and :func:`triangles_intersect` is exact.
+    """
+    P = (p0, p1, p2)
+    Q = (q0, q1, q2)
+    for k in range(3):
+        if not _orient3d_certain(p0, p1, p2, Q[k]) or not _orient3d_certain(q0, q1, q2, P[k]):
+            return False
+    for k in range(3):
+        for l in range(3):
+            if not _orient3d_certain(P[k], P[(k + 1) % 3], Q[l], Q[(l + 1) % 3]):
+                return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def _share_vertex(tri, i, j):
+    for a in range(3):
+        for b in range(3):
+            if tri[i, a] == tri[j, b]:
+                return True
+    return False
+
+
+@njit(cache=True, parallel=True)
+def _test_pairs(x, tri, pairs, flags):
+    """flags[k]: 0 disjoint, 1 intersecting (both certified), 2 undecided in float64."""
+    for k in prange(pairs.shape[0]):
+        i = pairs[k, 0]
+        j = pairs[k, 1]
+        if _share_vertex(tri, i, j):
+            flags[k] = 0
+            continue
+        a0, a1, a2 = x[tri[i, 0]], x[tri[i, 1]], x[tri[i, 2]]
+        b0, b1, b2 = x[tri[j, 0]], x[tri[j, 1]], x[tri[j, 2]]
+        if certified(a0, a1, a2, b0, b1, b2):
+            flags[k] = 1 if triangles_intersect(a0, a1, a2, b0, b1, b2) else 0
+        else:
+            flags[k] = 2
+
+
+def _decide(x, tri, pairs, flags) -> np.ndarray:
+    """Resolve undecided pairs exactly; returns the intersecting pairs."""
+    from .exact import triangles_intersect_exact
+
+    for k in np.nonzero(flags == 2)[0]:
+        i, j = pairs[k]
+        flags[k] = triangles_intersect_exact(*x[tri[i]], *x[tri[j]])
+    return pairs[flags == 1]
+
+
+def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_size: float | None = None) -> np.ndarray:
+    """All pairs of intersecting triangles that share no vertex (exact static test).
+
+    Broad phase: :func:`inflo.tools.collide.broad.box_pairs` over the triangles' boxes.
+
+    Parameters
+    ----------
+    vertex_x : (n, 3) float64
+    tri_indices : (m, 3) int32
+
+    Returns
+    -------
+    (k, 2) int32
+        Pairs ``(i, j)``, ``i < j``, sorted.
+    """
+    from .broad import box_pairs, triangle_boxes
+
+    x = np.ascontiguousarray(vertex_x, dtype=np.float64)
+    tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
+    if len(tri) < 2:
+        return np.zeros((0, 2), np.int32)
+    boxes = triangle_boxes(x, x, tri, 0.0)
+    pairs = box_pairs(boxes, None, cell_size=cell_size)
+    flags = np.zeros(len(pairs), np.int8)
+    _test_pairs(x, tri, pairs, flags)
+    return _decide(x, tri, pairs, flags)
+
+
+def intersecting_pairs_brute(vertex_x, tri_indices):
+    """Reference for tests: every pair tested, O(m^2). Returns (k, 2) int32 sorted."""
+    x = np.ascontiguousarray(vertex_x, dtype=np.float64)
+    tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
+    m = len(tri)
+    ii, jj = np.triu_indices(m, 1)
+    pairs = np.stack([ii, jj], axis=1).astype(np.int32)
+    flags = np.zeros(len(pairs), np.int8)
+    _test_pairs(x, tri, pairs, flags)
+    return _decide(x, tri, pairs, flags)

@@ -1,0 +1,413 @@
+"""The Floral Canopy Composer: constraint-based growth with continuous collision handling.
+
+:func:`compose_canopy` is Algorithm 1 of the thesis (section 8 f) over the model of
+:mod:`.model`. For every simulation step (``updates per frame`` per frame):
+
+1. ``applyAnimation``: each floret's developmental time and placement at the new time give the
+   rest values of its constraints (edge lengths, signed dihedral angles; :func:`.model.rest_values`)
+   and the attachment targets of its fixed vertices;
+2. prediction (:func:`.model.predict`): every vertex is carried rigidly with its floret's
+   placement change (a floret moved by ``ta``/``ra``/``rba`` moves with it) and moved by its
+   template's displacement over the step (the growth "velocity": an undeformed floret lands on
+   its template exactly, so rest values need not drag long petals round by Gauss-Seidel sweeps
+   alone); fixed vertices (inverse mass 0) are put on their targets (attachment constraints);
+3. ``solverIterations`` Gauss-Seidel sweeps over the distance (eq. 3.11) then bending (eq. 3.13)
+   constraints;
+4. continuous collision detection from the collision-free positions of the previous step to the
+   predicted ones, collision constraints C_vt/C_ee (eqs. 4.6-4.7) solved for ``collision
+   iterations``, re-detected up to ``max collision retries`` times
+   (:func:`inflo.tools.collide.resolve_collisions`); pairs still crossing are reported by floret
+   and frame, and their vertices put back (so the canopy stays collision-free), or the run stops
+   with ``strict``;
+5. the positions are accepted.
+
+The canopy is written as ``OUT/frame_NNNN.obj`` (frame 0 is the initial state) every output
+period and at the last frame, one OBJ group ``floret_<index>`` per floret and ``usemtl mtl<id>``
+from the SCN ``mtl:`` lines. ``OUT/log.csv`` (:mod:`.log`) has a row per frame. Next to every
+written frame ``OUT/state/frame_NNNN.npy`` keeps the exact float64 positions so that ``resume``
+continues bit-identically from the last complete frame.
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import io
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from inflo.formats.atomic import frame_name, write_bytes_atomic, write_text_atomic
+from inflo.formats.errors import InputError
+from inflo.formats.fcc import CanopyParams, check_references
+from inflo.formats.obj import ObjMesh, write_obj
+from inflo.tools.collide.broad import lattice_cell_size, triangle_boxes
+from inflo.tools.collide.resolve import default_tolerance, resolve_collisions
+from inflo.tools.collide.tritri import intersecting_pairs
+from inflo.tools.pbd.solver import (
+    bending_residual,
+    colour_constraints,
+    distance_residual,
+    project_bending_constraints,
+    project_bending_constraints_coloured,
+    project_distance_constraints,
+    project_distance_constraints_coloured,
+)
+
+from .log import FrameLog, read_log, write_log
+from .model import Model, build_model, predict, rest_values, template_positions
+
+__all__ = ["ComposeResult", "CollisionError", "InitialIntersectionError", "compose_canopy", "Simulation"]
+
+
+class InitialIntersectionError(InputError):
+    """The first frame is not collision-free (exit 2 in the CLI)."""
+
+
+class CollisionError(RuntimeError):
+    """``strict``: pairs still crossing after the retries, or the sanity check found intersections."""
+
+
+@dataclass
+class ComposeResult:
+    """Summary of a run."""
+
+    frames_written: list = field(default_factory=list)
+    first_frame: int = 0
+    last_frame: int = 0
+    n_triangles: int = 0
+    n_vertices: int = 0
+    steps: int = 0
+    remaining_reports: list = field(default_factory=list)
+    seconds: float = 0.0
+
+
+def _pairs_by_floret(model: Model, tri_pairs: np.ndarray) -> list[tuple[int, int]]:
+    fl = model.tri_floret[tri_pairs]
+    fl.sort(axis=1)
+    return sorted({(int(a), int(b)) for a, b in fl.tolist()})
+
+
+def _florets_text(pairs) -> str:
+    return ";".join(f"{a}-{b}" for a, b in pairs)
+
+
+class Simulation:
+    """The solver state and one-step update of Algorithm 1 (usable without files, e.g. benchmarks).
+
+    Parameters
+    ----------
+    model : Model
+    coloured : bool
+        Solve internal constraints colour by colour in parallel (see :mod:`inflo.tools.pbd.solver`);
+        False (default): the serial Gauss-Seidel sweep.
+
+    The serial sweeps stop before ``solver iterations`` once a whole sweep moved no vertex by more
+    than 1e-9 of the scene's size (every constraint already at rest: the usual case for florets
+    no collision touches, since the prediction puts them on their templates).
+    """
+
+    def __init__(self, model: Model, *, coloured: bool = False):
+        self.model = model
+        p = model.params
+        self.params = p
+        self.edge_rest_length = np.zeros(len(model.edge_indices))
+        self.hinge_rest_angle = np.zeros(len(model.hinge_indices))
+        self.coloured = coloured
+        if coloured:
+            self.edge_colours = colour_constraints(model.edge_indices, model.n_vertices)
+            self.hinge_colours = colour_constraints(model.hinge_indices, model.n_vertices)
+        self._sched_frame = None
+        self._sched = None
+        self.cell_size = None
+        self.converged_below = None
+
+    def schedule(self, frame: float):
+        if self._sched_frame != frame:
+            self._sched = self.model.schedule(frame)
+            self._sched_frame = frame
+        return self._sched
+
+    def initial_positions(self) -> np.ndarray:
+        """Positions of frame 0: every floret's template at its time, placed."""
+        m = self.model
+        ba, bb, al, mats = self.schedule(0.0)
+        x = np.zeros((m.n_vertices, 3))
+        template_positions(m.template_x, m.vertex_floret, m.floret_vertex_offset, ba, bb, al, mats,
+                           np.arange(m.n_vertices, dtype=np.int32), x)
+        self.update_rest(0.0)
+        return x
+
+    def update_rest(self, frame: float) -> None:
+        m = self.model
+        ba, bb, al, mats = self.schedule(frame)
+        rest_values(m.template_x, m.vertex_floret, m.floret_vertex_offset, ba, bb, al, mats,
+                    m.edge_indices, m.hinge_indices, self.edge_rest_length, self.hinge_rest_angle)
+
+    def _cell(self, x: np.ndarray) -> float:
+        if self.cell_size is None:
+            boxes = triangle_boxes(x, x, self.model.tri_indices, 0.0)
+            self.cell_size = lattice_cell_size(self.params.lattice, x.min(axis=0), x.max(axis=0), boxes)
+        return self.cell_size
+
+    def step(self, x: np.ndarray, frame_from: float, frame_to: float, timing: dict):
+        """One simulation step from ``frame_from`` to ``frame_to``; returns (new x, CollisionResult)."""
+        m = self.model
+        p = self.params
+        t0 = time.perf_counter()
+        oa, ob, oal, m_old = (a.copy() for a in self.schedule(frame_from))
+        ba, bb, al, m_new = self.schedule(frame_to)
+        self.update_rest(frame_to)
+        # rigid carry: D = M_new M_old^-1 per floret
+        full_old = np.zeros((len(m_old), 4, 4))
+        full_old[:, :3] = m_old
+        full_old[:, 3, 3] = 1.0
+        full_new = np.zeros_like(full_old)
+        full_new[:, :3] = m_new
+        full_new[:, 3, 3] = 1.0
+        delta = np.ascontiguousarray((full_new @ np.linalg.inv(full_old))[:, :3])
+        xp = np.empty_like(x)
+        predict(x, m.vertex_floret, m.floret_vertex_offset, delta, m.template_x, oa, ob, oal, ba, bb, al,
+                m_new, xp)
+        template_positions(m.template_x, m.vertex_floret, m.floret_vertex_offset, ba, bb, al, m_new,
+                           m.vertex_fixed, xp)
+        t1 = time.perf_counter()
+        w = m.vertex_inv_mass
+        if self.converged_below is None:
+            self.converged_below = 1e-9 * float(np.ptp(x, axis=0).max()) if len(x) else 0.0
+        for _ in range(p.solver_iterations):
+            if self.coloured:
+                project_distance_constraints_coloured(xp, w, m.edge_indices, self.edge_rest_length,
+                                                      m.edge_stiffness, *self.edge_colours)
+                project_bending_constraints_coloured(xp, w, m.hinge_indices, self.hinge_rest_angle,
+                                                     m.hinge_stiffness, *self.hinge_colours)
+            else:
+                d1 = project_distance_constraints(xp, w, m.edge_indices, self.edge_rest_length,
+                                                  m.edge_stiffness)
+                d2 = project_bending_constraints(xp, w, m.hinge_indices, self.hinge_rest_angle,
+                                                 m.hinge_stiffness)
+                if max(d1, d2) <= self.converged_below:
+                    break  # every constraint satisfied: further sweeps would change nothing
+        t2 = time.perf_counter()
+        res = resolve_collisions(x, xp, w, m.tri_indices, m.edge_indices, thickness=p.spacing,
+                                 stiffness=p.k_collision, iterations=p.collision_iterations,
+                                 max_retries=p.max_collision_retries,
+                                 tolerance=default_tolerance(x, p.spacing), cell_size=self._cell(x))
+        t3 = time.perf_counter()
+        timing["rest"] = timing.get("rest", 0.0) + (t1 - t0)
+        timing["internal"] = timing.get("internal", 0.0) + (t2 - t1)
+        timing["collide"] = timing.get("collide", 0.0) + (t3 - t2)
+        return xp, res
+
+
+def _fingerprint(params: CanopyParams, model: Model) -> str:
+    h = hashlib.sha256()
+    if params.source is not None and Path(params.source).is_file():
+        h.update(Path(params.source).read_bytes())
+    h.update(model.template_x.tobytes())
+    h.update(model.tri_indices.tobytes())
+    return h.hexdigest()
+
+
+def _write_frame(out: Path, model: Model, x: np.ndarray, k: int) -> Path:
+    mats = sorted({fl.material for fl in model.florets if fl.material is not None})
+    mat_index = {m: i for i, m in enumerate(mats)}
+    face_material = None
+    if mats:
+        per_floret = np.array([mat_index.get(fl.material, -1) if fl.material is not None else -1
+                               for fl in model.florets], dtype=np.int32)
+        face_material = per_floret[model.tri_floret]
+    mesh = ObjMesh(
+        vertices=x,
+        faces=model.tri_indices,
+        groups=[f"floret_{fl.index}" for fl in model.florets],
+        face_group=model.tri_floret.copy(),
+        materials=[f"mtl{m}" for m in mats],
+        face_material=face_material,
+    )
+    path = out / frame_name(k, "frame_", ".obj", 4)
+    write_obj(path, mesh, header=f"fccompose canopy, frame {k}: {len(model.florets)} florets, "
+                                 f"{model.n_triangles} triangles")
+    return path
+
+
+def _save_state(out: Path, x: np.ndarray, k: int, fingerprint: str) -> None:
+    sdir = out / "state"
+    sdir.mkdir(exist_ok=True)
+    buf = io.BytesIO()
+    np.save(buf, x, allow_pickle=False)
+    write_bytes_atomic(sdir / frame_name(k, "frame_", ".npy", 4), buf.getvalue())
+    write_text_atomic(sdir / "run.json", json.dumps({"fingerprint": fingerprint, "frame": k}) + "\n")
+    for old in sorted(sdir.glob("frame_*.npy")):
+        if old.name != frame_name(k, "frame_", ".npy", 4):
+            old.unlink()
+
+
+def _load_resume(out: Path, fingerprint: str, n_vertices: int):
+    sdir = out / "state"
+    run = sdir / "run.json"
+    if not run.is_file():
+        return None
+    info = json.loads(run.read_text())
+    if info.get("fingerprint") != fingerprint:
+        raise InputError(f"{run}: expected a run of the same parameters and inputs to resume, "
+                         f"found one of different parameters (delete {out} or run without --resume)")
+    k = int(info["frame"])
+    st = sdir / frame_name(k, "frame_", ".npy", 4)
+    obj = out / frame_name(k, "frame_", ".obj", 4)
+    if not st.is_file() or not obj.is_file():
+        return None
+    x = np.load(st, allow_pickle=False)
+    if x.shape != (n_vertices, 3):
+        raise InputError(f"{st}: expected positions of {n_vertices} vertices, found shape {x.shape}")
+    return k, x
+
+
+def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, strict: bool = False,
+                   allow_initial_intersections: bool = False, progress=None, warn=None,
+                   coloured: bool = False) -> ComposeResult:
+    """Simulate the canopy's development and write it as an OBJ per output frame.
+
+    Parameters
+    ----------
+    params : CanopyParams
+        The ``.fcc`` file (:func:`inflo.formats.fcc.read_fcc`).
+    out_dir : path
+        Output folder (created).
+    resume : bool
+        Continue from the last complete output frame of a previous run of the same inputs.
+    strict : bool
+        Stop (:class:`CollisionError`) when pairs still cross after the retries or the sanity check
+        finds intersections, instead of reporting them and continuing.
+    allow_initial_intersections : bool
+        Accept an initial state that is not collision-free (otherwise
+        :class:`InitialIntersectionError` naming the floret pairs).
+    progress : callable or None
+        ``progress(total_frames)`` returning a context manager whose value has ``update(n)``
+        (:func:`inflo.tools.common.cli.progress` fits); None: no progress reporting.
+    warn : callable or None
+        Called with one line per reported problem.
+    coloured : bool
+        Parallel colour-by-colour constraint sweeps (see :class:`Simulation`).
+
+    Returns
+    -------
+    ComposeResult
+    """
+    t_start = time.perf_counter()
+    check_references(params)
+    model = build_model(params)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    sim = Simulation(model, coloured=coloured)
+    fp = _fingerprint(params, model)
+    every = params.output_every
+    n = model.n_frames
+    result = ComposeResult(n_triangles=model.n_triangles, n_vertices=model.n_vertices, last_frame=n)
+    warn = warn or (lambda msg: None)
+    log_rows: list = []
+
+    start = None
+    if resume:
+        start = _load_resume(out, fp, model.n_vertices)
+    if start is not None:
+        k0, x = start
+        log_rows = [r for r in read_log(out / "log.csv") if r and int(r[0]) <= k0]
+        result.first_frame = k0 + 1
+        sim.update_rest(float(k0))
+    else:
+        k0 = 0
+        x = sim.initial_positions()
+        row = FrameLog(0, 0)
+        t0 = time.perf_counter()
+        pairs = intersecting_pairs(x, model.tri_indices)
+        row["t_sanity_s"] = time.perf_counter() - t0
+        row["intersecting_pairs"] = len(pairs)
+        if len(pairs):
+            fl = _pairs_by_floret(model, pairs)
+            msg = (f"{params.source}: expected a collision-free first frame (thesis 4.2), found "
+                   f"{len(pairs)} intersecting triangle pairs between florets {_florets_text(fl[:20])}"
+                   + (" ..." if len(fl) > 20 else "")
+                   + " (placement indices; --allow-initial-intersections to go on)")
+            if not allow_initial_intersections:
+                raise InitialIntersectionError(msg)
+            warn(msg)
+        row["rms_edge_error"] = distance_residual(x, model.edge_indices, sim.edge_rest_length)
+        row["rms_dihedral_error_deg"] = math.degrees(
+            bending_residual(x, model.hinge_indices, sim.hinge_rest_angle))
+        t0 = time.perf_counter()
+        result.frames_written.append(_write_frame(out, model, x, 0))
+        _save_state(out, x, 0, fp)
+        row["t_write_s"] = time.perf_counter() - t0
+        log_rows.append(row)
+        write_log(out / "log.csv", log_rows)
+        result.first_frame = 1
+
+    bar_cm = progress(n - k0) if progress else contextlib.nullcontext(None)
+    with bar_cm as bar:
+        _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_rows, result, bar)
+    result.seconds = time.perf_counter() - t_start
+    return result
+
+
+def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_rows, result, bar):
+    upf = params.updates_per_frame
+    for k in range(k0 + 1, n + 1):
+        row = FrameLog(k, upf)
+        timing: dict = {}
+        remaining = []
+        for s in range(upf):
+            f_from = (k - 1) + s / upf
+            f_to = (k - 1) + (s + 1) / upf
+            x, res = sim.step(x, f_from, f_to, timing)
+            result.steps += 1
+            row["vt_candidates"] += res.stats.get("vt_candidates", 0)
+            row["ee_candidates"] += res.stats.get("ee_candidates", 0)
+            row["collisions_found"] += res.found[0] if res.found else 0
+            row["collision_rounds"] += res.rounds
+            row["collision_constraints"] += res.constraints
+            row["reverted_vertices"] += res.reverted
+            if len(res.remaining):
+                row["remaining_pairs"] += len(res.remaining)
+                fl = np.unique(np.sort(model.vertex_floret[res.remaining.indices[:, [0, 3]]], axis=1), axis=0)
+                remaining.extend((int(a), int(b)) for a, b in fl.tolist())
+        if remaining:
+            remaining = sorted(set(remaining))
+            row["remaining_florets"] = _florets_text(remaining)
+            msg = (f"frame {k}: {row['remaining_pairs']} colliding pairs left after "
+                   f"{params.max_collision_retries} retries between florets {_florets_text(remaining[:20])}"
+                   f" (their vertices were kept at the previous step)")
+            result.remaining_reports.append((k, remaining))
+            if strict:
+                raise CollisionError(msg)
+            warn(msg)
+        row["t_rest_s"] = timing.get("rest", 0.0)
+        row["t_internal_s"] = timing.get("internal", 0.0)
+        row["t_collide_s"] = timing.get("collide", 0.0)
+        row["rms_edge_error"] = distance_residual(x, model.edge_indices, sim.edge_rest_length)
+        row["rms_dihedral_error_deg"] = math.degrees(
+            bending_residual(x, model.hinge_indices, sim.hinge_rest_angle))
+        if params.sanity_check_every and k % params.sanity_check_every == 0:
+            t0 = time.perf_counter()
+            pairs = intersecting_pairs(x, model.tri_indices)
+            row["t_sanity_s"] = time.perf_counter() - t0
+            row["intersecting_pairs"] = len(pairs)
+            if len(pairs):
+                fl = _pairs_by_floret(model, pairs)
+                msg = (f"frame {k}: sanity check found {len(pairs)} intersecting triangle pairs "
+                       f"between florets {_florets_text(fl[:20])}")
+                if strict:
+                    raise CollisionError(msg)
+                warn(msg)
+        log_rows.append(row)
+        if k % every == 0 or k == n:
+            t0 = time.perf_counter()
+            result.frames_written.append(_write_frame(out, model, x, k))
+            _save_state(out, x, k, fp)
+            row["t_write_s"] = time.perf_counter() - t0
+            write_log(out / "log.csv", log_rows)
+        if bar is not None:
+            bar.update(1)

@@ -1,0 +1,554 @@
+"""The canopy as a constraint system: static Model, changing State (Warp's split; thesis 3, 8 f).
+
+:func:`build_model` reads everything a ``.fcc`` file names (OBJ sequences, single OBJs, weight
+files, SCN files, RBA folders), instances every placement and concatenates the florets into one
+structure-of-arrays system:
+
+- ``Model`` (static): ``tri_indices``, ``edge_indices``, ``hinge_indices`` (global vertex ids),
+  per-constraint stiffness, ``vertex_inv_mass`` (0 for the fixed vertices of the weight files),
+  ``vertex_floret``, the template frames of every animation (``template_x``, local coordinates,
+  scaled by the entry's initial scale) and per-floret tables; plus :meth:`Model.schedule`, which
+  gives at any (fractional) frame each floret's developmental time and placement matrix.
+- ``State`` (changing): ``vertex_x`` and the frame reached.
+
+Rest values at a time (edge lengths, eq. 3.11; signed dihedral angles, eq. 3.13) are computed
+from the two template frames around the floret's developmental time, each mapped through the
+linear part of its placement (scale, scene scale; rotation does not change them), and
+interpolated linearly (angles along the shorter way, modulo 2 pi).
+
+Placement kinds (SCN, app. C.2) and developmental time u in [0, 1] (template frame u (F - 1)):
+
+- ``ca start end``: u = (frame - start) / (end - start), clamped; static placement.
+- ``i value``: u = value for all frames; static placement.
+- ``o``: u = 0 (first template frame); static placement.
+- ``ta start end x y z``: translated by s (x, y, z), s = (frame - start)/(end - start) clamped;
+  develops like ``ca`` over the same frames.
+- ``ra start end x y z angle``: rotated by s * angle degrees about the axis (x, y, z) through the
+  placement position; develops like ``ca``.
+- ``rba start end``: placement of each frame from the RBA files (linear interpolation between
+  frames and of sub-steps; a floret absent from a frame takes the nearest frame where it is
+  present); develops like ``ca``. The ``rigid body animation`` entry's scale multiplies the RBA
+  scales.
+
+Weight files list fixed vertex ids: 0-based indices in the OBJ's vertex order, separated by blanks,
+commas or line breaks; ``#`` starts a comment.
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from inflo.formats.errors import FormatError, InputError, read_lines, shorten
+from inflo.formats.fcc import CanopyParams
+from inflo.formats.obj import read_obj, read_obj_sequence
+from inflo.formats.placement import placement_matrix
+from inflo.formats.rba import read_rba_sequence
+from inflo.formats.scn import read_scn
+from inflo.tools.pbd.constraints import signed_dihedral_angle, wrap_angle
+from inflo.tools.pbd.solver import mesh_edges, mesh_hinges
+
+__all__ = ["Template", "Floret", "Model", "State", "build_model", "read_weight_file"]
+
+
+@dataclass
+class Template:
+    """One ``animation``/``obj`` entry: the floret's OBJ frames in its local frame.
+
+    Attributes
+    ----------
+    id : int
+    frames : (F, nv, 3) float64
+        Local positions, multiplied by the entry's initial scale.
+    tri_indices : (m, 3) int32
+    edge_indices : (e, 2) int32
+    hinge_indices : (h, 4) int32
+    fixed : (k,) int32
+        Fixed vertex ids (weight file), sorted.
+    k_stretch, k_bend : float
+        Distance and bending stiffness (per-id or global).
+    source : str
+        What was read (for messages).
+    """
+
+    id: int
+    frames: np.ndarray
+    tri_indices: np.ndarray
+    edge_indices: np.ndarray
+    hinge_indices: np.ndarray
+    fixed: np.ndarray
+    k_stretch: float
+    k_bend: float
+    source: str = ""
+
+    @property
+    def n_vertices(self) -> int:
+        return self.frames.shape[1]
+
+
+@dataclass
+class Floret:
+    """One placement instanced in the canopy.
+
+    ``index`` is its position in the composed scene (scene files in ``.fcc`` order, placements in
+    file order); output groups are named ``floret_<index>``.
+    """
+
+    index: int
+    placement: object
+    template: Template
+    scene_path: Path
+    local_index: int
+    material: int | None
+    vertex_offset: int = 0
+    tri_offset: int = 0
+    rba: object = None  # (paths, frames) of the RBA sequence moving it, or None
+    rba_scale: np.ndarray | None = None
+
+
+def read_weight_file(path, n_vertices: int) -> np.ndarray:
+    """Fixed vertex ids of a ``weight`` file (0-based OBJ vertex order), sorted and unique.
+
+    Raises
+    ------
+    FormatError
+        A token that is not a non-negative integer below ``n_vertices``.
+    """
+    ids = []
+    for lineno, line in enumerate(read_lines(path), 1):
+        text = line.split("#", 1)[0]
+        for tok in re.split(r"[\s,]+", text.strip()):
+            if not tok:
+                continue
+            try:
+                v = int(tok)
+            except ValueError:
+                raise FormatError(path, lineno, "a vertex id (integer)", shorten(tok)) from None
+            if not 0 <= v < n_vertices:
+                raise FormatError(path, lineno, f"a vertex id in 0..{n_vertices - 1}", shorten(tok))
+            ids.append(v)
+    return np.unique(np.array(ids, dtype=np.int32))
+
+
+def _load_template(params: CanopyParams, entry) -> Template:
+    if entry.kind == "obj":
+        mesh = read_obj(entry.path.resolved)
+        frames = mesh.vertices[None]
+        faces = mesh.faces
+    else:
+        _, meshes = read_obj_sequence(entry.path.resolved)
+        frames = np.stack([m.vertices for m in meshes])
+        faces = meshes[0].faces
+    if len(faces) == 0:
+        raise FormatError(entry.path.resolved, None, "triangles (f lines)", "none")
+    frames = frames * np.asarray(entry.scale, float)
+    nv = frames.shape[1]
+    fixed = np.zeros(0, np.int32)
+    if entry.id in params.weights:
+        fixed = read_weight_file(params.weights[entry.id].resolved, nv)
+    k_stretch, k_bend = params.stiffness(entry.id)
+    tri = np.ascontiguousarray(faces, dtype=np.int32)
+    return Template(entry.id, np.ascontiguousarray(frames), tri, mesh_edges(tri), mesh_hinges(tri), fixed,
+                    float(k_stretch), float(k_bend), str(entry.path.raw))
+
+
+@dataclass
+class Model:
+    """Static data of the canopy's constraint system (structure of arrays, global vertex ids).
+
+    Attributes
+    ----------
+    florets : list of Floret
+    templates : dict of int -> Template
+    vertex_inv_mass : (n,) float64
+    vertex_floret : (n,) int32
+    vertex_fixed : (k,) int32
+        Global ids of fixed vertices.
+    tri_indices : (m, 3) int32
+    tri_floret : (m,) int32
+    edge_indices : (e, 2) int32
+    edge_stiffness : (e,) float64
+    hinge_indices : (h, 4) int32
+    hinge_stiffness : (h,) float64
+    template_x : (T, 3) float64
+        All template frames of all templates, concatenated.
+    template_offset : dict of int -> int
+        Row of ``template_x`` where template id's frame 0 starts.
+    floret_vertex_offset : (nf + 1,) int64
+    n_frames : int
+        Frames to simulate.
+    params : CanopyParams
+    """
+
+    florets: list
+    templates: dict
+    vertex_inv_mass: np.ndarray
+    vertex_floret: np.ndarray
+    vertex_fixed: np.ndarray
+    tri_indices: np.ndarray
+    tri_floret: np.ndarray
+    edge_indices: np.ndarray
+    edge_stiffness: np.ndarray
+    hinge_indices: np.ndarray
+    hinge_stiffness: np.ndarray
+    template_x: np.ndarray
+    template_offset: dict
+    floret_vertex_offset: np.ndarray
+    n_frames: int
+    params: CanopyParams
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.vertex_inv_mass)
+
+    @property
+    def n_triangles(self) -> int:
+        return len(self.tri_indices)
+
+    # -- schedule ------------------------------------------------------------------------------
+
+    def developmental_time(self, floret: Floret, frame: float) -> float:
+        """u in [0, 1] of ``floret`` at (fractional) ``frame`` (see the module docstring)."""
+        p = floret.placement
+        if p.kind == "i":
+            return float(min(max(p.interpolation, 0.0), 1.0))
+        if p.kind == "o":
+            return 0.0
+        return _ramp(frame, p.frame_start, p.frame_end)
+
+    def matrix(self, floret: Floret, frame: float) -> np.ndarray:
+        """(4, 4) local-to-scene matrix of ``floret`` at ``frame``, scene scale included."""
+        p = floret.placement
+        if p.kind == "rba":
+            m = _rba_matrix(floret, frame)
+        else:
+            m = placement_matrix(p.pos, p.scale, p.up, p.right)
+            if p.kind == "ta":
+                s = _ramp(frame, p.frame_start, p.frame_end)
+                m = m.copy()
+                m[:3, 3] += s * np.asarray(p.translate, float)
+            elif p.kind == "ra":
+                s = _ramp(frame, p.frame_start, p.frame_end)
+                r = np.eye(4)
+                r[:3, :3] = _rotation(p.axis, math.radians(s * p.angle))
+                t1 = np.eye(4)
+                t1[:3, 3] = p.pos
+                t0 = np.eye(4)
+                t0[:3, 3] = -np.asarray(p.pos, float)
+                m = t1 @ r @ t0 @ m
+        scale = np.diag(list(self.params.scene_scale) + [1.0])
+        return scale @ m
+
+    def schedule(self, frame: float):
+        """Per-floret tables at ``frame`` for the kernels.
+
+        Returns
+        -------
+        base_a, base_b : (nf,) int64
+            Rows of ``template_x`` of the two template frames around each floret's time.
+        alpha : (nf,) float64
+            Interpolation weight of frame b.
+        matrix : (nf, 3, 4) float64
+            Local-to-scene affine maps.
+        """
+        nf = len(self.florets)
+        base_a = np.empty(nf, np.int64)
+        base_b = np.empty(nf, np.int64)
+        alpha = np.empty(nf)
+        mats = np.empty((nf, 3, 4))
+        for k, fl in enumerate(self.florets):
+            tpl = fl.template
+            nfr = tpl.frames.shape[0]
+            pos = self.developmental_time(fl, frame) * (nfr - 1)
+            a = min(int(math.floor(pos)), nfr - 1)
+            b = min(a + 1, nfr - 1)
+            off = self.template_offset[tpl.id]
+            base_a[k] = off + a * tpl.n_vertices
+            base_b[k] = off + b * tpl.n_vertices
+            alpha[k] = pos - a if b != a else 0.0
+            mats[k] = self.matrix(fl, frame)[:3]
+        return base_a, base_b, alpha, mats
+
+
+@dataclass
+class State:
+    """Changing data: positions and the last frame completed."""
+
+    vertex_x: np.ndarray
+    frame: int = 0
+
+
+def _ramp(frame: float, start, end) -> float:
+    start = 0 if start is None else start
+    end = start if end is None else end
+    if end <= start:
+        return 1.0 if frame >= start else 0.0
+    return float(min(max((frame - start) / (end - start), 0.0), 1.0))
+
+
+def _rotation(axis, angle: float) -> np.ndarray:
+    a = np.asarray(axis, float)
+    a = a / np.linalg.norm(a)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
+
+
+def _rba_matrix(floret: Floret, frame: float) -> np.ndarray:
+    _, frames = floret.rba
+    pid = floret.local_index
+    present = [i for i, fr in enumerate(frames) if fr.index(pid) is not None]
+    if not present:  # checked in build_model
+        raise InputError(f"placement {pid} appears in no RBA frame")
+    f = min(max(frame, 0.0), len(frames) - 1.0)
+    a = int(math.floor(f))
+    b = min(a + 1, len(frames) - 1)
+    s = f - a
+
+    def row(i):
+        if frames[i].index(pid) is None:
+            i = min(present, key=lambda j: (abs(j - i), j))
+        fr = frames[i]
+        r = fr.index(pid)
+        return fr.pos[r], fr.scale[r], fr.up[r], fr.right[r]
+
+    pa, sa, ua, ra = row(a)
+    pb, sb, ub, rb = row(b)
+    lerp = lambda x, y: (1 - s) * x + s * y  # noqa: E731
+    scale = lerp(sa, sb) * floret.rba_scale
+    return placement_matrix(lerp(pa, pb), scale, lerp(ua, ub), lerp(ra, rb))
+
+
+# --------------------------------------------------------------------------------------------------
+# Building
+# --------------------------------------------------------------------------------------------------
+
+
+def build_model(params: CanopyParams) -> Model:
+    """Load every file ``params`` names and instance every placement (thesis 8 f).
+
+    Raises
+    ------
+    FormatError, InputError
+        Unreadable or malformed inputs; an animation whose frames differ in topology (naming the
+        first differing frame); an SCN id with no ``animation``/``obj`` entry; an RBA id that is
+        not an ``rba:`` placement of its scene; an ``rba:`` placement without a ``rigid body
+        animation`` entry for its scene; a scene without placements.
+    """
+    templates = {e.id: None for e in params.animations}
+    entries = {e.id: e for e in params.animations}
+    if not params.scene_files and not params.rigid_body_animations:
+        raise InputError(f"{params.source}: expected at least one 'scene file path', found none")
+
+    # scene files (listed ones first, then those only named by rigid body animation lines)
+    scene_paths = [f.resolved for f in params.scene_files]
+    for r in params.rigid_body_animations:
+        if r.scene_path.resolved not in scene_paths:
+            scene_paths.append(r.scene_path.resolved)
+    scenes = {p: read_scn(p) for p in scene_paths}
+    rbas = {}
+    for r in params.rigid_body_animations:
+        sp = r.scene_path.resolved
+        if sp in rbas:
+            raise FormatError(params.source, r.line, "one 'rigid body animation' line per scene file",
+                              f"a second one for {r.scene_path.raw}")
+        paths, frames = read_rba_sequence(r.rba_folder.resolved, scenes[sp])
+        if not paths:
+            raise FormatError(params.source, r.line, "a folder with RBA files", f"none in {r.rba_folder.raw}")
+        rbas[sp] = (paths, frames, np.asarray(r.scale, float))
+
+    florets: list[Floret] = []
+    for sp in scene_paths:
+        scene = scenes[sp]
+        for k, p in enumerate(scene.placements):
+            if p.id not in entries:
+                raise FormatError(sp, None, f"placement ids naming an 'animation' or 'obj' entry of {params.source}",
+                                  f"id {p.id} (placement {k}, '{p.kind}:')")
+            if templates[p.id] is None:
+                templates[p.id] = _load_template(params, entries[p.id])
+            fl = Floret(len(florets), p, templates[p.id], sp, k, p.material)
+            if p.kind == "rba":
+                if sp not in rbas:
+                    raise FormatError(sp, None, "a 'rigid body animation' line for this scene's 'rba:' placements",
+                                      f"placement {k} and no such line")
+                paths, frames, scale = rbas[sp]
+                if not any(fr.index(k) is not None for fr in frames):
+                    raise FormatError(paths[0].parent, None, f"placement {k} in at least one RBA file", "none")
+                fl.rba = (paths, frames)
+                fl.rba_scale = scale
+            florets.append(fl)
+    if not florets:
+        raise InputError(f"{params.source}: expected placements in the scene files, found none")
+
+    # concatenate
+    used = [t for t in templates.values() if t is not None]
+    template_offset, rows = {}, 0
+    for t in used:
+        template_offset[t.id] = rows
+        rows += t.frames.shape[0] * t.n_vertices
+    template_x = np.concatenate([t.frames.reshape(-1, 3) for t in used]) if used else np.zeros((0, 3))
+
+    nv_tot = sum(f.template.n_vertices for f in florets)
+    inv_mass = np.ones(nv_tot)
+    vertex_floret = np.empty(nv_tot, np.int32)
+    offsets = np.zeros(len(florets) + 1, np.int64)
+    tris, tri_fl, edges, e_k, hinges, h_k, fixed = [], [], [], [], [], [], []
+    v_off = t_off = 0
+    for k, fl in enumerate(florets):
+        t = fl.template
+        fl.vertex_offset, fl.tri_offset = v_off, t_off
+        vertex_floret[v_off:v_off + t.n_vertices] = k
+        inv_mass[v_off + t.fixed] = 0.0
+        fixed.append(t.fixed + v_off)
+        tris.append(t.tri_indices + v_off)
+        tri_fl.append(np.full(len(t.tri_indices), k, np.int32))
+        edges.append(t.edge_indices + v_off)
+        e_k.append(np.full(len(t.edge_indices), t.k_stretch))
+        hinges.append(t.hinge_indices + v_off)
+        h_k.append(np.full(len(t.hinge_indices), t.k_bend))
+        v_off += t.n_vertices
+        t_off += len(t.tri_indices)
+        offsets[k + 1] = v_off
+
+    n_frames = params.run_frames
+    if n_frames is None:
+        ends = [0]
+        for fl in florets:
+            if fl.placement.frame_end is not None:
+                ends.append(int(fl.placement.frame_end))
+        for paths, _, _ in rbas.values():
+            ends.append(len(paths) - 1)
+        n_frames = max(ends)
+
+    cat = lambda xs, dt, shape: (np.ascontiguousarray(np.concatenate(xs), dtype=dt)  # noqa: E731
+                                 if xs else np.zeros(shape, dt))
+    return Model(
+        florets=florets,
+        templates={t.id: t for t in used},
+        vertex_inv_mass=inv_mass,
+        vertex_floret=vertex_floret,
+        vertex_fixed=cat(fixed, np.int32, (0,)),
+        tri_indices=cat(tris, np.int32, (0, 3)),
+        tri_floret=cat(tri_fl, np.int32, (0,)),
+        edge_indices=cat(edges, np.int32, (0, 2)),
+        edge_stiffness=cat(e_k, np.float64, (0,)),
+        hinge_indices=cat(hinges, np.int32, (0, 4)),
+        hinge_stiffness=cat(h_k, np.float64, (0,)),
+        template_x=np.ascontiguousarray(template_x, dtype=np.float64),
+        template_offset=template_offset,
+        floret_vertex_offset=offsets,
+        n_frames=int(n_frames),
+        params=params,
+    )
+
+
+# --------------------------------------------------------------------------------------------------
+# Kernels: template positions, rest values, prediction
+# --------------------------------------------------------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def _tpl_point(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, v, out):
+    f = vertex_floret[v]
+    lv = v - floret_vertex_offset[f]
+    a = base_a[f] + lv
+    b = base_b[f] + lv
+    s = alpha[f]
+    for d in range(3):
+        out[d] = (1.0 - s) * template_x[a, d] + s * template_x[b, d]
+
+
+@njit(cache=True)
+def template_positions(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, matrix,
+                       vertices, out):
+    """``out[v] = M_f * template(v)`` for the listed ``vertices`` (attachment targets, initial state)."""
+    p = np.empty(3)
+    for k in range(vertices.shape[0]):
+        v = vertices[k]
+        _tpl_point(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, v, p)
+        f = vertex_floret[v]
+        for d in range(3):
+            out[v, d] = matrix[f, d, 0] * p[0] + matrix[f, d, 1] * p[1] + matrix[f, d, 2] * p[2] + matrix[f, d, 3]
+
+
+@njit(cache=True, inline="always")
+def _mapped(template_x, f, row, matrix, out):
+    for d in range(3):
+        out[d] = (matrix[f, d, 0] * template_x[row, 0] + matrix[f, d, 1] * template_x[row, 1]
+                  + matrix[f, d, 2] * template_x[row, 2])
+
+
+@njit(cache=True)
+def rest_values(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, matrix,
+                edge_indices, hinge_indices, edge_rest_length, hinge_rest_angle):
+    """Rest lengths (eq. 3.11) and signed rest angles (eq. 3.13) at the floret's developmental time.
+
+    Each is measured on both template frames around the time, mapped by the linear part of the
+    floret's placement, and interpolated with weight ``alpha`` (angles modulo 2 pi).
+    """
+    pa = np.empty((4, 3))
+    pb = np.empty((4, 3))
+    for e in range(edge_indices.shape[0]):
+        i = edge_indices[e, 0]
+        j = edge_indices[e, 1]
+        f = vertex_floret[i]
+        li = i - floret_vertex_offset[f]
+        lj = j - floret_vertex_offset[f]
+        _mapped(template_x, f, base_a[f] + li, matrix, pa[0])
+        _mapped(template_x, f, base_a[f] + lj, matrix, pa[1])
+        la = math.sqrt((pa[0, 0] - pa[1, 0]) ** 2 + (pa[0, 1] - pa[1, 1]) ** 2 + (pa[0, 2] - pa[1, 2]) ** 2)
+        s = alpha[f]
+        if s != 0.0:
+            _mapped(template_x, f, base_b[f] + li, matrix, pb[0])
+            _mapped(template_x, f, base_b[f] + lj, matrix, pb[1])
+            lb = math.sqrt((pb[0, 0] - pb[1, 0]) ** 2 + (pb[0, 1] - pb[1, 1]) ** 2 + (pb[0, 2] - pb[1, 2]) ** 2)
+            edge_rest_length[e] = (1.0 - s) * la + s * lb
+        else:
+            edge_rest_length[e] = la
+    for h in range(hinge_indices.shape[0]):
+        f = vertex_floret[hinge_indices[h, 0]]
+        off = floret_vertex_offset[f]
+        for k in range(4):
+            _mapped(template_x, f, base_a[f] + hinge_indices[h, k] - off, matrix, pa[k])
+        th_a = signed_dihedral_angle(pa[0], pa[1], pa[2], pa[3])
+        s = alpha[f]
+        if s != 0.0:
+            for k in range(4):
+                _mapped(template_x, f, base_b[f] + hinge_indices[h, k] - off, matrix, pb[k])
+            th_b = signed_dihedral_angle(pb[0], pb[1], pb[2], pb[3])
+            hinge_rest_angle[h] = wrap_angle(th_a + s * wrap_angle(th_b - th_a))
+        else:
+            hinge_rest_angle[h] = th_a
+
+
+@njit(cache=True)
+def predict(vertex_x, vertex_floret, floret_vertex_offset, delta, template_x, old_a, old_b, old_alpha,
+            new_a, new_b, new_alpha, matrix_new, out):
+    """Predicted positions of a growth step (the "velocity" of PBD's prediction).
+
+    ``out = D_f x + L_f (T_new(v) - T_old(v))``: the vertex is carried with its floret's placement
+    change ``D_f`` (``delta``, (nf, 3, 4)) and moved by the template's own displacement between the
+    two developmental times, mapped by the new placement's linear part ``L_f``. An undeformed
+    floret (``x = M_old T_old``) lands exactly on its template (``M_new T_new``); a floret deformed
+    by collisions keeps its deformation, which the constraints then relax.
+    """
+    for v in range(vertex_x.shape[0]):
+        f = vertex_floret[v]
+        lv = v - floret_vertex_offset[f]
+        x0 = vertex_x[v, 0]
+        x1 = vertex_x[v, 1]
+        x2 = vertex_x[v, 2]
+        sa = old_alpha[f]
+        sb = new_alpha[f]
+        g0 = ((1.0 - sb) * template_x[new_a[f] + lv, 0] + sb * template_x[new_b[f] + lv, 0]
+              - (1.0 - sa) * template_x[old_a[f] + lv, 0] - sa * template_x[old_b[f] + lv, 0])
+        g1 = ((1.0 - sb) * template_x[new_a[f] + lv, 1] + sb * template_x[new_b[f] + lv, 1]
+              - (1.0 - sa) * template_x[old_a[f] + lv, 1] - sa * template_x[old_b[f] + lv, 1])
+        g2 = ((1.0 - sb) * template_x[new_a[f] + lv, 2] + sb * template_x[new_b[f] + lv, 2]
+              - (1.0 - sa) * template_x[old_a[f] + lv, 2] - sa * template_x[old_b[f] + lv, 2])
+        for d in range(3):
+            out[v, d] = (delta[f, d, 0] * x0 + delta[f, d, 1] * x1 + delta[f, d, 2] * x2 + delta[f, d, 3]
+                         + matrix_new[f, d, 0] * g0 + matrix_new[f, d, 1] * g1 + matrix_new[f, d, 2] * g2)
