@@ -1,0 +1,104 @@
+"""subdivide: collision-free Loop subdivision of canopies (thesis 4.4, fig. 4.8), CLI and sequences."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from inflo.formats.obj import ObjMesh, read_obj, read_obj_sequence, write_obj, write_obj_sequence
+from inflo.tools.collide import intersecting_pairs
+from inflo.tools.subdivide.collisions import collision_resolver
+from inflo.tools.subdivide.loop import loop_level
+from inflo.tools.subdivide.smooth import plan_subdivision, subdivide_frames, subdivide_meshes
+
+from conftest import no_partial_files, run_cli
+
+
+def corrugated_strip(nx, ny, amp, dz, refine=1, width=1.0, length=4.0):
+    """A strip folded in a zigzag across x (nx coarse folds); ``refine`` splits it linearly, so a
+    refined strip has exactly the coarse one's shape with more vertices."""
+    xs_coarse = np.linspace(0, length, nx + 1)
+    zs_coarse = np.where(np.arange(nx + 1) % 2 == 0, amp, -amp)
+    xs = np.linspace(0, length, nx * refine + 1)
+    zs = np.interp(xs, xs_coarse, zs_coarse)
+    ys = np.linspace(0, width, ny * refine + 1)
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    V = np.c_[X.ravel(), Y.ravel(), (np.broadcast_to(zs[:, None], X.shape) + dz).ravel()]
+    n1 = len(ys)
+    F = []
+    for i in range(len(xs) - 1):
+        for j in range(n1 - 1):
+            a = i * n1 + j
+            F += [[a, a + n1, a + n1 + 1], [a, a + n1 + 1, a + 1]]
+    return V, np.array(F, dtype=np.int32)
+
+
+def interlocking_petals(gap=0.08):
+    """Fig. 4.8a: two coarse petals nested into each other's folds, collision-free. The lower one
+    is finer, so plain Loop smoothing flattens the upper one's folds more and they cross."""
+    A, FA = corrugated_strip(8, 2, 0.3, 0.0)
+    B, FB = corrugated_strip(8, 2, 0.3, -gap, refine=2)
+    return np.vstack([A, B]), np.vstack([FA, FB + len(A)]).astype(np.int32), len(FA)
+
+
+def test_fig_4_8_interlocking_petals():
+    V, F, _ = interlocking_petals()
+    assert len(intersecting_pairs(V, F)) == 0  # (a) collision-free coarse arrangement
+    plan = plan_subdivision(F, len(V), 2)
+    plain, _ = subdivide_frames([V], plan)
+    assert len(intersecting_pairs(plain[0], plan.faces)) > 0  # (b) plain Loop: new intersections
+    handled, reports = subdivide_frames([V], plan, resolve=collision_resolver(spacing=0.004))
+    assert len(intersecting_pairs(handled[0], plan.faces)) == 0  # (c) with collision handling
+    assert sum(r.collision_constraints for r in reports) > 0
+    # collision handling only changes what it must: most vertices reach their Loop positions
+    moved = np.linalg.norm(handled[0] - plain[0], axis=1)
+    assert np.mean(moved < 1e-9) > 0.5
+
+
+def test_sequence_keeps_topology_and_vertex_order(tmp_path):
+    V, F = corrugated_strip(4, 2, 0.2, 0.0)
+    frames = [ObjMesh(np.round(V * (1 + 0.1 * k), 6), F, groups=["petal"], face_group=np.zeros(len(F), np.int32))
+              for k in range(3)]
+    write_obj_sequence(tmp_path / "in", frames)
+    res = run_cli("subdivide", tmp_path / "in", "--levels", 2, "-o", tmp_path / "out", "--no-collisions", "-q")
+    assert res.returncode == 0, res.stderr
+    paths, out = read_obj_sequence(tmp_path / "out")
+    assert [p.name for p in paths] == ["frame_0000.obj", "frame_0001.obj", "frame_0002.obj"]
+    assert len(out[0].faces) == 16 * len(F) and all(m.same_topology(out[0]) for m in out)
+    assert out[0].groups == ["petal"] and (out[0].face_group == 0).all()
+    # frame k is frame 0 scaled: subdivision is linear, so it commutes with the scaling
+    np.testing.assert_allclose(out[2].vertices, out[0].vertices * 1.2, atol=2e-6)
+    assert no_partial_files(tmp_path / "out")
+
+
+def test_cli_single_file_with_collisions_and_check(tmp_path):
+    V, F, n_a = interlocking_petals()
+    group = np.r_[np.zeros(n_a, np.int32), np.ones(len(F) - n_a, np.int32)]
+    write_obj(tmp_path / "petals.obj", ObjMesh(V, F, groups=["floret_0", "floret_1"], face_group=group))
+    res = run_cli("subdivide", tmp_path / "petals.obj", "--levels", 2, "--spacing", 0.004, "--check",
+                  "-o", tmp_path / "smooth.obj")
+    assert res.returncode == 0, res.stderr
+    assert "level 2: 2560 faces" in res.stderr and "intersecting triangle pairs per frame: max 0" in res.stderr
+    m = read_obj(tmp_path / "smooth.obj")
+    assert m.n_faces == 2560 and len(intersecting_pairs(m.vertices, m.faces)) == 0
+    assert m.groups == ["floret_0", "floret_1"] and (np.bincount(m.face_group) == [16 * n_a, 16 * (len(F) - n_a)]).all()
+
+
+def test_cli_non_manifold_error_and_no_output(tmp_path):
+    write_obj(tmp_path / "nm.obj", ObjMesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], float),
+                                           [[0, 1, 2], [1, 0, 3], [0, 1, 4]]))
+    res = run_cli("subdivide", tmp_path / "nm.obj", "--levels", 1, "--no-collisions", "-o", tmp_path / "o.obj")
+    assert res.returncode == 2
+    assert "nm.obj: edge 0-1 (0-based vertex indices) is shared by 3 triangles" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "o.obj").exists()
+
+
+def test_matches_plain_loop_when_no_collisions_arise():
+    """Far-apart petals: the collision step leaves the Loop positions untouched."""
+    A, FA = corrugated_strip(4, 2, 0.2, 0.0)
+    V = np.vstack([A, A + [0, 0, 5.0]])
+    F = np.vstack([FA, FA + len(A)])
+    lv = loop_level(F, len(V))
+    out, rep = subdivide_frames([V], plan_subdivision(F, len(V), 1), resolve=collision_resolver(spacing=0.01))
+    np.testing.assert_array_equal(out[0], lv.loop(V))
+    assert rep[0].collision_constraints == 0
