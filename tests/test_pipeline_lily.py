@@ -1,0 +1,266 @@
+"""The lily pipeline (issue 8, pipelines/lily): its inputs and a short run of its stages.
+
+What is checked (Ijiri et al. 2008, sec. 6.1 and 6.3):
+
+- the committed key poses and weight file are what ``make_keys.py`` writes (inputs and generator
+  do not drift apart);
+- tepal resolution: a petal has 684 triangles (Ijiri: 685), a sepal 576 (Ijiri: 567), within 2 %;
+- the bud (frame 1) is closed -- neighbouring sepal and petal overlap around the axis, the petal
+  inside -- and collision-free by the exact static test;
+- the joint angle between every tepal and the flower axis grows by 23 +- 1 degrees over frames
+  1-60, never decreases there, and changes by less than 0.5 degree over frames 60-100;
+- the midrib reflexes: the bud's tips lean inward, at frame 40 the tips point well below the
+  horizontal, from frame 60 on the midrib keeps its shape, and the lamina, channelled while the
+  midrib leads, ends flat across at frame 100 (a slight channel only);
+- the fixed vertices of lily.weights are exactly rows 0 and 1 of every tepal in polygonize's output;
+- fccompose on the pipeline's own lily.fcc / lily.scn, run for the first 12 frames (where the
+  petals press on the sepals in the key-pose animation), finds and resolves collisions and writes
+  frames with no intersecting triangle pairs;
+- the pipeline Makefile chains the stages in order;
+- if `make lily` has been run, its canopy and smoothed frames are collision-free, and no tepal
+  touches the pistil, stamens or receptacle.
+
+The whole pipeline (about 40 s at draft quality) is not run here.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from inflo.formats.floret import check_compatible, read_floret
+from inflo.formats.obj import list_obj_sequence, read_obj
+from inflo.tools.collide import intersecting_pairs
+
+from conftest import REPO, run_cli
+
+LILY = REPO / "pipelines" / "lily"
+KEYS = [LILY / f"key_{k}.floret" for k in ("bud", "early", "mid", "open")]
+BUILD = REPO / "build" / "lily"
+
+# polygonize's vertex order: organ by organ, copy by copy, row by row from the base
+SEPAL = dict(rows=19, per_row=17, copies=3, offset=0)
+PETAL = dict(rows=20, per_row=19, copies=3, offset=3 * 19 * 17)
+
+
+def _tepals():
+    for org in (SEPAL, PETAL):
+        n = org["rows"] * org["per_row"]
+        for c in range(org["copies"]):
+            yield org, org["offset"] + c * n
+
+
+def _load_check_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("check_lily", LILY / "check_lily.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def tepal_obj(tmp_path_factory):
+    """The tepal OBJ sequence of the pipeline's key poses: 100 frames (a few seconds)."""
+    out = tmp_path_factory.mktemp("lily")
+    r = run_cli("floret-animate", "-q", *KEYS, "-o", out / "frames")
+    assert r.returncode == 0, r.stderr
+    r = run_cli("polygonize", "-q", out / "frames", "-o", out / "obj")
+    assert r.returncode == 0, r.stderr
+    paths = list_obj_sequence(out / "obj")
+    assert len(paths) == 100
+    return out / "obj", paths
+
+
+def _frame(paths, n):
+    """Mesh of 1-based frame n."""
+    return read_obj(paths[n - 1])
+
+
+def test_inputs_are_what_make_keys_writes(tmp_path):
+    r = subprocess.run([sys.executable, str(LILY / "make_keys.py"), str(tmp_path)],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    written = sorted(p.name for p in tmp_path.iterdir())
+    assert written == sorted([p.name for p in KEYS] + ["column_bud.floret", "column_open.floret",
+                                                      "lily.weights"])
+    for name in written:
+        assert (tmp_path / name).read_text() == (LILY / name).read_text(), \
+            f"pipelines/lily/{name} differs from what make_keys.py writes: rerun it"
+
+
+def test_key_poses_compatible_and_timed():
+    poses = [read_floret(p) for p in KEYS]
+    for a, b, pa, pb in zip(poses, poses[1:], KEYS, KEYS[1:]):
+        check_compatible(a, b, pa, pb)
+    # key times at frames 1, 40, 60, 100 of 100
+    assert [round(p.key_time * 99) for p in poses] == [0, 39, 59, 99]
+    for p in poses:
+        sep, pet = p.organ("sepals"), p.organ("petals")
+        assert (sep.symmetry_n, pet.symmetry_n) == (3, 3)
+        assert pet.symmetry_phase_deg - sep.symmetry_phase_deg == pytest.approx(60.0)
+    # the joint angle is carried by tilt: 23 degrees by frame 60, then held
+    tilts = [p.organ("sepals").tilt_deg for p in poses]
+    assert tilts[0] == 0.0 and tilts[2] == tilts[3] == pytest.approx(23.0)
+    assert tilts[1] == pytest.approx(23.0 * 39 / 59, abs=1e-3)
+
+
+def test_triangle_counts_near_ijiri(tepal_obj):
+    _, paths = tepal_obj
+    mesh = _frame(paths, 1)
+    counts = {}
+    for name in mesh.groups:
+        g = mesh.groups.index(name)
+        counts[name] = int(np.count_nonzero(np.asarray(mesh.face_group) == g))
+    assert sorted(counts) == [f"petals_{c}" for c in range(3)] + [f"sepals_{c}" for c in range(3)]
+    for name, n in counts.items():
+        target = 685 if name.startswith("petals") else 567
+        assert abs(n - target) <= 0.02 * target, (name, n)
+    assert len(mesh.faces) == pytest.approx(3800, rel=0.02)  # Ijiri: ~3,800 in the flower
+    assert len(mesh.vertices) == 3 * (SEPAL["rows"] * SEPAL["per_row"] + PETAL["rows"] * PETAL["per_row"])
+
+
+def test_bud_is_closed_and_collision_free(tepal_obj):
+    _, paths = tepal_obj
+    mesh = _frame(paths, 1)
+    x = mesh.vertices
+    assert len(intersecting_pairs(x, mesh.faces)) == 0
+    # at mid-height, the azimuth span of each tepal and its distance from the axis
+    spans = {}
+    for org, off in _tepals():
+        row = org["rows"] // 2
+        ring = x[off + row * org["per_row"]: off + (row + 1) * org["per_row"]]
+        az = np.degrees(np.arctan2(-ring[:, 2], ring[:, 0]))  # +X turns toward -Z (floret.md)
+        mid = az[len(az) // 2]
+        rel = (az - mid + 180.0) % 360.0 - 180.0
+        spans[off] = (mid % 360.0, rel.min(), rel.max(), np.linalg.norm(ring[:, [0, 2]], axis=1).mean())
+    sepals = [spans[SEPAL["offset"] + c * 323] for c in range(3)]
+    petals = [spans[PETAL["offset"] + c * 380] for c in range(3)]
+    covered = np.zeros(360, bool)
+    for mid, lo, hi, _ in sepals + petals:
+        for d in range(int(math.floor(lo)), int(math.ceil(hi)) + 1):
+            covered[int(round(mid + d)) % 360] = True
+    assert covered.all(), "the bud is not closed at mid-height"
+    for mid_s, lo_s, hi_s, r_s in sepals:
+        for mid_p, lo_p, hi_p, r_p in petals:
+            gap = (mid_p - mid_s + 180.0) % 360.0 - 180.0
+            if abs(abs(gap) - 60.0) < 1.0:  # neighbours
+                overlap = min(hi_s, gap + hi_p) - max(lo_s, gap + lo_p)
+                assert overlap > 20.0, "neighbouring sepal and petal do not overlap"
+                assert r_p < r_s, "the petal is not inside the sepal"
+
+
+def test_joint_angle_grows_23_degrees_then_holds(tepal_obj):
+    _, paths = tepal_obj
+    check = _load_check_module()
+    angles = np.array([check.joint_angles(read_obj(p).vertices) for p in paths])  # (100, 6)
+    rise = angles[59] - angles[0]
+    assert np.all(np.abs(rise - 23.0) < 1.0), rise
+    assert np.all(np.diff(angles[:60], axis=0) > -1e-6)
+    assert np.all(np.abs(angles[99] - angles[59]) < 0.5)
+    assert np.all(np.ptp(angles[59:], axis=0) < 0.5)
+
+
+def _tip_and_channel(mesh):
+    """Per tepal: the direction of the midrib's last segment (degrees from +Y in the tepal's radial
+    plane, positive outward) and the channel
+    depth of the widest row (distance of the lateral vertex from the row's chord plane / width)."""
+    x = mesh.vertices
+    out = []
+    for org, off in _tepals():
+        pr, mid = org["per_row"], org["per_row"] // 2
+        a = x[off + (org["rows"] - 3) * pr + mid]
+        b = x[off + (org["rows"] - 1) * pr + mid]
+        base = x[off + mid]
+        radial = np.array([base[0], 0.0, base[2]]) / math.hypot(base[0], base[2])
+        d = b - a
+        tip = math.degrees(math.atan2(d @ radial, d[1]))  # signed: > 0 leans outward
+        row = x[off + (org["rows"] * 2 // 3) * pr: off + (org["rows"] * 2 // 3 + 1) * pr]
+        chord = row[-1] - row[0]
+        width = np.linalg.norm(chord)
+        sag = np.linalg.norm(np.cross(row[mid] - row[0], chord)) / width
+        out.append((tip, sag / width))
+    return np.array(out)
+
+
+def test_midrib_reflexes_early_then_lamina_flattens(tepal_obj):
+    _, paths = tepal_obj
+    bud, early, mid, last = (_tip_and_channel(_frame(paths, n)) for n in (1, 40, 60, 100))
+    assert np.all(bud[:, 0] < 0.0)              # bud: the tips lean in toward the axis
+    assert np.all(early[:, 0] > 120.0)          # frame 40: the midrib reflexed hard, tips down
+    assert np.all(early[:, 0] > last[:, 0] + 10.0)
+    assert np.all((last[:, 0] > 90.0) & (last[:, 0] < 120.0))  # open: tips a little below level
+    assert np.all(np.abs(last[:, 0] - mid[:, 0]) < 1.0)  # frames 60-100: the midrib stops warping
+    assert np.all(early[:, 1] > 2.0 * last[:, 1])  # lamina lags (channel) early, flat later
+    assert np.all(last[:, 1] < 0.06)
+
+
+def test_weight_file_fixes_the_claws(tepal_obj):
+    from inflo.tools.fccompose.model import read_weight_file
+
+    _, paths = tepal_obj
+    n = len(read_obj(paths[0]).vertices)
+    ids = read_weight_file(LILY / "lily.weights", n)
+    expect = []
+    for org, off in _tepals():
+        expect.extend(range(off, off + 2 * org["per_row"]))
+    assert ids.tolist() == sorted(expect)
+    # rows 0 and 1 are on the receptacle: the lowest vertices of the bud
+    y = read_obj(paths[0]).vertices[:, 1]
+    assert y[ids].max() < np.delete(y, ids).min() + 0.3
+
+
+@pytest.mark.slow
+def test_fccompose_resolves_the_tepal_contacts(tepal_obj, tmp_path):
+    obj_dir, paths = tepal_obj
+    # the key-pose animation alone has the petals pressing through the sepals early on
+    assert any(len(intersecting_pairs(m.vertices, m.faces)) for m in (read_obj(paths[i]) for i in (6, 9)))
+    text = (LILY / "lily.fcc").read_text()
+    text = text.replace("../../build/lily/obj", str(obj_dir))
+    text = text.replace("scene file path: lily.scn", f"scene file path: {LILY / 'lily.scn'}")
+    text = text.replace("weight: 0 lily.weights", f"weight: 0 {LILY / 'lily.weights'}")
+    text += "\nrun for number of frames: 12\n"
+    fcc = tmp_path / "lily.fcc"
+    fcc.write_text(text)
+    r = run_cli("fccompose", "-q", "--strict", fcc, "-o", tmp_path / "canopy")
+    assert r.returncode == 0, r.stdout + r.stderr
+    out = list_obj_sequence(tmp_path / "canopy")
+    assert len(out) >= 12
+    for p in out:
+        m = read_obj(p)
+        assert len(intersecting_pairs(m.vertices, m.faces)) == 0, p.name
+    with open(tmp_path / "canopy" / "log.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert sum(int(r["collisions_found"]) for r in rows) > 0
+    assert all(int(r["remaining_pairs"]) == 0 for r in rows)
+
+
+def test_makefile_chains_the_stages():
+    make = shutil.which("make")
+    if make is None:
+        pytest.skip("no make")
+    r = subprocess.run([make, "-n", "-B", "-C", str(LILY), "all"], capture_output=True, text=True,
+                       timeout=60)
+    assert r.returncode == 0, r.stderr
+    order = ["floret-animate", "polygonize", "fccompose", "subdivide", "canopy-render", "check_lily.py"]
+    pos = [r.stdout.find(word) for word in order]
+    assert all(p >= 0 for p in pos), dict(zip(order, pos))
+    assert pos == sorted(pos)
+    assert "lily.fcc" in r.stdout and "--levels 1" in r.stdout
+    r = subprocess.run([make, "-n", "-B", "-C", str(LILY), "smooth", "QUALITY=final"],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and "--levels 2" in r.stdout
+
+
+@pytest.mark.skipif(not (BUILD / "canopy").is_dir() or not (BUILD / "smooth").is_dir(),
+                    reason="make lily has not been run")
+def test_built_lily_is_collision_free(capsys):
+    """The exact test over the built canopy (every tenth frame), the smoothed frames, and the
+    tepals against the pistil/stamens/receptacle (pipelines/lily/check_lily.py)."""
+    check = _load_check_module()
+    assert check.main(BUILD) == 0, capsys.readouterr().out
