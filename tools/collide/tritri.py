@@ -24,8 +24,8 @@ _O3D_ERRBOUND = (7.0 + 56.0 * _EPS) * _EPS
 
 
 @njit(cache=True, inline="always")
-def orient3d(a, b, c, d):
-    """``det[b - a, c - a, d - a]``: > 0 when d is on the side of abc's normal (b-a)x(c-a)."""
+def _orient3d_with_bound(a, b, c, d):
+    """(det[b - a, c - a, d - a], Shewchuk's forward error bound of its float evaluation)."""
     bx = b[0] - a[0]
     by = b[1] - a[1]
     bz = b[2] - a[2]
@@ -35,7 +35,16 @@ def orient3d(a, b, c, d):
     dx = d[0] - a[0]
     dy = d[1] - a[1]
     dz = d[2] - a[2]
-    return bx * (cy * dz - cz * dy) + by * (cz * dx - cx * dz) + bz * (cx * dy - cy * dx)
+    det = bx * (cy * dz - cz * dy) + by * (cz * dx - cx * dz) + bz * (cx * dy - cy * dx)
+    perm = (abs(bx) * (abs(cy * dz) + abs(cz * dy)) + abs(by) * (abs(cz * dx) + abs(cx * dz))
+            + abs(bz) * (abs(cx * dy) + abs(cy * dx)))
+    return det, _O3D_ERRBOUND * perm
+
+
+@njit(cache=True, inline="always")
+def orient3d(a, b, c, d):
+    """``det[b - a, c - a, d - a]``: > 0 when d is on the side of abc's normal (b-a)x(c-a)."""
+    return _orient3d_with_bound(a, b, c, d)[0]
 
 
 @njit(cache=True, inline="always")
@@ -161,19 +170,8 @@ def triangles_intersect(p0, p1, p2, q0, q1, q2):
 @njit(cache=True, inline="always")
 def _orient3d_certain(a, b, c, d):
     """True when the float sign of orient3d(a, b, c, d) is the exact sign (Shewchuk's bound)."""
-    bx = b[0] - a[0]
-    by = b[1] - a[1]
-    bz = b[2] - a[2]
-    cx = c[0] - a[0]
-    cy = c[1] - a[1]
-    cz = c[2] - a[2]
-    dx = d[0] - a[0]
-    dy = d[1] - a[1]
-    dz = d[2] - a[2]
-    det = bx * (cy * dz - cz * dy) + by * (cz * dx - cx * dz) + bz * (cx * dy - cy * dx)
-    perm = (abs(bx) * (abs(cy * dz) + abs(cz * dy)) + abs(by) * (abs(cz * dx) + abs(cx * dz))
-            + abs(bz) * (abs(cx * dy) + abs(cy * dx)))
-    return abs(det) > _O3D_ERRBOUND * perm
+    det, bound = _orient3d_with_bound(a, b, c, d)
+    return abs(det) > bound
 
 
 @njit(cache=True)
