@@ -42,16 +42,16 @@ def vertex_boxes(x0, x1, pad):
 
 
 @njit(cache=True)
-def edge_boxes(x0, x1, edge_indices, pad):
-    """(e, 6): box of each edge's two vertices at t = 0 and t = 1, grown by ``pad``."""
-    n = edge_indices.shape[0]
+def _element_boxes(x0, x1, indices, pad):
+    """(k, 6): box of each element's vertices (a row of ``indices``) at t = 0 and t = 1, grown by ``pad``."""
+    n = indices.shape[0]
     out = np.empty((n, 6))
     for e in range(n):
         for d in range(3):
             lo = np.inf
             hi = -np.inf
-            for k in range(2):
-                v = edge_indices[e, k]
+            for k in range(indices.shape[1]):
+                v = indices[e, k]
                 lo = min(lo, x0[v, d], x1[v, d])
                 hi = max(hi, x0[v, d], x1[v, d])
             out[e, d] = lo - pad
@@ -59,22 +59,14 @@ def edge_boxes(x0, x1, edge_indices, pad):
     return out
 
 
-@njit(cache=True)
+def edge_boxes(x0, x1, edge_indices, pad):
+    """(e, 6): box of each edge's two vertices at t = 0 and t = 1, grown by ``pad``."""
+    return _element_boxes(x0, x1, edge_indices, pad)
+
+
 def triangle_boxes(x0, x1, tri_indices, pad):
     """(m, 6): box of each triangle's three vertices at t = 0 and t = 1, grown by ``pad``."""
-    n = tri_indices.shape[0]
-    out = np.empty((n, 6))
-    for t in range(n):
-        for d in range(3):
-            lo = np.inf
-            hi = -np.inf
-            for k in range(3):
-                v = tri_indices[t, k]
-                lo = min(lo, x0[v, d], x1[v, d])
-                hi = max(hi, x0[v, d], x1[v, d])
-            out[t, d] = lo - pad
-            out[t, d + 3] = hi + pad
-    return out
+    return _element_boxes(x0, x1, tri_indices, pad)
 
 
 def lattice_cell_size(lattice, bounds_min, bounds_max, boxes) -> float:
