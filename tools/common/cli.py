@@ -23,15 +23,7 @@ import click
 
 from inflo.formats.errors import InputError
 
-__all__ = ["inflo_command", "progress", "NotImplementedStage", "not_implemented"]
-
-
-class NotImplementedStage(InputError):
-    """Raised by a CLI whose stage has not been built yet (exit code 2)."""
-
-
-def not_implemented(cli_name: str, issue: int) -> None:
-    raise NotImplementedStage(f"{cli_name} is not implemented yet (issue {issue})")
+__all__ = ["inflo_command", "progress"]
 
 
 def inflo_command(name: str, **command_kwargs):
