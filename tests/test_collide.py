@@ -321,3 +321,51 @@ def test_fallback_reverts_when_retries_run_out():
     assert len(res.remaining) > 0 and res.reverted > 0
     assert len(detect_collisions(x0, x1, tri, edges, tolerance=1e-9)[0]) == 0
     assert len(intersecting_pairs(x1, tri)) == 0
+
+
+def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
+    """The retry rounds' incremental broad phase (round 0's grids + a small grid over what moved)
+    finds exactly the pairs a broad phase built afresh on the current positions finds for the
+    active vertices, over several rounds that move different vertices."""
+    from inflo.tools.collide.broad import box_pairs_brute, edge_boxes, triangle_boxes, vertex_boxes
+    from inflo.tools.collide.resolve import _StepBroadPhase
+    from inflo.tools.pbd import mesh_edges
+
+    def _candidates(x0, x1, tri, edges, pad, cell, active):  # brute force reference
+        vt = box_pairs_brute(vertex_boxes(x0, x1, pad), triangle_boxes(x0, x1, tri, pad), False)
+        eb = edge_boxes(x0, x1, edges, pad)
+        ee = box_pairs_brute(eb, eb, True)
+        if active is not None:
+            vt = vt[active[vt[:, 0]] | active[tri[vt[:, 1]]].any(axis=1)]
+            ee = ee[active[edges[ee[:, 0]]].any(axis=1) | active[edges[ee[:, 1]]].any(axis=1)]
+        return vt, ee
+
+    rng = np.random.default_rng(7)
+    n = 12
+    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    grid = np.stack([u.ravel(), v.ravel(), np.zeros(n * n)], axis=1)
+    quads = [(i * n + j, i * n + j + 1, (i + 1) * n + j, (i + 1) * n + j + 1)
+             for i in range(n - 1) for j in range(n - 1)]
+    tri = np.array([(a, b, c) for a, b, c, d in quads] + [(b, d, c) for a, b, c, d in quads], np.int32)
+    # two sheets, the second above the first
+    x0 = np.concatenate([grid, grid + [0.03, 0.02, 0.05]])
+    tri = np.concatenate([tri, tri + n * n]).astype(np.int32)
+    edges = mesh_edges(tri)
+    x1 = x0 + rng.normal(0, 0.02, x0.shape)
+    pad, cell = 1e-4, 0.1
+    bp = _StepBroadPhase(x0, tri, edges, pad, cell)
+    vt0, ee0 = bp.first(x1)
+    ref_vt, ref_ee = _candidates(x0, x1, tri, edges, pad, cell, None)
+    assert {tuple(p) for p in vt0.tolist()} == {tuple(p) for p in ref_vt.tolist()}
+    assert {tuple(p) for p in ee0.tolist()} == {tuple(p) for p in ref_ee.tolist()}
+    for _ in range(4):
+        active = rng.random(len(x0)) < 0.1
+        x1[active] += rng.normal(0, 0.05, (int(active.sum()), 3))
+        vt, ee = bp.again(x1, active)
+        ref_vt, ref_ee = _candidates(x0, x1, tri, edges, pad, cell, active)
+        got_vt = [tuple(p) for p in vt.tolist()]
+        got_ee = [tuple(p) for p in ee.tolist()]
+        assert len(got_vt) == len(set(got_vt)) and len(got_ee) == len(set(got_ee))  # no duplicates
+        assert set(got_vt) == {tuple(p) for p in ref_vt.tolist()}
+        assert set(got_ee) == {tuple(p) for p in ref_ee.tolist()}
+        assert len(ref_vt) and len(ref_ee)

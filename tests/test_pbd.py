@@ -230,3 +230,45 @@ def test_colouring_separates_constraints_and_coloured_sweeps_converge_determinis
         runs.append(y)
     np.testing.assert_array_equal(runs[0], runs[1])
     assert np.abs(np.linalg.norm(runs[0][e[:, 0]] - runs[0][e[:, 1]], axis=1) - target_l).max() < 1e-4
+
+
+def test_solving_part_by_part_equals_the_serial_sweeps_and_stops_parts_at_rest():
+    """project_internal_by_part on three disjoint strips (parts) gives, part by part, exactly the
+    serial Gauss-Seidel sweeps; a part already at rest stops after one sweep; part_offsets refuses
+    constraints that are not grouped by part or that join two parts."""
+    from inflo.tools.pbd import part_offsets, project_internal_by_part
+
+    rng = np.random.default_rng(11)
+    xs, tris = [], []
+    for p in range(3):
+        x, tri = strip(6, 4, rng=rng)
+        tris.append(tri + sum(len(a) for a in xs))
+        xs.append(x + [0.0, 0.0, 5.0 * p])
+    x = np.concatenate(xs)
+    part = np.repeat(np.arange(3), [len(a) for a in xs])
+    e = np.concatenate([mesh_edges(t) for t in tris]).astype(np.int32)
+    h = np.concatenate([mesh_hinges(t) for t in tris]).astype(np.int32)
+    rest_l = np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1)
+    rest_a = hinge_angles(x, h)
+    w = np.ones(len(x))
+    start = x.copy()
+    moved = part != 1  # part 1 stays at rest
+    start[moved] += rng.normal(scale=0.05, size=(int(moved.sum()), 3))
+    eo, ho = part_offsets(e, part, 3), part_offsets(h, part, 3)
+    assert eo.tolist()[0] == 0 and eo[-1] == len(e)
+    k_e, k_h = np.full(len(e), 0.9), np.full(len(h), 0.7)
+    got = start.copy()
+    sweeps = np.zeros(3, np.int64)
+    project_internal_by_part(got, w, e, rest_l, k_e, eo, h, rest_a, k_h, ho, 7, 1e-12, sweeps)
+    ref = start.copy()
+    for _ in range(7):
+        project_distance_constraints(ref, w, e, rest_l, k_e)
+        project_bending_constraints(ref, w, h, rest_a, k_h)
+    assert sweeps.tolist() == [7, 1, 7]
+    np.testing.assert_allclose(got[part == 1], start[part == 1], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-14)
+    # not grouped by part, or joining two parts: no offsets
+    assert part_offsets(e[::-1], part, 3) is None
+    joined = e.copy()
+    joined[0, 1] = len(x) - 1
+    assert part_offsets(joined, part, 3) is None

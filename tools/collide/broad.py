@@ -25,6 +25,7 @@ __all__ = [
     "triangle_boxes",
     "box_pairs",
     "box_pairs_brute",
+    "BoxGrid",
     "lattice_cell_size",
 ]
 
@@ -167,7 +168,8 @@ def _overlap(a, i, b, j):
 
 
 @njit(cache=True)
-def _query_one(a, boxes_a, boxes_b, same, origin, inv, starts, elem, cells, mask, out, base, write):
+def _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask, out, base,
+               write):
     lx = _cell(boxes_a[a, 0], origin[0], inv)
     ly = _cell(boxes_a[a, 1], origin[1], inv)
     lz = _cell(boxes_a[a, 2], origin[2], inv)
@@ -185,6 +187,8 @@ def _query_one(a, boxes_a, boxes_b, same, origin, inv, starts, elem, cells, mask
                     b = elem[k]
                     if same and b <= a:
                         continue
+                    if skip_b.shape[0] and skip_b[b]:
+                        continue
                     if not _overlap(boxes_a, a, boxes_b, b):
                         continue
                     # report once: in the cell of the intersection box's minimum corner
@@ -201,21 +205,70 @@ def _query_one(a, boxes_a, boxes_b, same, origin, inv, starts, elem, cells, mask
     return n
 
 
+@njit(cache=True, inline="always")
+def _fill_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask, out, base):
+    """Write query ``a``'s pairs at ``out[base:]``, its partners sorted (few: insertion sort), so
+    the output is in (a, b) order without a global sort."""
+    n = _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask,
+                   out, base, True)
+    for i in range(base + 1, base + n):
+        b = out[i, 1]
+        j = i - 1
+        while j >= base and out[j, 1] > b:
+            out[j + 1, 1] = out[j, 1]
+            j -= 1
+        out[j + 1, 1] = b
+
+
 @njit(cache=True, parallel=True)
-def _query(boxes_a, boxes_b, same, origin, inv, starts, elem, cells, mask):
+def _query(boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask):
     na = boxes_a.shape[0]
     counts = np.zeros(na + 1, np.int64)
     dummy = np.empty((0, 2), np.int32)
     for a in prange(na):
-        counts[a + 1] = _query_one(a, boxes_a, boxes_b, same, origin, inv, starts, elem, cells,
-                                   mask, dummy, 0, False)
+        counts[a + 1] = _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem,
+                                   cells, mask, dummy, 0, False)
     for a in range(na):
         counts[a + 1] += counts[a]
     out = np.empty((counts[na], 2), np.int32)
     for a in prange(na):
-        _query_one(a, boxes_a, boxes_b, same, origin, inv, starts, elem, cells, mask, out,
-                   counts[a], True)
+        _fill_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask, out,
+                  counts[a])
     return out
+
+
+@njit(cache=True)
+def _query_serial(boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask):
+    """:func:`_query` on one thread (same output): for the few boxes of a retry round, where waking
+    the thread pool costs more than the queries (milliseconds on a loaded 2-core machine)."""
+    na = boxes_a.shape[0]
+    counts = np.zeros(na + 1, np.int64)
+    dummy = np.empty((0, 2), np.int32)
+    for a in range(na):
+        counts[a + 1] = counts[a] + _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv,
+                                               starts, elem, cells, mask, dummy, 0, False)
+    out = np.empty((counts[na], 2), np.int32)
+    for a in range(na):
+        _fill_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask, out,
+                  counts[a])
+    return out
+
+
+#: below this many query boxes the serial query is used
+SERIAL_QUERY_BELOW = 20000
+
+
+@njit(cache=True)
+def _extent(a, b):
+    """Common origin (min corner over both box sets) and the largest box side."""
+    origin = np.full(3, np.inf)
+    span = 0.0
+    for boxes in (a, b):
+        for i in range(boxes.shape[0]):
+            for d in range(3):
+                origin[d] = min(origin[d], boxes[i, d])
+                span = max(span, boxes[i, d + 3] - boxes[i, d])
+    return origin, span
 
 
 def box_pairs(boxes_a: np.ndarray, boxes_b: np.ndarray | None = None, *,
@@ -242,18 +295,47 @@ def box_pairs(boxes_a: np.ndarray, boxes_b: np.ndarray | None = None, *,
         return np.zeros((0, 2), np.int32)
     if cell_size is None or not cell_size > 0:
         cell_size = _mean_extent(b)
-    origin = np.minimum(a[:, :3].min(axis=0), b[:, :3].min(axis=0))
+    origin, span = _extent(a, b)
     inv = 1.0 / float(cell_size)
     # guard against absurd cell counts for a too-small cell (an element spanning > 64 cells per axis)
-    span = float(np.max(np.concatenate([a[:, 3:] - a[:, :3], b[:, 3:] - b[:, :3]]).max(axis=0)))
     if span * inv > 64.0:
         inv = 64.0 / span
     starts, elem, cells, mask = _build(b, origin, inv)
-    pairs = _query(a, b, same, origin, inv, starts, elem, cells, mask)
-    if len(pairs) > 1:
-        order = np.lexsort((pairs[:, 1], pairs[:, 0]))
-        pairs = pairs[order]
-    return pairs
+    return _query(a, b, same, _NO_SKIP, origin, inv, starts, elem, cells, mask)
+
+
+_NO_SKIP = np.zeros(0, np.bool_)
+
+
+class BoxGrid:
+    """A hashed grid built once over a set of boxes and queried many times (the collision
+    resolution's retry rounds query it with the few boxes that moved).
+
+    Parameters
+    ----------
+    boxes : (nb, 6) float64
+    cell_size : float
+        Grid cell edge (> 0).
+    origin : (3,) float64
+        Grid origin; grids queried together must share it and ``cell_size``.
+    """
+
+    def __init__(self, boxes: np.ndarray, cell_size: float, origin: np.ndarray):
+        self.boxes = np.ascontiguousarray(boxes, dtype=np.float64).reshape(-1, 6)
+        self.origin = np.ascontiguousarray(origin, dtype=np.float64)
+        self.inv = 1.0 / float(cell_size)
+        self.tables = _build(self.boxes, self.origin, self.inv) if len(self.boxes) else None
+
+    def query(self, boxes: np.ndarray, *, skip: np.ndarray | None = None, same: bool = False) -> np.ndarray:
+        """(k, 2) int32 pairs ``(i, j)``: query box i overlaps grid box j (not ``skip[j]``), in (i, j)
+        order; ``same``: the query boxes are the grid's own boxes, pairs ``i < j`` only."""
+        q = np.ascontiguousarray(boxes, dtype=np.float64).reshape(-1, 6)
+        if self.tables is None or len(q) == 0:
+            return np.zeros((0, 2), np.int32)
+        sk = _NO_SKIP if skip is None else np.ascontiguousarray(skip, dtype=np.bool_)
+        starts, elem, cells, mask = self.tables
+        run = _query_serial if len(q) < SERIAL_QUERY_BELOW else _query
+        return run(q, self.boxes, same, sk, self.origin, self.inv, starts, elem, cells, mask)
 
 
 @njit(cache=True)

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
-from .broad import box_pairs, edge_boxes, triangle_boxes, vertex_boxes
+from .broad import BoxGrid, box_pairs, edge_boxes, triangle_boxes, vertex_boxes
 from .ccd import edge_edge_ccd, vertex_triangle_ccd
 from .response import project_collision_constraints
 
@@ -231,23 +231,114 @@ def _candidates(x0, x1, tri, edges, pad, cell_size, active):
     av = np.nonzero(active)[0]
     at = np.nonzero(active[tri].any(axis=1))[0]
     ae = np.nonzero(active[edges].any(axis=1))[0]
-    # the grids are built on the (few) active elements and queried by all boxes
-    parts = []
-    if len(av):
-        p = box_pairs(tb, vb[av], cell_size=cell_size)
-        parts.append(np.stack([av[p[:, 1]], p[:, 0]], axis=1))
-    if len(at):
-        p = box_pairs(vb, tb[at], cell_size=cell_size)
-        parts.append(np.stack([p[:, 0], at[p[:, 1]]], axis=1))
-    vt = np.unique(np.concatenate(parts), axis=0) if parts else np.zeros((0, 2), np.int32)
-    ee = np.zeros((0, 2), np.int32)
-    if len(ae):
-        p = box_pairs(eb, eb[ae], cell_size=cell_size)
-        p = np.stack([p[:, 0], ae[p[:, 1]]], axis=1)
-        p = p[p[:, 0] != p[:, 1]]
-        p.sort(axis=1)
-        ee = np.unique(p, axis=0)
-    return np.ascontiguousarray(vt, dtype=np.int32), np.ascontiguousarray(ee, dtype=np.int32)
+    # the grids are built on all elements and queried by the (few) active boxes only
+    vt = _merge_vt(box_pairs(vb[av], tb, cell_size=cell_size), av, None,
+                   box_pairs(tb[at], vb, cell_size=cell_size), at, active)
+    ee = _merge_ee(box_pairs(eb[ae], eb, cell_size=cell_size), ae, None, active[edges].any(axis=1))
+    return vt, ee
+
+
+def _merge_vt(p_vert, av, t_map, p_tri, at, v_active, v_map=None):
+    """Vertex-triangle pairs from the active vertices' query ``p_vert`` (rows: index into ``av``,
+    triangle (through ``t_map`` if given)) and the active triangles' query ``p_tri`` (rows: index
+    into ``at``, vertex (through ``v_map``)); a pair of an active vertex and an active triangle is in
+    both and kept once (from the first)."""
+    t = p_vert[:, 1] if t_map is None else t_map[p_vert[:, 1]]
+    first = np.stack([av[p_vert[:, 0]], t], axis=1)
+    v = p_tri[:, 1] if v_map is None else v_map[p_tri[:, 1]]
+    keep = ~v_active[v]
+    second = np.stack([v[keep], at[p_tri[keep, 0]]], axis=1)
+    return np.ascontiguousarray(np.concatenate([first, second]), dtype=np.int32)
+
+
+def _merge_ee(p_edge, ae, e_map, e_active):
+    """Edge-edge pairs from the active edges' query ``p_edge`` (rows: index into ``ae``, edge
+    (through ``e_map``)): no pair of an edge with itself, a pair of two active edges once, each pair
+    as (smaller, larger)."""
+    e = ae[p_edge[:, 0]]
+    f = p_edge[:, 1] if e_map is None else e_map[p_edge[:, 1]]
+    keep = (e != f) & (~e_active[f] | (e < f))
+    e = e[keep]
+    f = f[keep]
+    return np.ascontiguousarray(np.stack([np.minimum(e, f), np.maximum(e, f)], axis=1), dtype=np.int32)
+
+
+class _StepBroadPhase:
+    """The broad phase of one step's detection rounds (Alg. 1 lines 10-20).
+
+    Round 0 builds grids over every element's box (from ``x0`` to the predicted ``x1``) and pairs
+    them all. Later rounds are queried by the boxes of the active elements only (those with a
+    vertex the last round's constraints moved, or in a pair still crossing): against round 0's grids
+    for partners none of whose vertices has moved since round 0 (their boxes are unchanged), and
+    against a small grid over the current boxes of the elements that have moved.
+    """
+
+    def __init__(self, x0, tri, edges, pad, cell_size):
+        self.x0 = x0
+        self.tri = tri
+        self.edges = edges
+        self.pad = pad
+        self.cell_size = cell_size
+        self.moved = np.zeros(len(x0), np.bool_)
+
+    def first(self, x1):
+        x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
+        self.vb = vertex_boxes(x0, x1, pad)
+        self.tb = triangle_boxes(x0, x1, tri, pad)
+        self.eb = edge_boxes(x0, x1, edges, pad)
+        cell = self.cell_size
+        if cell is None or not cell > 0:
+            cell = float((self.tb[:, 3:] - self.tb[:, :3]).max(axis=1).mean()) if len(self.tb) else 1.0
+            cell = cell if cell > 0 else 1.0
+        span = max(float((bx[:, 3:] - bx[:, :3]).max()) if len(bx) else 0.0
+                   for bx in (self.vb, self.tb, self.eb))
+        if span > 64.0 * cell:  # guard against absurd cell counts (as box_pairs)
+            cell = span / 64.0
+        self.cell = cell
+        self.origin = self.vb[:, :3].min(axis=0) if len(self.vb) else np.zeros(3)
+        self.grid_t = BoxGrid(self.tb, cell, self.origin)
+        self.grid_e = BoxGrid(self.eb, cell, self.origin)
+        self.grid_v = None
+        vt = self.grid_t.query(self.vb)
+        ee = self.grid_e.query(self.eb, same=True)
+        return vt, ee
+
+    def again(self, x1, active):
+        x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
+        if self.grid_v is None:
+            self.grid_v = BoxGrid(self.vb, self.cell, self.origin)
+        self.moved |= active
+        moved = self.moved
+        moved_t = moved[tri].any(axis=1)
+        moved_e = moved[edges].any(axis=1)
+        active_t = active[tri].any(axis=1)
+        active_e = active[edges].any(axis=1)
+        av = np.nonzero(active)[0]
+        at = np.nonzero(active_t)[0]
+        ae = np.nonzero(active_e)[0]
+        mv = np.nonzero(moved)[0]
+        mt = np.nonzero(moved_t)[0]
+        me = np.nonzero(moved_e)[0]
+        vb_m = vertex_boxes(x0[mv], x1[mv], pad)
+        tb_m = triangle_boxes(x0, x1, tri[mt], pad)
+        eb_m = edge_boxes(x0, x1, edges[me], pad)
+        # the active elements are among the moved ones: their boxes by position in mv/mt/me
+        vb_a = vb_m[np.searchsorted(mv, av)]
+        tb_a = tb_m[np.searchsorted(mt, at)]
+        eb_a = eb_m[np.searchsorted(me, ae)]
+        small_t = BoxGrid(tb_m, self.cell, self.origin)
+        small_v = BoxGrid(vb_m, self.cell, self.origin)
+        small_e = BoxGrid(eb_m, self.cell, self.origin)
+        vt = np.concatenate([
+            _merge_vt(self.grid_t.query(vb_a, skip=moved_t), av, None,
+                      self.grid_v.query(tb_a, skip=moved), at, active),
+            _merge_vt(small_t.query(vb_a), av, mt, small_v.query(tb_a), at, active, v_map=mv),
+        ])
+        ee = np.concatenate([
+            _merge_ee(self.grid_e.query(eb_a, skip=moved_e), ae, None, active_e),
+            _merge_ee(small_e.query(eb_a), ae, me, active_e),
+        ])
+        return np.ascontiguousarray(vt, dtype=np.int32), np.ascontiguousarray(ee, dtype=np.int32)
 
 
 def detect_collisions(x0: np.ndarray, x1: np.ndarray, tri_indices: np.ndarray, edge_indices: np.ndarray,
@@ -274,8 +365,8 @@ def detect_collisions(x0: np.ndarray, x1: np.ndarray, tri_indices: np.ndarray, e
     Returns
     -------
     contacts : Contacts
-        Pairs with an odd number of crossings (need a response), vertex-triangle first, each in
-        sorted pair order.
+        Pairs with an odd number of crossings (need a response), vertex-triangle first, in a
+        deterministic order.
     stats : dict
         ``vt_candidates``, ``ee_candidates`` (broad phase), ``vt_hits``, ``ee_hits`` (pairs with
         any crossing), ``vt_even``, ``ee_even`` (pairs crossing an even number of times: ignored).
@@ -287,6 +378,11 @@ def detect_collisions(x0: np.ndarray, x1: np.ndarray, tri_indices: np.ndarray, e
     pad = 0.5 * tolerance
     vt_pairs, ee_pairs = _candidates(x0, x1, tri, edges, pad, cell_size,
                                      None if active is None else np.asarray(active, dtype=bool))
+    return _narrow(x0, x1, tri, edges, vt_pairs, ee_pairs, tolerance)
+
+
+def _narrow(x0, x1, tri, edges, vt_pairs, ee_pairs, tolerance) -> tuple[Contacts, dict]:
+    """Narrow phase over candidate pairs and the contacts of those crossing an odd number of times."""
     vt_hits = np.zeros(len(vt_pairs), np.int32)
     vt_info = np.zeros((len(vt_pairs), 4))
     ee_hits = np.zeros(len(ee_pairs), np.int32)
@@ -417,9 +513,15 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
     found = Contacts.empty()
     active = None
     best, stalled = None, 0
+    x0 = np.ascontiguousarray(x0, dtype=np.float64)
+    broad = _StepBroadPhase(x0, tri, edges, 0.5 * tol, cell_size)
+
+    def detect(active):
+        pairs = broad.first(x1) if active is None else broad.again(x1, active)
+        return _narrow(x0, x1, tri, edges, pairs[0], pairs[1], tol)
+
     for r in range(max_retries + 1):
-        found, stats = detect_collisions(x0, x1, tri, edges, tolerance=tol, cell_size=cell_size,
-                                         active=active)
+        found, stats = detect(active)
         res.rounds += 1
         res.found.append(len(found))
         if r == 0:
@@ -454,8 +556,7 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         x1[verts] = x0[verts]
         active = np.zeros(len(x1), np.bool_)
         active[verts] = True
-        found, _ = detect_collisions(x0, x1, tri, edges, tolerance=tol, cell_size=cell_size,
-                                     active=active)
+        found, _ = detect(active)
         if len(found) == 0:
             break
     else:

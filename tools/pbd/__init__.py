@@ -24,6 +24,8 @@ from .solver import (
     project_bending_constraints_coloured,
     project_distance_constraints,
     project_distance_constraints_coloured,
+    project_internal_by_part,
+    part_offsets,
     bending_residual,
     distance_residual,
 )
@@ -44,6 +46,8 @@ __all__ = [
     "project_bending_constraints_coloured",
     "project_distance_constraints",
     "project_distance_constraints_coloured",
+    "project_internal_by_part",
+    "part_offsets",
     "bending_residual",
     "distance_residual",
 ]
