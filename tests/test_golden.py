@@ -279,6 +279,14 @@ def test_report_lists_the_first_few_and_counts_the_rest(tmp_path):
     assert "20 of 20 vertices moved" in text
     assert text.count("moved 0.5: golden") == G.MAX_DETAILS
     assert f"... and {20 - G.MAX_DETAILS} more" in text
+    # a run of files with the same kinds of difference (every frame of a sequence) is shown once
+    for i in range(4):
+        _pair(tmp_path, OBJ, OBJ.replace("usemtl mtl4", "usemtl mtl5"), f"frame_{i:04d}.obj")
+    report = G.format_report(G.diff_trees(tmp_path / "golden", tmp_path / "found"), "seq")
+    assert report.startswith("seq: 5 files, 5 differ")
+    assert report.count("materials: golden ['mtl3', 'mtl4']") == 1
+    assert "... and 3 more files with the same kinds of difference: frame_0001.obj ... frame_0003.obj" in report
+    assert "x.obj: 20 of 20 vertices moved" in report
 
 
 # --------------------------------------------------------------------------------------------------

@@ -689,12 +689,31 @@ def format_report(diffs, title: str = "", verbose: bool = False) -> str:
     for d in diffs:
         counts[d.status] = counts.get(d.status, 0) + 1
     order = ("same", "ok", "differs", "missing", "extra", "no golden", "unreadable")
-    words = {"same": "identical", "ok": "within tolerance"}
+    words = {"same": "identical", "ok": "within tolerance", "differs": "differ"}
     summary = ", ".join(f"{counts[s]} {words.get(s, s)}" for s in order if counts.get(s))
     lines = [f"{title}{': ' if title else ''}{len(diffs)} files, {summary or 'nothing compared'}"]
+    # a run of files with the same differences (e.g. every frame of a sequence) is shown once
+    prev, run = None, []
+
+    def flush():
+        if run:
+            span = run[0] if len(run) == 1 else f"{run[0]} ... {run[-1]}"
+            lines.append(f"  ... and {len(run)} more file{'s' if len(run) > 1 else ''} with the same "
+                         f"kinds of difference: {span}")
+            run.clear()
+
     for d in diffs:
-        if not d.ok or verbose:
-            lines.extend("  " + line for line in d.format(notes=verbose).splitlines())
+        if d.ok and not verbose:
+            continue
+        sig = tuple(f.summary.split(" at ")[0].split(", from ")[0] for f in d.findings) \
+            if d.status == "differs" else None
+        if sig is not None and sig == prev:
+            run.append(d.name)
+            continue
+        flush()
+        lines.extend("  " + line for line in d.format(notes=verbose).splitlines())
+        prev = sig
+    flush()
     return "\n".join(lines)
 
 
