@@ -96,3 +96,23 @@ def test_registry_round_trips_every_suffix(tmp_path):
     assert {".obj", ".scn", ".rba", ".floret", ".func", ".fset", ".con", ".cset", ".s", ".fcc"} <= set(FORMATS)
     with pytest.raises(InputError, match="unknown file type '.xyz'"):
         read_any(tmp_path / "a.xyz")
+
+
+def test_progress_bar_shows_the_rate_on_a_terminal(monkeypatch, capsys):
+    """With unit= the bar's text carries '<rate> <unit>/s' (fccompose shows frames/s)."""
+    import io
+    import sys
+
+    from inflo.tools.common import cli
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    err = Tty()
+    monkeypatch.setattr(sys, "stderr", err)
+    with cli.progress(length=3, label="run", unit="frames") as bar:
+        for _ in range(3):
+            bar.update(1)
+    text = err.getvalue()
+    assert "frames/s" in text and "3/3" in text

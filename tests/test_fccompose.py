@@ -11,7 +11,7 @@ import pytest
 
 from conftest import no_partial_files, run_cli
 from inflo.formats.fcc import read_fcc
-from inflo.formats.obj import read_obj, read_obj_sequence, write_obj
+from inflo.formats.obj import ObjMesh, read_obj, read_obj_sequence, write_obj, write_obj_sequence
 from inflo.formats.rba import RbaFrame, write_rba_sequence
 from inflo.formats.scn import Placement
 from inflo.tools.collide import intersecting_pairs
@@ -153,6 +153,66 @@ def test_rigid_body_animation_moves_the_floret(inputs, tmp_path):
         b = min(a + 1, N_FRAMES - 1)
         expect = (1 - (u[k] - a)) * tpl[a] + (u[k] - a) * tpl[b] + [0.5 * k, 0, 0]
         assert np.abs(mesh.vertices - expect).max() < 0.01  # rest values interpolate, positions do not
+
+
+def test_organ_materials_of_the_template_are_kept(inputs, tmp_path):
+    """Triangles keep their template OBJ's usemtl (a floret's organs: a lily's sepals and petals);
+    triangles without one take the placement's SCN mtl id."""
+    frames, faces = inputs["frames"], inputs["faces"]
+    organ = np.where(np.arange(len(faces)) < len(faces) // 2, -1, 0).astype(np.int32)  # none, then mtl9
+    write_obj_sequence(tmp_path / "anim", [ObjMesh(v, faces, materials=["mtl9"], face_material=organ)
+                                           for v in frames])
+    shutil.copy(inputs["dir"] / "petal_base.txt", tmp_path / "petal_base.txt")
+    write_scene(tmp_path / "scene.scn", inputs["placements"][:1])  # material 1
+    write_fcc_text(tmp_path / "m.fcc", frames=2)
+    out = tmp_path / "out"
+    res = run_cli("fccompose", tmp_path / "m.fcc", "-o", out, "-q")
+    assert res.returncode == 0, res.stderr
+    mesh = read_obj(out / "frame_0002.obj")
+    assert mesh.materials == ["mtl1", "mtl9"]
+    names = np.array(mesh.materials)[mesh.face_material]
+    assert (names[: len(faces) // 2] == "mtl1").all() and (names[len(faces) // 2:] == "mtl9").all()
+
+
+@pytest.mark.parametrize("kind", ["ta", "ra"])
+def test_translation_and_rotation_animations_move_the_floret(inputs, tmp_path, kind):
+    """ta: the floret is carried by (x, y, z) over frameStart..frameEnd; ra: turned by angle about
+    the axis through its position (C.2); its shape follows its template meanwhile."""
+    d = inputs["dir"]
+    shutil.copytree(d / "anim", tmp_path / "anim")
+    shutil.copy(d / "petal_base.txt", tmp_path / "petal_base.txt")
+    pos = np.array([1.0, 0.5, -0.25])
+    p = Placement(kind, 0, pos, [1, 1, 1], [0, 1, 0], [1, 0, 0], frame_start=0, frame_end=4, material=3)
+    if kind == "ta":
+        p.translate = np.array([2.0, 0.0, 1.0])
+    else:
+        p.axis, p.angle = np.array([0.0, 1.0, 0.0]), 90.0
+    write_scene(tmp_path / "s.scn", [p])
+    write_fcc_text(tmp_path / "s.fcc", scene="s.scn", frames=4)
+    out = tmp_path / "out"
+    res = run_cli("fccompose", tmp_path / "s.fcc", "-o", out, "-q")
+    assert res.returncode == 0, res.stderr
+    _, meshes = read_obj_sequence(out)
+    assert len(meshes) == 5
+    tpl = inputs["frames"]
+    size = np.ptp(np.concatenate(tpl), axis=0).max()
+    for k, mesh in enumerate(meshes):
+        s = k / 4
+        if kind == "ta":
+            expect_centre = pos + s * np.array([2.0, 0.0, 1.0])
+            rot = np.eye(3)
+        else:
+            a = np.radians(90.0 * s)
+            rot = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+            expect_centre = pos
+        u = s * (N_FRAMES - 1)
+        i0 = int(np.floor(u))
+        i1 = min(i0 + 1, N_FRAMES - 1)
+        local = (1 - (u - i0)) * tpl[i0] + (u - i0) * tpl[i1]
+        expect = local @ rot.T + expect_centre
+        assert np.abs(mesh.vertices - expect).max() < 0.02 * size, k
+    # the motion is real: the last frame is far from the first placement
+    assert np.linalg.norm(meshes[-1].vertices.mean(0) - meshes[0].vertices.mean(0)) > (0.5 if kind == "ta" else 0.0)
 
 
 # -- bad input ---------------------------------------------------------------------------------------

@@ -113,40 +113,66 @@ def default_tolerance(x0: np.ndarray, thickness: float) -> float:
 # --------------------------------------------------------------------------------------------------
 
 
+@njit(cache=True, inline="always")
+def _narrow_vt_one(k, x0, x1, tri, pairs, tol, hits, info):
+    v = pairs[k, 0]
+    t = pairs[k, 1]
+    a = tri[t, 0]
+    b = tri[t, 1]
+    c = tri[t, 2]
+    out = np.zeros(4)
+    if v == a or v == b or v == c:
+        hits[k] = 0
+    else:
+        hits[k] = vertex_triangle_ccd(x0[v], x0[a], x0[b], x0[c], x1[v], x1[a], x1[b], x1[c], tol, out)
+    for j in range(4):
+        info[k, j] = out[j]
+
+
+@njit(cache=True, inline="always")
+def _narrow_ee_one(k, x0, x1, edges, pairs, tol, hits, info):
+    e = pairs[k, 0]
+    f = pairs[k, 1]
+    a = edges[e, 0]
+    b = edges[e, 1]
+    c = edges[f, 0]
+    d = edges[f, 1]
+    out = np.zeros(4)
+    if a == c or a == d or b == c or b == d:
+        hits[k] = 0
+    else:
+        hits[k] = edge_edge_ccd(x0[a], x0[b], x0[c], x0[d], x1[a], x1[b], x1[c], x1[d], tol, out)
+    for j in range(4):
+        info[k, j] = out[j]
+
+
 @njit(cache=True, parallel=True)
 def _narrow_vt(x0, x1, tri, pairs, tol, hits, info):
     for k in prange(pairs.shape[0]):
-        v = pairs[k, 0]
-        t = pairs[k, 1]
-        a = tri[t, 0]
-        b = tri[t, 1]
-        c = tri[t, 2]
-        out = np.zeros(4)
-        if v == a or v == b or v == c:
-            hits[k] = 0
-        else:
-            hits[k] = vertex_triangle_ccd(x0[v], x0[a], x0[b], x0[c], x1[v], x1[a], x1[b], x1[c],
-                                          tol, out)
-        for j in range(4):
-            info[k, j] = out[j]
+        _narrow_vt_one(k, x0, x1, tri, pairs, tol, hits, info)
 
 
 @njit(cache=True, parallel=True)
 def _narrow_ee(x0, x1, edges, pairs, tol, hits, info):
     for k in prange(pairs.shape[0]):
-        e = pairs[k, 0]
-        f = pairs[k, 1]
-        a = edges[e, 0]
-        b = edges[e, 1]
-        c = edges[f, 0]
-        d = edges[f, 1]
-        out = np.zeros(4)
-        if a == c or a == d or b == c or b == d:
-            hits[k] = 0
-        else:
-            hits[k] = edge_edge_ccd(x0[a], x0[b], x0[c], x0[d], x1[a], x1[b], x1[c], x1[d], tol, out)
-        for j in range(4):
-            info[k, j] = out[j]
+        _narrow_ee_one(k, x0, x1, edges, pairs, tol, hits, info)
+
+
+@njit(cache=True)
+def _narrow_vt_serial(x0, x1, tri, pairs, tol, hits, info):
+    for k in range(pairs.shape[0]):
+        _narrow_vt_one(k, x0, x1, tri, pairs, tol, hits, info)
+
+
+@njit(cache=True)
+def _narrow_ee_serial(x0, x1, edges, pairs, tol, hits, info):
+    for k in range(pairs.shape[0]):
+        _narrow_ee_one(k, x0, x1, edges, pairs, tol, hits, info)
+
+
+#: below this many candidate pairs the narrow phase runs on one thread (waking the thread pool
+#: costs milliseconds on a loaded 2-core machine; a retry round has a few thousand pairs)
+SERIAL_NARROW_BELOW = 20000
 
 
 @njit(cache=True)
@@ -388,9 +414,11 @@ def _narrow(x0, x1, tri, edges, vt_pairs, ee_pairs, tolerance) -> tuple[Contacts
     ee_hits = np.zeros(len(ee_pairs), np.int32)
     ee_info = np.zeros((len(ee_pairs), 4))
     if len(vt_pairs):
-        _narrow_vt(x0, x1, tri, vt_pairs, float(tolerance), vt_hits, vt_info)
+        run = _narrow_vt_serial if len(vt_pairs) < SERIAL_NARROW_BELOW else _narrow_vt
+        run(x0, x1, tri, vt_pairs, float(tolerance), vt_hits, vt_info)
     if len(ee_pairs):
-        _narrow_ee(x0, x1, edges, ee_pairs, float(tolerance), ee_hits, ee_info)
+        run = _narrow_ee_serial if len(ee_pairs) < SERIAL_NARROW_BELOW else _narrow_ee
+        run(x0, x1, edges, ee_pairs, float(tolerance), ee_hits, ee_info)
     stats = {
         "vt_candidates": int(len(vt_pairs)),
         "ee_candidates": int(len(ee_pairs)),

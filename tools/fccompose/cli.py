@@ -24,7 +24,7 @@ def main(params, output, resume, strict, allow_initial_intersections, quiet, deb
     warn = (lambda msg: None) if quiet else (lambda msg: click.echo(f"fccompose: warning: {msg}", err=True))
     res = compose_canopy(
         p, output, resume=resume, strict=strict, allow_initial_intersections=allow_initial_intersections,
-        progress=lambda total: progress(length=total, label="fccompose frames", quiet=quiet), warn=warn,
+        progress=lambda total: progress(length=total, label="fccompose", quiet=quiet, unit="frames"), warn=warn,
     )
     if not quiet:
         click.echo(f"fccompose: {len(res.frames_written)} frames written to {output} "

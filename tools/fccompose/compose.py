@@ -22,8 +22,9 @@
 5. the positions are accepted.
 
 The canopy is written as ``OUT/frame_NNNN.obj`` (frame 0 is the initial state) every output
-period and at the last frame, one OBJ group ``floret_<index>`` per floret and ``usemtl mtl<id>``
-from the SCN ``mtl:`` lines. ``OUT/log.csv`` (:mod:`.log`) has a row per frame. Next to every
+period and at the last frame, one OBJ group ``floret_<index>`` per floret and per triangle the
+``usemtl`` of its template OBJ (a floret's organs keep their materials), else ``mtl<id>`` from the
+SCN ``mtl:`` lines (:attr:`.model.Model.face_materials`). ``OUT/log.csv`` (:mod:`.log`) has a row per frame. Next to every
 written frame ``OUT/state/frame_NNNN.npy`` keeps the exact float64 positions so that ``resume``
 continues bit-identically from the last complete frame.
 """
@@ -222,19 +223,13 @@ def _fingerprint(params: CanopyParams, model: Model) -> str:
 
 
 def _write_frame(out: Path, model: Model, x: np.ndarray, k: int) -> Path:
-    mats = sorted({fl.material for fl in model.florets if fl.material is not None})
-    mat_index = {m: i for i, m in enumerate(mats)}
-    face_material = None
-    if mats:
-        per_floret = np.array([mat_index.get(fl.material, -1) if fl.material is not None else -1
-                               for fl in model.florets], dtype=np.int32)
-        face_material = per_floret[model.tri_floret]
+    mats, face_material = model.face_materials
     mesh = ObjMesh(
         vertices=x,
         faces=model.tri_indices,
         groups=[f"floret_{fl.index}" for fl in model.florets],
         face_group=model.tri_floret.copy(),
-        materials=[f"mtl{m}" for m in mats],
+        materials=mats,
         face_material=face_material,
     )
     path = out / frame_name(k, "frame_", ".obj", 4)

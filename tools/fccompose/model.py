@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 import re
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -73,6 +74,10 @@ class Template:
         Distance and bending stiffness (per-id or global).
     source : str
         What was read (for messages).
+    materials : list of str
+        ``usemtl`` names of the template's OBJ (first frame), e.g. one per organ.
+    face_material : (m,) int32 or None
+        Index into ``materials`` per triangle (-1: none), None when the OBJ uses no ``usemtl``.
     """
 
     id: int
@@ -84,6 +89,8 @@ class Template:
     k_stretch: float
     k_bend: float
     source: str = ""
+    materials: list = None
+    face_material: np.ndarray | None = None
 
     @property
     def n_vertices(self) -> int:
@@ -138,11 +145,11 @@ def _load_template(params: CanopyParams, entry) -> Template:
     if entry.kind == "obj":
         mesh = read_obj(entry.path.resolved)
         frames = mesh.vertices[None]
-        faces = mesh.faces
     else:
         _, meshes = read_obj_sequence(entry.path.resolved)
         frames = np.stack([m.vertices for m in meshes])
-        faces = meshes[0].faces
+        mesh = meshes[0]
+    faces = mesh.faces
     if len(faces) == 0:
         raise FormatError(entry.path.resolved, None, "triangles (f lines)", "none")
     frames = frames * np.asarray(entry.scale, float)
@@ -153,7 +160,8 @@ def _load_template(params: CanopyParams, entry) -> Template:
     k_stretch, k_bend = params.stiffness(entry.id)
     tri = np.ascontiguousarray(faces, dtype=np.int32)
     return Template(entry.id, np.ascontiguousarray(frames), tri, mesh_edges(tri), mesh_hinges(tri), fixed,
-                    float(k_stretch), float(k_bend), str(entry.path.raw))
+                    float(k_stretch), float(k_bend), str(entry.path.raw), list(mesh.materials),
+                    None if mesh.face_material is None else np.asarray(mesh.face_material, np.int32))
 
 
 @dataclass
@@ -208,6 +216,33 @@ class Model:
     @property
     def n_triangles(self) -> int:
         return len(self.tri_indices)
+
+    @functools.cached_property
+    def face_materials(self) -> tuple[list, np.ndarray | None]:
+        """Material names of the canopy and the index of each triangle's (-1: none).
+
+        A triangle takes its template OBJ's ``usemtl`` material (so a floret's organs keep their own
+        colours, e.g. a lily's sepals and petals); a triangle its template gives none takes its
+        placement's SCN ``mtl:`` id as ``mtl<id>``. Names are sorted, so the output is stable.
+        """
+        names: list = []
+        per_floret = []
+        for fl in self.florets:
+            t = fl.template
+            own = f"mtl{fl.material}" if fl.material is not None else None
+            if t.face_material is not None and t.materials:
+                tm = np.asarray(t.materials + [own], dtype=object)[t.face_material]  # -1 -> own
+            else:
+                tm = np.full(len(t.tri_indices), own, dtype=object)
+            per_floret.append(tm)
+            names.extend(n for n in set(tm.tolist()) if n is not None)
+        mats = sorted(set(names))
+        if not mats:
+            return [], None
+        index = {m: i for i, m in enumerate(mats)}
+        index[None] = -1
+        face = np.concatenate([np.array([index[n] for n in tm.tolist()], np.int32) for tm in per_floret])
+        return mats, face
 
     # -- schedule ------------------------------------------------------------------------------
 
