@@ -1,4 +1,4 @@
-# inflo top-level Makefile: make lily | make yarrow | make test | make bench | make clean
+# inflo top-level Makefile: make lily | make yarrow | make test | make bench | make golden | make clean
 # The first target run on a fresh clone creates .venv and installs inflo with its test extras.
 
 QUALITY ?= draft
@@ -12,7 +12,7 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: all venv test bench lily yarrow clean distclean
+.PHONY: all venv test bench golden golden-check lily yarrow clean distclean
 
 all: lily
 
@@ -30,6 +30,14 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) -m bench.run
+
+# golden stage outputs (tests/golden/README.md): rebuild every species at draft quality and take
+# its outputs as the new goldens after an intended change; golden-check only reports differences
+golden: $(STAMP)
+	$(PY) -m inflo.tools.common.golden refresh all
+
+golden-check: $(STAMP)
+	$(PY) -m inflo.tools.common.golden check all --rebuild
 
 lily: $(STAMP)
 	@if [ -f pipelines/lily/Makefile ]; then \
