@@ -331,6 +331,27 @@ def test_yarrow_cli_writes_groups_with_parents(tmp_path, write):
     assert all(p.emergence is not None for p in sc.placements)
 
 
+def test_static_hierarchy_honours_ca_placement(tmp_path, write):
+    """``[primordia] placement = 'ca'`` gives a static recursive pattern ``ca:`` placements (it was
+    silently written as ``o:``); the dynamic pattern keeps ``rba:`` at the same final positions."""
+    text = ("[primordia]\nplacement = 'ca'\nframe_start = 2\nframe_end = 40\n[hierarchy]\nlevels = 3\n"
+            "frames = 124\nproduction_threshold = [6.0, 8.0, 1.5]\nmeristem_threshold = [12.0, 6.0]\n")
+    res = run_cli("phyllotaxis", write("s.toml", text), "-o", tmp_path / "s", "--quiet")
+    assert res.returncode == 0, res.stderr
+    static = read_scn(tmp_path / "s/scene.scn")
+    assert len(static) > 10
+    assert all(p.kind == "ca" and (p.frame_start, p.frame_end) == (2, 40) for p in static.placements)
+    res = run_cli("phyllotaxis", write("d.toml", text.replace("frames = 124", "frames = 124\ndynamic = true")),
+                  "-o", tmp_path / "d", "--quiet")
+    assert res.returncode == 0, res.stderr
+    dyn = read_scn(tmp_path / "d/scene.scn")
+    assert all(p.kind == "rba" for p in dyn.placements)
+    np.testing.assert_array_equal(static.arrays()["pos"], dyn.arrays()["pos"])
+    res = run_cli("phyllotaxis", write("o.toml", text.replace("placement = 'ca'", "placement = 'o'")),
+                  "-o", tmp_path / "o", "--quiet")
+    assert all(p.kind == "o" for p in read_scn(tmp_path / "o/scene.scn").placements)
+
+
 @pytest.mark.parametrize("text,needle", [
     ("[primordia]\ndivergence = 400\n", "divergence"),
     ("[primordia]\narea = 0.01\nbogus = 1\n", "did you mean"),

@@ -127,7 +127,8 @@ def _hierarchy(params, out: Path, progress, header) -> Summary:
                 write_rba_fast(rba / frame_name(f, "", ".rba", 4), st["ids"], st["pos"], st["scale"],
                                st["up"], st["right"])
                 bar.update(1)
-    scene = hierarchy_scene(h, final, floret_id=pr["floret_id"], dynamic=h_p["dynamic"])
+    scene = hierarchy_scene(h, final, floret_id=pr["floret_id"], dynamic=h_p["dynamic"], kind=pr["placement"],
+                            frame_start=pr["frame_start"], frame_end=pr["frame_end"])
     out.mkdir(parents=True, exist_ok=True)
     write_scn(out / "scene.scn", scene, header=header)
     birth = h.element_birth[h.florets[final["ids"]]]

@@ -260,12 +260,15 @@ def hierarchy_state(h: Hierarchy, t: float, *, size_factor: float = 1.0) -> dict
             "scale": np.repeat(d[:, None], 3, axis=1), "group": grp, "centres": pos}
 
 
-def hierarchy_scene(h: Hierarchy, final: dict, *, floret_id: int = 0, dynamic: bool = False) -> Scene:
+def hierarchy_scene(h: Hierarchy, final: dict, *, floret_id: int = 0, dynamic: bool = False,
+                    kind: str = "o", frame_start: int = 0, frame_end: int = 100) -> Scene:
     """The SCN at the end of the run: one placement per floret, groups = the meristems.
 
     Each meristem that formed florets or sub-meristems is a group (id = its element index) with
     its centre at the final time and its producing meristem as parent. Static: ``o:``
-    placements; dynamic: ``rba:`` with ``frameStart`` the emergence frame (rounded up).
+    placements, or ``ca: frame_start frame_end`` with ``kind = "ca"`` (``[primordia] placement``,
+    as for the static and compound models); dynamic: ``rba:`` with ``frameStart`` the emergence
+    frame (rounded up).
     """
     scene = Scene()
     centres = final["centres"]
@@ -281,8 +284,10 @@ def hierarchy_scene(h: Hierarchy, final: dict, *, floret_id: int = 0, dynamic: b
         kw = {}
         if dynamic:
             kw = {"frame_start": min(int(math.ceil(h.element_birth[e] - 1e-9)), last), "frame_end": last}
+        elif kind == "ca":
+            kw = {"frame_start": int(frame_start), "frame_end": int(frame_end)}
         scene.placements.append(Placement(
-            "rba" if dynamic else "o", int(floret_id), final["pos"][row], final["scale"][row],
+            "rba" if dynamic else kind, int(floret_id), final["pos"][row], final["scale"][row],
             final["up"][row], final["right"][row], group=int(final["group"][row]),
             emergence=float(h.element_birth[e]), **kw))
     return scene
