@@ -325,8 +325,8 @@ def test_fallback_reverts_when_retries_run_out():
 
 def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
     """The retry rounds' incremental broad phase (round 0's grids + a small grid over what moved)
-    finds exactly the pairs a broad phase built afresh on the current positions finds for the
-    active vertices, over several rounds that move different vertices."""
+    finds exactly the pairs a brute-force test of every box pair finds for the active vertices
+    (less those sharing a vertex), over several rounds that move different vertices."""
     from inflo.tools.collide.broad import box_pairs_brute, edge_boxes, triangle_boxes, vertex_boxes
     from inflo.tools.collide.resolve import _StepBroadPhase
     from inflo.tools.pbd import mesh_edges
@@ -335,6 +335,10 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
         vt = box_pairs_brute(vertex_boxes(x0, x1, pad), triangle_boxes(x0, x1, tri, pad), False)
         eb = edge_boxes(x0, x1, edges, pad)
         ee = box_pairs_brute(eb, eb, True)
+        # pairs sharing a vertex are never collisions: the broad phase leaves them out
+        vt = vt[~(tri[vt[:, 1]] == vt[:, :1]).any(axis=1)]
+        ea, eb_ = edges[ee[:, 0]], edges[ee[:, 1]]
+        ee = ee[~((ea[:, :1] == eb_) | (ea[:, 1:] == eb_)).any(axis=1)]
         if active is not None:
             vt = vt[active[vt[:, 0]] | active[tri[vt[:, 1]]].any(axis=1)]
             ee = ee[active[edges[ee[:, 0]]].any(axis=1) | active[edges[ee[:, 1]]].any(axis=1)]

@@ -111,6 +111,9 @@ def _cell(v, o, inv):
 
 @njit(cache=True)
 def _build(boxes, origin, inv):
+    """Hash every box into the cells it overlaps. Returns ``starts`` (bucket offsets), and per
+    entry, in bucket order: the element, its cell key and a copy of its box (so that a query scans
+    a bucket's entries in contiguous memory), and the hash mask."""
     n = boxes.shape[0]
     total = 0
     for i in range(n):
@@ -138,7 +141,8 @@ def _build(boxes, origin, inv):
         counts[h + 1] += counts[h]
     fill = counts[:-1].copy()
     elem = np.empty(total, np.int32)
-    cells = np.empty((total, 3), np.int64)
+    key = np.empty(total, np.int64)
+    ebox = np.empty((total, 6))
     for i in range(n):
         lx = _cell(boxes[i, 0], origin[0], inv)
         ly = _cell(boxes[i, 1], origin[1], inv)
@@ -152,11 +156,19 @@ def _build(boxes, origin, inv):
                     h = _hash(ix, iy, iz, mask)
                     k = fill[h]
                     elem[k] = i
-                    cells[k, 0] = ix
-                    cells[k, 1] = iy
-                    cells[k, 2] = iz
+                    key[k] = _key(ix, iy, iz)
+                    for d in range(6):
+                        ebox[k, d] = boxes[i, d]
                     fill[h] = k + 1
-    return counts, elem, cells, mask
+    return counts, elem, key, ebox, mask
+
+
+@njit(cache=True, inline="always")
+def _key(ix, iy, iz):
+    """The cell as one int64 (21 bits an axis, wrapping): two cells may share a key only when
+    2^21 cells apart, and a wrong match is then rejected by the exact box test."""
+    m = np.int64(0x1FFFFF)
+    return ((ix & m) << np.int64(42)) | ((iy & m) << np.int64(21)) | (iz & m)
 
 
 @njit(cache=True, inline="always")
@@ -168,8 +180,8 @@ def _overlap(a, i, b, j):
 
 
 @njit(cache=True)
-def _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask, out, base,
-               write):
+def _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
+               mask, out, base, write):
     lx = _cell(boxes_a[a, 0], origin[0], inv)
     ly = _cell(boxes_a[a, 1], origin[1], inv)
     lz = _cell(boxes_a[a, 2], origin[2], inv)
@@ -181,22 +193,25 @@ def _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cel
         for iy in range(ly, hy + 1):
             for iz in range(lz, hz + 1):
                 h = _hash(ix, iy, iz, mask)
+                ck = _key(ix, iy, iz)
                 for k in range(starts[h], starts[h + 1]):
-                    if cells[k, 0] != ix or cells[k, 1] != iy or cells[k, 2] != iz:
+                    if key[k] != ck:
+                        continue
+                    if not _overlap(boxes_a, a, ebox, k):
                         continue
                     b = elem[k]
                     if same and b <= a:
                         continue
                     if skip_b.shape[0] and skip_b[b]:
                         continue
-                    if not _overlap(boxes_a, a, boxes_b, b):
-                        continue
                     # report once: in the cell of the intersection box's minimum corner
-                    if _cell(max(boxes_a[a, 0], boxes_b[b, 0]), origin[0], inv) != ix:
+                    if _cell(max(boxes_a[a, 0], ebox[k, 0]), origin[0], inv) != ix:
                         continue
-                    if _cell(max(boxes_a[a, 1], boxes_b[b, 1]), origin[1], inv) != iy:
+                    if _cell(max(boxes_a[a, 1], ebox[k, 1]), origin[1], inv) != iy:
                         continue
-                    if _cell(max(boxes_a[a, 2], boxes_b[b, 2]), origin[2], inv) != iz:
+                    if _cell(max(boxes_a[a, 2], ebox[k, 2]), origin[2], inv) != iz:
+                        continue
+                    if verts_a.shape[0] and _share_vertex(verts_a, a, verts_b, b):
                         continue
                     if write:
                         out[base + n, 0] = a
@@ -206,11 +221,12 @@ def _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cel
 
 
 @njit(cache=True, inline="always")
-def _fill_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask, out, base):
+def _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask, out,
+              base):
     """Write query ``a``'s pairs at ``out[base:]``, its partners sorted (few: insertion sort), so
     the output is in (a, b) order without a global sort."""
-    n = _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask,
-                   out, base, True)
+    n = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
+                   mask, out, base, True)
     for i in range(base + 1, base + n):
         b = out[i, 1]
         j = i - 1
@@ -221,36 +237,36 @@ def _fill_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cell
 
 
 @njit(cache=True, parallel=True)
-def _query(boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask):
+def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask):
     na = boxes_a.shape[0]
     counts = np.zeros(na + 1, np.int64)
     dummy = np.empty((0, 2), np.int32)
     for a in prange(na):
-        counts[a + 1] = _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem,
-                                   cells, mask, dummy, 0, False)
+        counts[a + 1] = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts,
+                                   elem, key, ebox, mask, dummy, 0, False)
     for a in range(na):
         counts[a + 1] += counts[a]
     out = np.empty((counts[na], 2), np.int32)
     for a in prange(na):
-        _fill_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask, out,
-                  counts[a])
+        _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
+                  mask, out, counts[a])
     return out
 
 
 @njit(cache=True)
-def _query_serial(boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask):
+def _query_serial(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask):
     """:func:`_query` on one thread (same output): for the few boxes of a retry round, where waking
     the thread pool costs more than the queries (milliseconds on a loaded 2-core machine)."""
     na = boxes_a.shape[0]
     counts = np.zeros(na + 1, np.int64)
     dummy = np.empty((0, 2), np.int32)
     for a in range(na):
-        counts[a + 1] = counts[a] + _query_one(a, boxes_a, boxes_b, same, skip_b, origin, inv,
-                                               starts, elem, cells, mask, dummy, 0, False)
+        counts[a + 1] = counts[a] + _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv,
+                                               starts, elem, key, ebox, mask, dummy, 0, False)
     out = np.empty((counts[na], 2), np.int32)
     for a in range(na):
-        _fill_one(a, boxes_a, boxes_b, same, skip_b, origin, inv, starts, elem, cells, mask, out,
-                  counts[a])
+        _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
+                  mask, out, counts[a])
     return out
 
 
@@ -300,11 +316,20 @@ def box_pairs(boxes_a: np.ndarray, boxes_b: np.ndarray | None = None, *,
     # guard against absurd cell counts for a too-small cell (an element spanning > 64 cells per axis)
     if span * inv > 64.0:
         inv = 64.0 / span
-    starts, elem, cells, mask = _build(b, origin, inv)
-    return _query(a, b, same, _NO_SKIP, origin, inv, starts, elem, cells, mask)
+    return _query(a, same, _NO_SKIP, _NO_VERTS, _NO_VERTS, origin, inv, *_build(b, origin, inv))
 
 
 _NO_SKIP = np.zeros(0, np.bool_)
+_NO_VERTS = np.zeros((0, 1), np.int32)
+
+
+@njit(cache=True, inline="always")
+def _share_vertex(verts_a, a, verts_b, b):
+    for i in range(verts_a.shape[1]):
+        for j in range(verts_b.shape[1]):
+            if verts_a[a, i] == verts_b[b, j]:
+                return True
+    return False
 
 
 class BoxGrid:
@@ -318,24 +343,36 @@ class BoxGrid:
         Grid cell edge (> 0).
     origin : (3,) float64
         Grid origin; grids queried together must share it and ``cell_size``.
+    vertices : (nb, k) int32 or None
+        The mesh vertices of each box's element (a vertex: one column, an edge: two, a triangle:
+        three); with them, queries that give theirs skip pairs sharing a vertex (a triangle's own
+        vertices, two edges of one fan: never a collision) before they are written.
     """
 
-    def __init__(self, boxes: np.ndarray, cell_size: float, origin: np.ndarray):
+    def __init__(self, boxes: np.ndarray, cell_size: float, origin: np.ndarray,
+                 vertices: np.ndarray | None = None):
         self.boxes = np.ascontiguousarray(boxes, dtype=np.float64).reshape(-1, 6)
+        self.vertices = _NO_VERTS if vertices is None else np.ascontiguousarray(vertices, dtype=np.int32)
         self.origin = np.ascontiguousarray(origin, dtype=np.float64)
         self.inv = 1.0 / float(cell_size)
         self.tables = _build(self.boxes, self.origin, self.inv) if len(self.boxes) else None
 
-    def query(self, boxes: np.ndarray, *, skip: np.ndarray | None = None, same: bool = False) -> np.ndarray:
+    def query(self, boxes: np.ndarray, *, skip: np.ndarray | None = None, same: bool = False,
+              vertices: np.ndarray | None = None) -> np.ndarray:
         """(k, 2) int32 pairs ``(i, j)``: query box i overlaps grid box j (not ``skip[j]``), in (i, j)
-        order; ``same``: the query boxes are the grid's own boxes, pairs ``i < j`` only."""
+        order; ``same``: the query boxes are the grid's own boxes, pairs ``i < j`` only;
+        ``vertices``: the query elements' mesh vertices, pairs sharing one with the grid's element
+        are left out (needs the grid's ``vertices``)."""
         q = np.ascontiguousarray(boxes, dtype=np.float64).reshape(-1, 6)
         if self.tables is None or len(q) == 0:
             return np.zeros((0, 2), np.int32)
         sk = _NO_SKIP if skip is None else np.ascontiguousarray(skip, dtype=np.bool_)
-        starts, elem, cells, mask = self.tables
+        va = _NO_VERTS if vertices is None else np.ascontiguousarray(vertices, dtype=np.int32)
+        vb = self.vertices if len(va) else _NO_VERTS
+        if len(va) and len(vb) != len(self.boxes):
+            raise ValueError("vertex filter needs the grid's element vertices")
         run = _query_serial if len(q) < SERIAL_QUERY_BELOW else _query
-        return run(q, self.boxes, same, sk, self.origin, self.inv, starts, elem, cells, mask)
+        return run(q, same, sk, va, vb, self.origin, self.inv, *self.tables)
 
 
 @njit(cache=True)

@@ -322,17 +322,18 @@ class _StepBroadPhase:
             cell = span / 64.0
         self.cell = cell
         self.origin = self.vb[:, :3].min(axis=0) if len(self.vb) else np.zeros(3)
-        self.grid_t = BoxGrid(self.tb, cell, self.origin)
-        self.grid_e = BoxGrid(self.eb, cell, self.origin)
+        self.vid = np.arange(len(x0), dtype=np.int32)[:, None]
+        self.grid_t = BoxGrid(self.tb, cell, self.origin, tri)
+        self.grid_e = BoxGrid(self.eb, cell, self.origin, edges)
         self.grid_v = None
-        vt = self.grid_t.query(self.vb)
-        ee = self.grid_e.query(self.eb, same=True)
+        vt = self.grid_t.query(self.vb, vertices=self.vid)
+        ee = self.grid_e.query(self.eb, same=True, vertices=edges)
         return vt, ee
 
     def again(self, x1, active):
         x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
         if self.grid_v is None:
-            self.grid_v = BoxGrid(self.vb, self.cell, self.origin)
+            self.grid_v = BoxGrid(self.vb, self.cell, self.origin, self.vid)
         self.moved |= active
         moved = self.moved
         moved_t = moved[tri].any(axis=1)
@@ -352,17 +353,19 @@ class _StepBroadPhase:
         vb_a = vb_m[np.searchsorted(mv, av)]
         tb_a = tb_m[np.searchsorted(mt, at)]
         eb_a = eb_m[np.searchsorted(me, ae)]
-        small_t = BoxGrid(tb_m, self.cell, self.origin)
-        small_v = BoxGrid(vb_m, self.cell, self.origin)
-        small_e = BoxGrid(eb_m, self.cell, self.origin)
+        small_t = BoxGrid(tb_m, self.cell, self.origin, tri[mt])
+        small_v = BoxGrid(vb_m, self.cell, self.origin, self.vid[mv])
+        small_e = BoxGrid(eb_m, self.cell, self.origin, edges[me])
+        va, ta, ea = self.vid[av], tri[at], edges[ae]
         vt = np.concatenate([
-            _merge_vt(self.grid_t.query(vb_a, skip=moved_t), av, None,
-                      self.grid_v.query(tb_a, skip=moved), at, active),
-            _merge_vt(small_t.query(vb_a), av, mt, small_v.query(tb_a), at, active, v_map=mv),
+            _merge_vt(self.grid_t.query(vb_a, skip=moved_t, vertices=va), av, None,
+                      self.grid_v.query(tb_a, skip=moved, vertices=ta), at, active),
+            _merge_vt(small_t.query(vb_a, vertices=va), av, mt, small_v.query(tb_a, vertices=ta), at,
+                      active, v_map=mv),
         ])
         ee = np.concatenate([
-            _merge_ee(self.grid_e.query(eb_a, skip=moved_e), ae, None, active_e),
-            _merge_ee(small_e.query(eb_a), ae, me, active_e),
+            _merge_ee(self.grid_e.query(eb_a, skip=moved_e, vertices=ea), ae, None, active_e),
+            _merge_ee(small_e.query(eb_a, vertices=ea), ae, me, active_e),
         ])
         return np.ascontiguousarray(vt, dtype=np.int32), np.ascontiguousarray(ee, dtype=np.int32)
 
