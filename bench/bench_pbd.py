@@ -7,7 +7,10 @@ shifted by 0.05 rad (angles), so every projection does its full work. Reported s
 - ``pbd_distance_projections``: serial Gauss-Seidel sweep of the distance constraints (eq. 3.11);
   anchor: the ~6e7 projections/s a plain numba loop reaches on one core here (issue 5);
 - ``pbd_bending_projections``: serial sweep of the signed dihedral constraints (eq. 3.13);
-- ``..._coloured``: the colour-by-colour ``prange`` sweeps on all cores (ratio to serial in the note).
+- ``..._coloured``: the colour-by-colour ``prange`` sweeps on all cores (ratio to serial in the note);
+- ``pbd_internal_by_floret``: what fccompose runs, distance then bending sweeps floret by floret,
+  florets in parallel (:func:`~inflo.tools.pbd.solver.project_internal_by_part`, no early exit
+  here), as (distance + bending) projections per second; the ratio to the serial sweeps in the note.
 """
 from __future__ import annotations
 
@@ -22,6 +25,8 @@ from inflo.tools.pbd import (
     project_bending_constraints_coloured,
     project_distance_constraints,
     project_distance_constraints_coloured,
+    part_offsets,
+    project_internal_by_part,
 )
 from inflo.tools.pbd.solver import edge_lengths, hinge_angles
 
@@ -68,6 +73,13 @@ def projections(ctx: BenchContext) -> list[Result]:
     t_b = run(project_bending_constraints, w, h, rest_a, k_h)
     t_dc = run(project_distance_constraints_coloured, w, e, rest_l, k_e, *ce)
     t_bc = run(project_bending_constraints_coloured, w, h, rest_a, k_h, *ch)
+    n_v = len(x) // n_fl
+    part = np.arange(len(x)) // n_v
+    eo, ho = part_offsets(e, part, n_fl), part_offsets(h, part, n_fl)
+    done = np.zeros(n_fl, np.int64)
+    y = x.copy()
+    project_internal_by_part(y, w, e, rest_l, k_e, eo, h, rest_a, k_h, ho, 1, -1.0, done)  # warm up
+    t_p = run(lambda y_: project_internal_by_part(y_, w, e, rest_l, k_e, eo, h, rest_a, k_h, ho, 1, -1.0, done))
     note = f"{len(tri):,} triangles, {len(e):,} edges, {len(h):,} hinges, {sweeps} sweeps, best of 3"
     rd, rb = len(e) * sweeps / t_d, len(h) * sweeps / t_b
     rdc, rbc = len(e) * sweeps / t_dc, len(h) * sweeps / t_bc
@@ -78,6 +90,8 @@ def projections(ctx: BenchContext) -> list[Result]:
                f"{len(ce[1]) - 1} colours; {rdc / rd:.2f}x the serial sweep"),
         Result("pbd_bending_projections_coloured", rbc, "projections/s", ANCHOR, 6e7,
                f"{len(ch[1]) - 1} colours; {rbc / rb:.2f}x the serial sweep"),
+        Result("pbd_internal_by_floret", (len(e) + len(h)) * sweeps / t_p, "projections/s", ANCHOR, 6e7,
+               f"{n_fl} florets in parallel; {(t_d + t_b) / t_p:.2f}x the serial distance + bending sweeps"),
     ]
 
 
