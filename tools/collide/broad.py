@@ -256,18 +256,25 @@ def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, k
 @njit(cache=True)
 def _query_serial(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask):
     """:func:`_query` on one thread (same output): for the few boxes of a retry round, where waking
-    the thread pool costs more than the queries (milliseconds on a loaded 2-core machine)."""
+    the thread pool costs more than the queries (milliseconds on a loaded 2-core machine). Each
+    query is counted then written right away, while its cells are still in cache."""
     na = boxes_a.shape[0]
-    counts = np.zeros(na + 1, np.int64)
     dummy = np.empty((0, 2), np.int32)
+    out = np.empty((max(64, 4 * na), 2), np.int32)
+    n = 0
     for a in range(na):
-        counts[a + 1] = counts[a] + _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv,
-                                               starts, elem, key, ebox, mask, dummy, 0, False)
-    out = np.empty((counts[na], 2), np.int32)
-    for a in range(na):
+        k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
+                       mask, dummy, 0, False)
+        if k == 0:
+            continue
+        if n + k > out.shape[0]:
+            grown = np.empty((max(2 * out.shape[0], n + k), 2), np.int32)
+            grown[:n] = out[:n]
+            out = grown
         _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-                  mask, out, counts[a])
-    return out
+                  mask, out, n)
+        n += k
+    return out[:n].copy()
 
 
 #: below this many query boxes the serial query is used

@@ -1,0 +1,71 @@
+"""Whole species pipelines (issue 8): ``make lily`` and ``make yarrow QUALITY=final``.
+
+Each runs the species Makefile from scratch (``make -B``: every stage rebuilt, numba caches warm)
+into the repository's ``build/<species>/`` (the same files ``make lily`` writes), with the
+virtual environment's tools first on PATH:
+
+- ``pipeline_lily``: the whole draft lily (key poses to pictures and the exact intersection check);
+  anchor: Ijiri et al.'s 11.5 min for their lily; goal under 30 s;
+- ``pipeline_lily_fccompose``: the fccompose stage alone, rerun with ``make -W lily.fcc canopy``
+  (what-if the parameter file changed); goal under 10 s;
+- ``pipeline_yarrow_final``: the whole yarrow at ``QUALITY=final`` (about 350k canopy triangles);
+  anchor: the thesis's 60 min for the yarrow canopy alone (table 4.1); goal under 10 min. Skipped
+  in ``--quick`` runs (draft quality instead) and while pipelines/yarrow does not exist.
+"""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from .harness import REPO, BenchContext, Result
+
+
+def _make(*args: str) -> float:
+    env = dict(os.environ)
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+    for k in ("MAKEFLAGS", "MAKELEVEL", "MFLAGS", "QUALITY"):
+        env.pop(k, None)
+    t0 = time.perf_counter()
+    res = subprocess.run(["make", "--no-print-directory", *args], cwd=REPO, env=env,
+                         capture_output=True, text=True)
+    seconds = time.perf_counter() - t0
+    if res.returncode != 0:
+        raise RuntimeError(f"make {' '.join(args)} failed ({res.returncode}): {res.stderr.strip()[-2000:]}")
+    return seconds
+
+
+def _canopy_size(folder: Path) -> str:
+    frames = sorted(folder.glob("frame_*.obj"))
+    if not frames:
+        return "no canopy frames"
+    n_tri = sum(1 for line in frames[-1].open() if line.startswith("f "))
+    return f"{n_tri:,} canopy triangles, {len(frames)} canopy frames"
+
+
+def lily(ctx: BenchContext) -> list[Result]:
+    total = _make("-B", "-C", "pipelines/lily", "QUALITY=draft")
+    stage = _make("-C", "pipelines/lily", "QUALITY=draft", "-W", "lily.fcc", "canopy")
+    size = _canopy_size(REPO / "build" / "lily" / "canopy")
+    return [
+        Result("pipeline_lily", total, "s", "Ijiri et al. 11.5 min (goal under 30 s, issue 8)", 30.0,
+               f"make -B, draft: every stage, pictures and check; {size}"),
+        Result("pipeline_lily_fccompose", stage, "s", "goal under 10 s (issue 8)", 10.0,
+               "the fccompose stage alone (fresh process)"),
+    ]
+
+
+def yarrow(ctx: BenchContext) -> list[Result]:
+    if not (REPO / "pipelines" / "yarrow" / "Makefile").is_file():
+        return []
+    quality = "draft" if ctx.quick else "final"
+    total = _make("-B", "-C", "pipelines/yarrow", f"QUALITY={quality}")
+    size = _canopy_size(REPO / "build" / "yarrow" / "canopy")
+    return [Result(f"pipeline_yarrow_{quality}", total / 60, "min",
+                   "thesis table 4.1: 60 min for the canopy alone (goal under 10 min, issue 8)", 10.0,
+                   f"make -B, QUALITY={quality}: every stage; {size}")]
+
+
+BENCHMARKS = [lily, yarrow]
