@@ -14,7 +14,8 @@ from pathlib import Path
 
 from .errors import InputError
 
-__all__ = ["atomic_write", "write_text_atomic", "write_bytes_atomic", "list_sequence", "frame_name"]
+__all__ = ["atomic_write", "write_text_atomic", "write_bytes_atomic", "list_sequence", "frame_name",
+           "remove_stale_frames"]
 
 
 @contextlib.contextmanager
@@ -88,3 +89,17 @@ def list_sequence(source, suffix: str) -> list[Path]:
         if not names:
             raise InputError(f"{source}: no such file or folder, and no file matches it as a glob")
     return [Path(n) for n in sorted(names, key=_natural_key)]
+
+
+def remove_stale_frames(folder, keep, suffix: str, prefix: str = "frame_") -> list[Path]:
+    """Remove ``prefix<digits>suffix`` files in ``folder`` whose names are not in ``keep`` (paths or
+    names): the frames of an earlier, longer run that this run did not write, so a sequence folder
+    holds one run. Returns the removed paths."""
+    names = {Path(k).name for k in keep}
+    pat = re.compile(re.escape(prefix) + r"\d+" + re.escape(suffix) + "$")
+    removed = []
+    for p in sorted(Path(folder).iterdir()):
+        if pat.match(p.name) and p.name not in names:
+            p.unlink()
+            removed.append(p)
+    return removed

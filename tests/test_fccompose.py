@@ -56,8 +56,12 @@ def kabsch_rms(a: np.ndarray, b: np.ndarray) -> float:
 
 def test_single_floret_reproduces_its_template(inputs, tmp_path):
     out = tmp_path / "single"
+    out.mkdir()
+    (out / "frame_0099.obj").write_text("a frame of an earlier, longer run\n")
+    (out / "notes.txt").write_text("not a frame\n")
     res = run_cli("fccompose", inputs["dir"] / "single.fcc", "-o", out, "-q")
     assert res.returncode == 0, res.stderr
+    assert not (out / "frame_0099.obj").exists() and (out / "notes.txt").exists()
     paths, meshes = read_obj_sequence(out)
     assert [p.name for p in paths] == [f"frame_{k:04d}.obj" for k in range(N_FRAMES)]
     size = np.ptp(np.concatenate(inputs["frames"]), axis=0).max()

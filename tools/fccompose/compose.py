@@ -42,7 +42,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from inflo.formats.atomic import frame_name, write_bytes_atomic, write_text_atomic
+from inflo.formats.atomic import frame_name, remove_stale_frames, write_bytes_atomic, write_text_atomic
 from inflo.formats.errors import InputError
 from inflo.formats.fcc import CanopyParams, check_references
 from inflo.formats.obj import ObjMesh, write_obj
@@ -357,6 +357,9 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
     bar_cm = progress(n - k0) if progress else contextlib.nullcontext(None)
     with bar_cm as bar:
         _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_rows, result, bar)
+    # frames of an earlier, longer run in the same folder are not part of this one
+    remove_stale_frames(out, [frame_name(k, "frame_", ".obj", 4) for k in range(n + 1)
+                              if k % every == 0 or k == n], ".obj")
     result.seconds = time.perf_counter() - t_start
     return result
 

@@ -2,10 +2,9 @@
 from __future__ import annotations
 
 import os
-import re
 from pathlib import Path
 
-from inflo.formats.atomic import frame_name
+from inflo.formats.atomic import frame_name, remove_stale_frames
 from inflo.formats.errors import InputError
 from inflo.formats.floret import read_floret, write_floret
 from inflo.formats.func import read_func
@@ -18,15 +17,6 @@ __all__ = ["animate_files", "write_frames", "FRAME_PREFIX"]
 FRAME_PREFIX = "frame_"
 
 
-def _remove_stale(folder: Path, written: list[Path], suffix: str, prefix: str = FRAME_PREFIX) -> None:
-    """Remove ``prefix####suffix`` files of an earlier, longer run that this run did not write."""
-    keep = {p.name for p in written}
-    pat = re.compile(re.escape(prefix) + r"\d+" + re.escape(suffix) + "$")
-    for p in folder.iterdir():
-        if pat.match(p.name) and p.name not in keep:
-            p.unlink()
-
-
 def write_frames(frames, output, quiet: bool = True, n_frames: int | None = None) -> list[Path]:
     """Write Floret frames as ``output/frame_0000.floret`` ... (atomic); returns the paths."""
     out = Path(output)
@@ -37,7 +27,7 @@ def write_frames(frames, output, quiet: bool = True, n_frames: int | None = None
             p = out / frame_name(i, FRAME_PREFIX, ".floret")
             write_floret(p, fr)
             written.append(p)
-    _remove_stale(out, written, ".floret")
+    remove_stale_frames(out, written, ".floret")
     return written
 
 

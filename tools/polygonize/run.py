@@ -2,13 +2,12 @@
 from __future__ import annotations
 
 import os
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from inflo.formats.atomic import frame_name, list_sequence
+from inflo.formats.atomic import frame_name, list_sequence, remove_stale_frames
 from inflo.formats.errors import InputError
 from inflo.formats.floret import check_compatible, full_petal, read_floret
 from inflo.formats.obj import write_obj
@@ -139,14 +138,6 @@ def polygonize_frames(frames, paths=None, *, lam=None, eta=None, aspect=None):
     return meshes, report
 
 
-def _remove_stale(folder: Path, written, suffix: str, prefix: str = "frame_") -> None:
-    keep = {p.name for p in written}
-    pat = re.compile(re.escape(prefix) + r"\d+" + re.escape(suffix) + "$")
-    for p in folder.iterdir():
-        if pat.match(p.name) and p.name not in keep:
-            p.unlink()
-
-
 def polygonize_files(source, output, *, lam=None, eta=None, aspect=None, quiet: bool = True) -> PolygonizeReport:
     """Read the .floret frames of ``source`` (folder, glob or file), write ``output/frame_0000.obj`` ..."""
     paths = list_sequence(os.fspath(source), ".floret")
@@ -162,5 +153,5 @@ def polygonize_files(source, output, *, lam=None, eta=None, aspect=None, quiet: 
             p = out / frame_name(i, "frame_", ".obj")
             write_obj(p, m, header=f"polygonize: {paths[i].name} (time {f.key_time})")
             written.append(p)
-    _remove_stale(out, written, ".obj")
+    remove_stale_frames(out, written, ".obj")
     return report
