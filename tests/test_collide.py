@@ -227,6 +227,20 @@ def test_box_pairs_match_brute_force():
         np.testing.assert_array_equal(box_pairs(b[:40], b, cell_size=cell), box_pairs_brute(b[:40], b, False))
 
 
+def test_box_pairs_in_a_crowded_cell_match_brute_force():
+    """Hundreds of boxes on top of each other (far more pairs per query than the parallel query's
+    per-block scratch space holds: its recount path) next to sparse ones."""
+    rng = np.random.default_rng(8)
+    crowd = np.concatenate([rng.uniform(0, 0.1, (300, 3)), rng.uniform(0.2, 0.3, (300, 3))], axis=1)
+    sparse = np.concatenate([rng.uniform(5, 50, (300, 3)), np.zeros((300, 3))], axis=1)
+    sparse[:, 3:] = sparse[:, :3] + 0.5
+    b = np.concatenate([crowd, sparse])
+    pairs = box_pairs(b, None, cell_size=0.3)
+    assert len(pairs) >= 300 * 299 // 2  # every crowd box meets every other
+    np.testing.assert_array_equal(pairs, box_pairs_brute(b, b, True))
+    np.testing.assert_array_equal(box_pairs(b, b[::7], cell_size=0.3), box_pairs_brute(b, b[::7], False))
+
+
 def test_triangles_intersect_hand_cases():
     t = [v(0, 0, 0), v(1, 0, 0), v(0, 1, 0)]
     assert triangles_intersect(*t, v(0.2, 0.2, -1), v(0.2, 0.2, 1), v(0.3, 0.9, 1))  # pierced

@@ -238,18 +238,61 @@ def _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, e
 
 @njit(cache=True, parallel=True)
 def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask):
+    """Pairs of every query box with the grid's boxes, in (a, b) order, in one scan.
+
+    The queries are cut into blocks solved in parallel; each query is counted then written at
+    once (its cells still in cache) into its block's slab of a scratch buffer; the slabs are then
+    copied out in block order. A block whose pairs overflow its slab is redone by counting first.
+    """
     na = boxes_a.shape[0]
-    counts = np.zeros(na + 1, np.int64)
+    nblk = max(1, min(na, 256))
+    per = (na + nblk - 1) // nblk
+    cap = 8 * per + 64
+    buf = np.empty((nblk * cap, 2), np.int32)
+    cnt = np.zeros(nblk, np.int64)
+    over = np.zeros(nblk, np.bool_)
     dummy = np.empty((0, 2), np.int32)
-    for a in prange(na):
-        counts[a + 1] = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts,
-                                   elem, key, ebox, mask, dummy, 0, False)
-    for a in range(na):
-        counts[a + 1] += counts[a]
-    out = np.empty((counts[na], 2), np.int32)
-    for a in prange(na):
-        _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-                  mask, out, counts[a])
+    for blk in prange(nblk):
+        base = blk * cap
+        n = 0
+        for a in range(blk * per, min(na, (blk + 1) * per)):
+            k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key,
+                           ebox, mask, dummy, 0, False)
+            if k == 0:
+                continue
+            if n + k > cap:
+                over[blk] = True
+                break
+            _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
+                      mask, buf, base + n)
+            n += k
+        cnt[blk] = n
+    for blk in prange(nblk):
+        if over[blk]:
+            n = 0
+            for a in range(blk * per, min(na, (blk + 1) * per)):
+                n += _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem,
+                                key, ebox, mask, dummy, 0, False)
+            cnt[blk] = n
+    offsets = np.zeros(nblk + 1, np.int64)
+    for blk in range(nblk):
+        offsets[blk + 1] = offsets[blk] + cnt[blk]
+    out = np.empty((offsets[nblk], 2), np.int32)
+    for blk in prange(nblk):
+        o = offsets[blk]
+        if over[blk]:
+            for a in range(blk * per, min(na, (blk + 1) * per)):
+                k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem,
+                               key, ebox, mask, dummy, 0, False)
+                if k:
+                    _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key,
+                              ebox, mask, out, o)
+                    o += k
+        else:
+            base = blk * cap
+            for i in range(cnt[blk]):
+                out[o + i, 0] = buf[base + i, 0]
+                out[o + i, 1] = buf[base + i, 1]
     return out
 
 
