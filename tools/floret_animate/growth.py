@@ -34,7 +34,7 @@ Frames: frame i of F has frame time tau_i = i / (F - 1); its growth time is ``du
 the same as floret-animate's interpolation mode writes, so polygonize and the rest of the pipeline
 do not change.
 
-Parameter file (TOML)::
+Parameter file (TOML; reference page: formats/lu_growth.md)::
 
     duration = 1.0                 # growth time of the last frame
     organ = "petal"                # the organ that grows (default: every 4 x 4 bicubic organ)
