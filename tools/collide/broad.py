@@ -181,7 +181,8 @@ def _overlap(a, i, b, j):
 
 @njit(cache=True)
 def _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-               mask, out, base, write):
+               mask, out, base, limit):
+    """Count query ``a``'s pairs; write them at ``out[base:]`` while below row ``limit``."""
     lx = _cell(boxes_a[a, 0], origin[0], inv)
     ly = _cell(boxes_a[a, 1], origin[1], inv)
     lz = _cell(boxes_a[a, 2], origin[2], inv)
@@ -213,7 +214,7 @@ def _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, 
                         continue
                     if verts_a.shape[0] and _share_vertex(verts_a, a, verts_b, b):
                         continue
-                    if write:
+                    if base + n < limit:
                         out[base + n, 0] = a
                         out[base + n, 1] = b
                     n += 1
@@ -221,12 +222,9 @@ def _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, 
 
 
 @njit(cache=True, inline="always")
-def _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask, out,
-              base):
-    """Write query ``a``'s pairs at ``out[base:]``, its partners sorted (few: insertion sort), so
-    the output is in (a, b) order without a global sort."""
-    n = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-                   mask, out, base, True)
+def _sort_partners(out, base, n):
+    """Sort one query's partners ``out[base:base+n, 1]`` (few: insertion sort), so the output is in
+    (a, b) order without a global sort."""
     for i in range(base + 1, base + n):
         b = out[i, 1]
         j = i - 1
@@ -240,9 +238,9 @@ def _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, e
 def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask):
     """Pairs of every query box with the grid's boxes, in (a, b) order, in one scan.
 
-    The queries are cut into blocks solved in parallel; each query is counted then written at
-    once (its cells still in cache) into its block's slab of a scratch buffer; the slabs are then
-    copied out in block order. A block whose pairs overflow its slab is redone by counting first.
+    The queries are cut into blocks solved in parallel; each writes its pairs into its block's
+    slab of a scratch buffer as it finds them; the slabs are then copied out in block order. A
+    block whose pairs overflow its slab is redone by counting first.
     """
     na = boxes_a.shape[0]
     nblk = max(1, min(na, 256))
@@ -257,14 +255,11 @@ def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, k
         n = 0
         for a in range(blk * per, min(na, (blk + 1) * per)):
             k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key,
-                           ebox, mask, dummy, 0, False)
-            if k == 0:
-                continue
+                           ebox, mask, buf, base + n, base + cap)
             if n + k > cap:
                 over[blk] = True
                 break
-            _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-                      mask, buf, base + n)
+            _sort_partners(buf, base + n, k)
             n += k
         cnt[blk] = n
     for blk in prange(nblk):
@@ -272,7 +267,7 @@ def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, k
             n = 0
             for a in range(blk * per, min(na, (blk + 1) * per)):
                 n += _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem,
-                                key, ebox, mask, dummy, 0, False)
+                                key, ebox, mask, dummy, 0, 0)
             cnt[blk] = n
     offsets = np.zeros(nblk + 1, np.int64)
     for blk in range(nblk):
@@ -283,11 +278,9 @@ def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, k
         if over[blk]:
             for a in range(blk * per, min(na, (blk + 1) * per)):
                 k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem,
-                               key, ebox, mask, dummy, 0, False)
-                if k:
-                    _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key,
-                              ebox, mask, out, o)
-                    o += k
+                               key, ebox, mask, out, o, offsets[blk + 1])
+                _sort_partners(out, o, k)
+                o += k
         else:
             base = blk * cap
             for i in range(cnt[blk]):
@@ -299,23 +292,21 @@ def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, k
 @njit(cache=True)
 def _query_serial(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask):
     """:func:`_query` on one thread (same output): for the few boxes of a retry round, where waking
-    the thread pool costs more than the queries (milliseconds on a loaded 2-core machine). Each
-    query is counted then written right away, while its cells are still in cache."""
+    the thread pool costs more than the queries (milliseconds on a loaded 2-core machine). Pairs
+    are written as found; a query that overflows the buffer is redone after growing it."""
     na = boxes_a.shape[0]
-    dummy = np.empty((0, 2), np.int32)
     out = np.empty((max(64, 4 * na), 2), np.int32)
     n = 0
     for a in range(na):
         k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-                       mask, dummy, 0, False)
-        if k == 0:
-            continue
+                       mask, out, n, out.shape[0])
         if n + k > out.shape[0]:
             grown = np.empty((max(2 * out.shape[0], n + k), 2), np.int32)
             grown[:n] = out[:n]
             out = grown
-        _fill_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-                  mask, out, n)
+            _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
+                       mask, out, n, out.shape[0])
+        _sort_partners(out, n, k)
         n += k
     return out[:n].copy()
 
