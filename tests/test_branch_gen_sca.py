@@ -1,6 +1,8 @@
 """branch-gen --algorithm sca: space colonization and envelopes (Runions ch. 3, issue 7)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -96,6 +98,157 @@ def test_branch_gen_sca_hedge_and_obstacle():
             break
         root_of = nxt
     assert set(np.unique(root_of)) == {0, 1, 2}, "every root grows a tree"
+
+
+def _colonize_brute_force(points, roots, *, step, kill_distance, influence_radius=math.inf, tropism=(0.0, 0.0, 0.0),
+                          max_iterations=100000):
+    """A slow transcription of the space colonization loop (eq. 3.1, 3.3) for small N: every live
+    point is compared with every node of the last iteration, in node order, with a strict ``<``;
+    the same floating-point operations in the same order as the library, so results are equal bit
+    for bit. Returns (node_pos, node_parent, node_iter, alive, near_d, iterations)."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    g = np.asarray(tropism, dtype=np.float64)
+    node_pos = [np.asarray(r, dtype=np.float64) for r in np.asarray(roots, dtype=np.float64).reshape(-1, 3)]
+    node_parent = [-1] * len(node_pos)
+    node_iter = [-1] * len(node_pos)
+    last_dir = {}
+    alive = np.ones(len(pts), bool)
+    near = np.full(len(pts), -1)
+    near_d2 = np.full(len(pts), np.inf)
+    d_i2 = influence_radius * influence_radius if math.isfinite(influence_radius) else math.inf
+    d_k2 = kill_distance * kill_distance
+
+    def biased(n):
+        nn = math.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+        if nn < 1e-12:
+            return np.zeros(3)
+        u = n / nn + g
+        un = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+        return np.zeros(3) if un < 1e-12 else u / un
+
+    def dot(a, b):
+        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+    new_from, it = 0, 0
+    while it < max_iterations:
+        for v in range(new_from, len(node_pos)):
+            q = node_pos[v]
+            dx, dy, dz = q[0] - pts[:, 0], q[1] - pts[:, 1], q[2] - pts[:, 2]
+            d2 = dx * dx + dy * dy + dz * dz
+            better = alive & (d2 < near_d2)
+            near_d2[better] = d2[better]
+            near[better] = v
+        alive &= ~(near_d2 < d_k2)
+        new_from = len(node_pos)
+        acc, closest, touched = {}, {}, []
+        for s in np.flatnonzero(alive):
+            if near_d2[s] >= d_i2:
+                continue
+            v = int(near[s])
+            d = math.sqrt(near_d2[s])
+            if d <= 0.0:
+                continue
+            if v not in acc:
+                acc[v] = np.zeros(3)
+                closest[v] = s
+                touched.append(v)
+            else:
+                dc = math.sqrt(near_d2[closest[v]])
+                if d < dc or (d == dc and s < closest[v]):
+                    closest[v] = s
+            acc[v] += (pts[s] - node_pos[v]) / d
+        grown = 0
+        for v in touched:
+            ld = last_dir.get(v, np.zeros(3))
+            u = biased(acc[v])
+            if dot(u, ld) > 1.0 - 1e-12:
+                u = biased(pts[closest[v]] - node_pos[v])
+                if dot(u, ld) > 1.0 - 1e-12:
+                    continue
+            if not u.any():
+                continue
+            node_pos.append(node_pos[v] + step * u)
+            node_parent.append(v)
+            node_iter.append(it)
+            last_dir[v] = u
+            grown += 1
+        it += 1
+        if grown == 0:
+            break
+    return np.array(node_pos), np.array(node_parent), np.array(node_iter), alive, np.sqrt(near_d2), it
+
+
+def _grid_points():
+    """Points on a lattice around the root: many exactly equal distances (ties)."""
+    t = np.linspace(-0.5, 0.5, 7)
+    return np.stack(np.meshgrid(t, t, t, indexing="ij"), -1).reshape(-1, 3) + [0.013, 0.0, 0.0]
+
+
+def _plane_points():
+    """Points on the plane x = 0 (y, z on a 1/16 lattice, a lopsided subset): each exactly as
+    far from the root (-0.5, 0, 0) as from the root (0.5, 0, 0)."""
+    t = np.arange(0, 13) / 16
+    yz = np.stack(np.meshgrid(t, t, indexing="ij"), -1).reshape(-1, 2)
+    yz = yz[np.random.default_rng(12).random(len(yz)) < 0.6]
+    return np.c_[np.zeros(len(yz)), yz]
+
+
+@pytest.mark.parametrize("case", ["sphere", "influence_hedge_tropism", "lattice", "tied_roots", "one_point",
+                                  "max_iterations"])
+def test_branch_gen_sca_matches_brute_force_reference(case):
+    """The incremental nearest-node search (kd-trees, pruning, dead points dropped) gives exactly
+    the tree of comparing every live point with every new node."""
+    rng = np.random.default_rng(11)
+    sphere = Envelope("sphere", (0, 0, 0), radius=1.0)
+    kw = dict(step=0.03, kill_distance=0.06)
+    roots = [[0.0, 0.0, 0.0]]
+    if case == "sphere":
+        pts = attraction_points(sphere, 500, rng)
+    elif case == "influence_hedge_tropism":
+        pts = attraction_points(sphere, 500, rng)
+        roots = [[0.0, -1.0, 0.0], [0.3, -1.0, 0.0]]
+        kw.update(influence_radius=0.4, tropism=(0.0, 0.2, 0.0))
+    elif case == "lattice":
+        pts = _grid_points()
+        kw = dict(step=0.05, kill_distance=0.1)
+    elif case == "tied_roots":
+        # every point ties between the two roots in the first iteration: the lower index wins
+        pts = _plane_points()
+        roots = [[-0.5, 0.0, 0.0], [0.5, 0.0, 0.0]]
+        kw = dict(step=0.05, kill_distance=0.1)
+    elif case == "one_point":
+        pts = np.array([[1.0, 0.0, 0.0]])
+        kw = dict(step=0.01, kill_distance=0.02, tropism=(0.0, 0.35, 0.0))
+    else:
+        pts = attraction_points(sphere, 500, rng)
+        kw.update(max_iterations=7)
+    res = colonize(pts, roots, **kw)
+    node_pos, node_parent, node_iter, alive, near_d, iterations = _colonize_brute_force(pts, roots, **kw)
+    assert len(res.node_pos) > 20
+    np.testing.assert_array_equal(res.node_pos, node_pos)
+    np.testing.assert_array_equal(res.node_parent, node_parent)
+    np.testing.assert_array_equal(res.node_iter, node_iter)
+    np.testing.assert_array_equal(res.alive, alive)
+    np.testing.assert_array_equal(res.near_d, near_d)
+    assert res.iterations == iterations
+
+
+def test_branch_gen_sca_work_grows_about_linearly():
+    """Runions fig. 3.9: run time about linear in N. Counted, not timed: the point-node distances
+    the nearest-node updates compute (and the kd-tree nodes they enter) for N and 4N points in
+    the unit sphere (D = 0.01, d_k = 2D, d_I = inf) grow by less than 4^1.15; comparing every
+    live point with every new node grows by about 4^1.5."""
+    env = Envelope("sphere", (0, 0, 0), radius=1.0)
+    work = []
+    for n in (1000, 4000):
+        pts = attraction_points(env, n, np.random.default_rng(0))
+        res = colonize(pts, [[0.0, 0.0, 0.0]], step=0.01, kill_distance=0.02)
+        assert not res.alive.any()
+        work.append((res.distance_evaluations, res.tree_visits))
+    (e1, v1), (e4, v4) = work
+    assert e1 > 0 and v1 > 0
+    assert e4 / e1 < 4 ** 1.15, work
+    assert (e4 + v4) / (e1 + v1) < 4 ** 1.15, work
 
 
 def test_branch_gen_overdispersed_points_keep_min_distance():

@@ -10,11 +10,22 @@ v' = v + D n~ with (eq. 3.1, 3.3)
 and points within the kill distance d_k of any node die. Several initial nodes compete for the
 points (a hedge, fig. 3.20); planes remove points behind them (obstacles).
 
-The nearest node of every point is kept incrementally: only the nodes created in the last
-iteration are compared with the live points, so an iteration costs O(k r) for k live points and
-r new nodes (Runions sec. 3.2.4 reaches O(k log n) with a Voronoi diagram). The whole run costs
-about N times the number of nodes: 0.15 s for Runions' N = 3000 benchmark, growing as ~N^1.45
-(bench/bench_branch_gen.py); a spatial hash of the new nodes measured no faster at these sizes.
+The nearest node of every point is kept incrementally: it can only change to one of the nodes
+created in the last iteration, and a new node w can only become nearest for points s with
+|s - w| < d(s), their current nearest distance. The live points sit in a static kd-tree (buckets
+of 32, tight boxes) whose every subtree keeps an upper bound of d(s)^2 over its live points; the
+new nodes of an iteration get a kd-tree of their own (buckets of 16) cut into clusters of at most
+32, and each cluster enters only the subtrees whose box is within that bound of the cluster's box,
+then compares a bucket's points only with those of its node buckets whose box is within the
+point's d(s) (Runions sec. 3.2.4 reaches the same end with a Voronoi diagram). Killed points
+are swap-removed from their bucket and dropped from a compact, index-ordered list of live points,
+so dead points cost nothing. The work per iteration is then about proportional to the live points
+(each gets about one nearer node per iteration), and the run time grows about linearly in N
+(fig. 3.9; the old scan of every live point against every new node grew as ~N^1.5). The result is
+bit-identical to that scan in node order (strict improvement, so the lowest node index wins a
+tie): a skipped pair could not have won, as the box gaps are computed with the same rounded
+operations and never exceed a member's distance. Runions' N = 3000 benchmark and the fitted
+exponent are in bench/bench_branch_gen.py.
 """
 from __future__ import annotations
 
@@ -112,7 +123,10 @@ def attraction_points(envelope, n: int, rng, *, min_distance: float = 0.0, obsta
 
 @njit(cache=True)
 def _update_nearest(points, alive, near, near_d2, node_pos, n_from, n_to):
-    """Nearest node of every live point among its old one and the nodes ``n_from:n_to`` (a scan)."""
+    """Nearest node of every live point among its old one and the nodes ``n_from:n_to`` (a scan).
+
+    Used only for points added during the run (against the nodes that exist when they appear).
+    """
     for s in range(points.shape[0]):
         if not alive[s]:
             continue
@@ -128,44 +142,307 @@ def _update_nearest(points, alive, near, near_d2, node_pos, n_from, n_to):
         near[s] = bq
 
 
+POINT_LEAF = 32  # live points per bucket of the point kd-tree
+NODE_LEAF = 16  # new nodes per bucket of that iteration's node kd-tree
+NODE_CLUSTER = 32  # new nodes per cluster (subtree of the node kd-tree) walking the point kd-tree
+
+
 @njit(cache=True)
-def _biased(n, g):
-    """Eq. 3.1 and 3.3: n^ = n / |n|, n~ = (n^ + g) / |n^ + g| (zero vector when undefined)."""
-    nn = math.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2)
+def _build_kd(pos, idx, leaf_size):
+    """kd-tree over the rows ``idx`` of ``pos``: median splits on the widest axis, tight boxes.
+
+    Returns (perm, t_lo, t_hi, t_start, t_cnt, t_left, t_size): node ``t`` covers the rows
+    ``perm[t_start[t]:t_start[t] + t_size[t]]``; a bucket has ``t_cnt[t]`` = ``t_size[t]``, an inner
+    node ``t_cnt[t]`` = -1 and children ``t_left[t]`` and ``t_left[t] + 1``, both numbered after it.
+    """
+    n = idx.shape[0]
+    cap = 2 * (n // max(1, leaf_size // 2)) + 3
+    perm = idx.copy()
+    t_lo = np.empty((cap, 3))
+    t_hi = np.empty((cap, 3))
+    t_start = np.zeros(cap, np.int64)
+    t_end = np.zeros(cap, np.int64)
+    t_left = np.full(cap, -1, np.int64)
+    t_cnt = np.full(cap, -1, np.int64)
+    t_end[0] = n
+    n_t = 1
+    stack = np.empty(cap, np.int64)
+    stack[0] = 0
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        t = stack[sp]
+        a, b = t_start[t], t_end[t]
+        for k in range(3):
+            t_lo[t, k] = np.inf
+            t_hi[t, k] = -np.inf
+        for i in range(a, b):
+            for k in range(3):
+                c = pos[perm[i], k]
+                t_lo[t, k] = min(t_lo[t, k], c)
+                t_hi[t, k] = max(t_hi[t, k], c)
+        if b - a <= leaf_size:
+            t_cnt[t] = b - a
+            continue
+        ax = 0
+        for k in range(1, 3):
+            if t_hi[t, k] - t_lo[t, k] > t_hi[t, ax] - t_lo[t, ax]:
+                ax = k
+        seg = perm[a:b].copy()
+        order = np.argsort(pos[seg, ax])
+        for i in range(b - a):
+            perm[a + i] = seg[order[i]]
+        mid = (a + b) // 2
+        t_left[t] = n_t
+        t_start[n_t], t_end[n_t] = a, mid
+        t_start[n_t + 1], t_end[n_t + 1] = mid, b
+        stack[sp] = n_t
+        stack[sp + 1] = n_t + 1
+        sp += 2
+        n_t += 2
+    return (perm, t_lo[:n_t].copy(), t_hi[:n_t].copy(), t_start[:n_t].copy(), t_cnt[:n_t].copy(),
+            t_left[:n_t].copy(), t_end[:n_t] - t_start[:n_t])
+
+
+@njit(cache=True)
+def _point_tree(points, live, near_d2, leaf_size):
+    """The kd-tree of the points ``live`` with what the nearest-node update keeps per bucket.
+
+    Returns (perm, t_lo, t_hi, t_start, t_cnt, t_left, t_maxd2, slot_pos, slot_d2, slot_of, leaf_of):
+    slot ``i`` holds point ``perm[i]``, its position ``slot_pos[i]`` and ``slot_d2[i]`` = its
+    ``near_d2`` (copies in bucket order); a bucket's live points fill the front of its slots;
+    ``t_maxd2[t]`` bounds ``near_d2`` over the live points below ``t`` (-1 when none); point s
+    sits in slot ``slot_of[s]`` of bucket ``leaf_of[s]``.
+    """
+    perm, t_lo, t_hi, t_start, t_cnt, t_left, _ = _build_kd(points, live, leaf_size)
+    n = perm.shape[0]
+    slot_pos = np.empty((n, 3))
+    slot_d2 = np.empty(n)
+    slot_of = np.full(points.shape[0], -1, np.int64)
+    leaf_of = np.full(points.shape[0], -1, np.int64)
+    for i in range(n):
+        s = perm[i]
+        slot_pos[i] = points[s]
+        slot_d2[i] = near_d2[s]
+        slot_of[s] = i
+    t_maxd2 = np.full(t_cnt.shape[0], -1.0)
+    for t in range(t_cnt.shape[0]):
+        for i in range(t_start[t], t_start[t] + max(t_cnt[t], 0)):
+            t_maxd2[t] = max(t_maxd2[t], slot_d2[i])
+            leaf_of[perm[i]] = t
+    _refit(t_maxd2, t_cnt, t_left)
+    return perm, t_lo, t_hi, t_start, t_cnt, t_left, t_maxd2, slot_pos, slot_d2, slot_of, leaf_of
+
+
+@njit(cache=True)
+def _refit(t_maxd2, t_cnt, t_left):
+    """Inner-node bounds from their children, bottom up (buckets keep their own)."""
+    for t in range(t_maxd2.shape[0] - 1, -1, -1):
+        if t_cnt[t] < 0:
+            t_maxd2[t] = max(t_maxd2[t_left[t]], t_maxd2[t_left[t] + 1])
+
+
+@njit(cache=True)
+def _gap2(lo_a, hi_a, lo_b, hi_b):
+    """Squared gap between the intervals [lo_a, hi_a] and [lo_b, hi_b] along one axis (0 if they meet).
+
+    Rounded subtraction is monotone, so this never exceeds fl(x - y) ** 2 for x in one interval
+    and y in the other: summed over the axes in order it bounds the squared distance exactly as
+    the distance is computed.
+    """
+    if hi_a < lo_b:
+        return (lo_b - hi_a) ** 2
+    if lo_a > hi_b:
+        return (lo_a - hi_b) ** 2
+    return 0.0
+
+
+@njit(cache=True)
+def _update_nearest_tree(near, near_d2, node_pos, n_from, n_to, perm, t_lo, t_hi, t_start, t_cnt, t_left,
+                         t_maxd2, slot_pos, slot_d2, stack, work):
+    """Nearest node of every live point among its old one and the nodes ``n_from:n_to``.
+
+    The result of comparing every live point with the new nodes in index order (strict ``<``):
+    the least distance, the lowest node index among equals (old nodes all precede the new ones).
+    The new nodes get a kd-tree of their own (buckets of NODE_LEAF) whose subtrees of at most
+    NODE_CLUSTER nodes are clusters. A cluster enters only the point-tree subtrees whose squared
+    gap to its box does not exceed their bound on ``near_d2``; in a point bucket, a point is
+    compared with the nodes of the cluster's buckets that are no farther from it (by box) than
+    its nearest node. ``work[0]`` counts point-node distance evaluations, ``work[1]`` point-tree
+    nodes entered.
+    """
+    if n_to <= n_from:
+        return
+    order, c_lo, c_hi, c_start, c_cnt, c_left, c_size = _build_kd(node_pos, np.arange(n_from, n_to), NODE_LEAF)
+    n_eval = 0
+    n_visit = 0
+    # the cluster's nodes (contiguous) and its buckets: first node, count, box
+    cx = np.empty(NODE_CLUSTER)
+    cy = np.empty(NODE_CLUSTER)
+    cz = np.empty(NODE_CLUSTER)
+    cv = np.empty(NODE_CLUSTER, np.int64)
+    q_first = np.empty(NODE_CLUSTER, np.int64)
+    q_cnt = np.empty(NODE_CLUSTER, np.int64)
+    q_box = np.empty((NODE_CLUSTER, 6))
+    c_stack = np.empty(c_cnt.shape[0] + 2, np.int64)
+    c_stack[0] = 0
+    csp = 1
+    while csp > 0:
+        csp -= 1
+        c = c_stack[csp]
+        if c_size[c] > NODE_CLUSTER:
+            c_stack[csp] = c_left[c]
+            c_stack[csp + 1] = c_left[c] + 1
+            csp += 2
+            continue
+        if c_size[c] == 0:
+            continue
+        # cluster c: gather its buckets (in node order) below it
+        c0 = c_start[c]
+        nq = 0
+        q_stack = c_stack[csp:]
+        q_stack[0] = c
+        qsp = 1
+        while qsp > 0:
+            qsp -= 1
+            q = q_stack[qsp]
+            if c_cnt[q] < 0:
+                q_stack[qsp] = c_left[q] + 1
+                q_stack[qsp + 1] = c_left[q]
+                qsp += 2
+                continue
+            q_first[nq] = c_start[q] - c0
+            q_cnt[nq] = c_cnt[q]
+            for k in range(3):
+                q_box[nq, k] = c_lo[q, k]
+                q_box[nq, 3 + k] = c_hi[q, k]
+            nq += 1
+        for j in range(c_size[c]):
+            v = order[c0 + j]
+            cv[j] = v
+            cx[j], cy[j], cz[j] = node_pos[v, 0], node_pos[v, 1], node_pos[v, 2]
+        lx, ly, lz = c_lo[c, 0], c_lo[c, 1], c_lo[c, 2]
+        hx, hy, hz = c_hi[c, 0], c_hi[c, 1], c_hi[c, 2]
+        stack[0] = 0
+        sp = 1
+        while sp > 0:
+            sp -= 1
+            t = stack[sp]
+            n_visit += 1
+            # a lower bound of every cluster-node-to-point distance below t: b > bound means no
+            # point below t can get nearer or tie
+            b = _gap2(lx, hx, t_lo[t, 0], t_hi[t, 0]) + _gap2(ly, hy, t_lo[t, 1], t_hi[t, 1]) \
+                + _gap2(lz, hz, t_lo[t, 2], t_hi[t, 2])
+            if b > t_maxd2[t]:
+                continue
+            if t_cnt[t] < 0:
+                stack[sp] = t_left[t]
+                stack[sp + 1] = t_left[t] + 1
+                sp += 2
+                continue
+            m = -1.0
+            for i in range(t_start[t], t_start[t] + t_cnt[t]):
+                best = slot_d2[i]
+                if best >= b:
+                    px, py, pz = slot_pos[i, 0], slot_pos[i, 1], slot_pos[i, 2]
+                    e = _gap2(lx, hx, px, px) + _gap2(ly, hy, py, py) + _gap2(lz, hz, pz, pz)
+                    if best >= e:
+                        bq = -1  # the current nearest node, read when first needed
+                        changed = False
+                        for q in range(nq):
+                            e = _gap2(q_box[q, 0], q_box[q, 3], px, px) + _gap2(q_box[q, 1], q_box[q, 4], py, py) \
+                                + _gap2(q_box[q, 2], q_box[q, 5], pz, pz)
+                            if e > best:
+                                continue
+                            n_eval += q_cnt[q]
+                            for j in range(q_first[q], q_first[q] + q_cnt[q]):
+                                d2 = (cx[j] - px) ** 2 + (cy[j] - py) ** 2 + (cz[j] - pz) ** 2
+                                if d2 <= best:
+                                    if bq < 0:
+                                        bq = near[perm[i]]
+                                    if d2 < best or cv[j] < bq:
+                                        best = d2
+                                        bq = cv[j]
+                                        changed = True
+                        if changed:
+                            s = perm[i]
+                            slot_d2[i] = best
+                            near_d2[s] = best
+                            near[s] = bq
+                m = max(m, best)
+            t_maxd2[t] = m
+    work[0] += n_eval
+    work[1] += n_visit
+
+
+@njit(cache=True)
+def _kill(s, perm, t_start, t_cnt, t_maxd2, slot_pos, slot_d2, slot_of, leaf):
+    """Swap-remove point ``s`` from bucket ``leaf`` (its slot moves past the bucket's live ones)."""
+    last = t_start[leaf] + t_cnt[leaf] - 1
+    i = slot_of[s]
+    o = perm[last]
+    perm[i], perm[last] = o, s
+    slot_of[o], slot_of[s] = i, last
+    for k in range(3):
+        slot_pos[i, k], slot_pos[last, k] = slot_pos[last, k], slot_pos[i, k]
+    slot_d2[i], slot_d2[last] = slot_d2[last], slot_d2[i]
+    t_cnt[leaf] -= 1
+    if t_cnt[leaf] == 0:
+        t_maxd2[leaf] = -1.0
+
+
+@njit(cache=True)
+def _biased(nx, ny, nz, g, out):
+    """Eq. 3.1 and 3.3 into ``out``: n^ = n / |n|, n~ = (n^ + g) / |n^ + g| (zero when undefined)."""
+    nn = math.sqrt(nx ** 2 + ny ** 2 + nz ** 2)
     if nn < 1e-12:
-        return np.zeros(3)
-    u = n / nn + g
-    un = math.sqrt(u[0] ** 2 + u[1] ** 2 + u[2] ** 2)
+        out[:] = 0.0
+        return
+    ux, uy, uz = nx / nn + g[0], ny / nn + g[1], nz / nn + g[2]
+    un = math.sqrt(ux ** 2 + uy ** 2 + uz ** 2)
     if un < 1e-12:
-        return np.zeros(3)
-    return u / un
+        out[:] = 0.0
+        return
+    out[0], out[1], out[2] = ux / un, uy / un, uz / un
 
 
 @njit(cache=True)
 def _iterate(max_iter, it0, points, alive, near, near_d2, node_pos, node_parent, node_iter, n_nodes, n_new_from,
-             last_dir, d_i2, d_k2, step, g, acc, cnt, closest):
+             last_dir, d_i2, d_k2, step, g, acc, cnt, closest, live, n_live, perm, t_lo, t_hi, t_start, t_cnt,
+             t_left, t_maxd2, slot_pos, slot_d2, slot_of, leaf_of, work):
     """Space colonization iterations until no node grows, ``max_iter``, or capacity runs short.
 
-    Returns (iterations done, node count, first node of the last batch, status) with status 0 =
-    finished (no growth), 1 = max_iter reached, 2 = needs more node capacity.
+    ``live[:n_live]`` are the live points in increasing order (compacted as points die), all in
+    the point kd-tree (``_point_tree``).
+    Returns (iterations done, node count, first node of the last batch, live count, status) with
+    status 0 = finished (no growth), 1 = max_iter reached, 2 = needs more node capacity.
     """
     cap = node_pos.shape[0]
     it = it0
     touched = np.empty(points.shape[0], np.int64)
+    stack = np.empty(t_maxd2.shape[0] + 2, np.int64)
+    u = np.empty(3)
     while it < max_iter:
-        _update_nearest(points, alive, near, near_d2, node_pos, n_new_from, n_nodes)
+        _update_nearest_tree(near, near_d2, node_pos, n_new_from, n_nodes, perm, t_lo, t_hi, t_start, t_cnt,
+                             t_left, t_maxd2, slot_pos, slot_d2, stack, work)
         n_alive = 0
-        for s in range(points.shape[0]):
-            if alive[s] and near_d2[s] < d_k2:
+        for j in range(n_live):
+            s = live[j]
+            if near_d2[s] < d_k2:
                 alive[s] = False
-            if alive[s]:
+                _kill(s, perm, t_start, t_cnt, t_maxd2, slot_pos, slot_d2, slot_of, leaf_of[s])
+            else:
+                live[n_alive] = s
                 n_alive += 1
+        n_live = n_alive
+        _refit(t_maxd2, t_cnt, t_left)
         if n_nodes + n_alive > cap:
-            return it, n_nodes, n_new_from, 2
+            return it, n_nodes, n_new_from, n_live, 2
         n_new_from = n_nodes
         nt = 0
-        for s in range(points.shape[0]):
-            if not alive[s] or near_d2[s] >= d_i2:
+        for j in range(n_live):
+            s = live[j]
+            if near_d2[s] >= d_i2:
                 continue
             v = near[s]
             d = math.sqrt(near_d2[s])
@@ -183,30 +460,32 @@ def _iterate(max_iter, it0, points, alive, near, near_d2, node_pos, node_parent,
         grown = 0
         for j in range(nt):
             v = touched[j]
-            n = acc[v].copy()
+            _biased(acc[v, 0], acc[v, 1], acc[v, 2], g, u)
             acc[v, :] = 0.0
             cnt[v] = 0
-            u = _biased(n, g)
             # S(v) unchanged since v last grew (points symmetric about the new node, which stays
             # farther from them than v) or n = 0: grow toward the closest point of S(v) instead,
             # which breaks the symmetry deterministically
             if u[0] * last_dir[v, 0] + u[1] * last_dir[v, 1] + u[2] * last_dir[v, 2] > 1.0 - 1e-12:
-                u = _biased(points[closest[v]] - node_pos[v], g)
+                c = closest[v]
+                dx, dy, dz = points[c, 0] - node_pos[v, 0], points[c, 1] - node_pos[v, 1], points[c, 2] - node_pos[v, 2]
+                _biased(dx, dy, dz, g, u)
                 if u[0] * last_dir[v, 0] + u[1] * last_dir[v, 1] + u[2] * last_dir[v, 2] > 1.0 - 1e-12:
                     continue
             if u[0] == 0.0 and u[1] == 0.0 and u[2] == 0.0:
                 continue
             w = n_nodes
             n_nodes += 1
-            node_pos[w] = node_pos[v] + step * u
+            for k in range(3):
+                node_pos[w, k] = node_pos[v, k] + step * u[k]
+                last_dir[v, k] = u[k]
             node_parent[w] = v
             node_iter[w] = it
-            last_dir[v] = u
             grown += 1
         it += 1
         if grown == 0:
-            return it, n_nodes, n_new_from, 0
-    return it, n_nodes, n_new_from, 1
+            return it, n_nodes, n_new_from, n_live, 0
+    return it, n_nodes, n_new_from, n_live, 1
 
 
 @dataclass
@@ -226,6 +505,10 @@ class ScaResult:
     near_d : (N,) float64
         Distance of each point to its nearest node at the end.
     iterations : int
+    distance_evaluations : int
+        Point-node distances computed by the nearest-node updates (the run's main work).
+    tree_visits : int
+        kd-tree nodes entered by those updates.
     """
 
     node_pos: np.ndarray
@@ -235,6 +518,8 @@ class ScaResult:
     alive: np.ndarray
     near_d: np.ndarray
     iterations: int
+    distance_evaluations: int = 0
+    tree_visits: int = 0
 
 
 def colonize(points, roots, *, step: float, kill_distance: float, influence_radius: float = math.inf,
@@ -276,11 +561,15 @@ def colonize(points, roots, *, step: float, kill_distance: float, influence_radi
     d_i2 = influence_radius ** 2 if math.isfinite(influence_radius) else np.inf
     it, new_from = 0, 0
     killed_before = 0
+    work = np.zeros(2, np.int64)
+    live = np.arange(len(pts), dtype=np.int64)
+    tree = _point_tree(pts, live, near_d2, POINT_LEAF)
     while True:
         limit = min(max_iterations, it + 1) if (add_points is not None and it < add_iterations) else max_iterations
-        it, n_nodes, new_from, status = _iterate(limit, it, pts, alive, near, near_d2, node_pos, node_parent,
-                                                 node_iter, n_nodes, new_from, last_dir, d_i2,
-                                                 kill_distance ** 2, step, g, acc, cnt, closest)
+        it, n_nodes, new_from, n_live, status = _iterate(
+            limit, it, pts, alive, near, near_d2, node_pos, node_parent, node_iter, n_nodes, new_from, last_dir,
+            d_i2, kill_distance ** 2, step, g, acc, cnt, closest, live, len(live), *tree, work)
+        live = live[:n_live]
         if progress is not None:
             killed = int((~alive).sum())
             progress(killed - killed_before)
@@ -303,10 +592,13 @@ def colonize(points, roots, *, step: float, kill_distance: float, influence_radi
                 alive = np.concatenate([alive, np.ones(len(new), np.bool_)])
                 near = np.concatenate([near, np.full(len(new), -1, np.int64)])
                 near_d2 = np.concatenate([near_d2, np.full(len(new), np.inf)])
-                # the new points see every node, not only the newest
+                # the new points see every node, not only the newest (a scan: added points are few)
                 sub_alive = np.zeros(len(pts), np.bool_)
                 sub_alive[-len(new):] = True
                 _update_nearest(pts, sub_alive, near, near_d2, node_pos, 0, new_from)
+                work[0] += len(new) * new_from
+                live = np.flatnonzero(alive).astype(np.int64)
+                tree = _point_tree(pts, live, near_d2, POINT_LEAF)
             if it < add_iterations:
                 continue
             if status == 0 and not len(new):
@@ -314,7 +606,7 @@ def colonize(points, roots, *, step: float, kill_distance: float, influence_radi
             continue
         break
     return ScaResult(node_pos[:n_nodes].copy(), node_parent[:n_nodes].copy(), node_iter[:n_nodes].copy(), pts,
-                     alive, np.sqrt(near_d2), it)
+                     alive, np.sqrt(near_d2), it, int(work[0]), int(work[1]))
 
 
 def grow_sca(params, envelope, *, progress=None) -> tuple[Skeleton, ScaResult]:
