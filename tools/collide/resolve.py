@@ -289,6 +289,54 @@ def _merge_ee(p_edge, ae, e_map, e_active):
     return np.ascontiguousarray(np.stack([np.minimum(e, f), np.maximum(e, f)], axis=1), dtype=np.int32)
 
 
+@njit(cache=True)
+def _touching(flags, idx):
+    """(k,) bool: element k (a row of ``idx``) has a flagged vertex."""
+    out = np.zeros(idx.shape[0], np.bool_)
+    for k in range(idx.shape[0]):
+        for j in range(idx.shape[1]):
+            if flags[idx[k, j]]:
+                out[k] = True
+                break
+    return out
+
+
+@njit(cache=True)
+def _box_stats(vb, tb, eb):
+    """Origin (min corner of the vertex boxes), mean largest side of the triangle boxes, and the
+    largest side of any box."""
+    origin = np.zeros(3)
+    if vb.shape[0]:
+        for d in range(3):
+            origin[d] = np.inf
+    for i in range(vb.shape[0]):
+        for d in range(3):
+            origin[d] = min(origin[d], vb[i, d])
+    span = 0.0
+    mean = 0.0
+    for k in range(3):
+        boxes = vb if k == 0 else (tb if k == 1 else eb)
+        for i in range(boxes.shape[0]):
+            m = 0.0
+            for d in range(3):
+                m = max(m, boxes[i, d + 3] - boxes[i, d])
+            span = max(span, m)
+            if k == 1:
+                mean += m
+    if tb.shape[0]:
+        mean /= tb.shape[0]
+    return origin, mean, span
+
+
+@njit(cache=True)
+def _changed(x, before):
+    """(n,) bool: row i of ``x`` differs from ``before``."""
+    out = np.zeros(x.shape[0], np.bool_)
+    for i in range(x.shape[0]):
+        out[i] = x[i, 0] != before[i, 0] or x[i, 1] != before[i, 1] or x[i, 2] != before[i, 2]
+    return out
+
+
 class _StepBroadPhase:
     """The broad phase of one step's detection rounds (Alg. 1 lines 10-20).
 
@@ -312,16 +360,14 @@ class _StepBroadPhase:
         self.vb = vertex_boxes(x0, x1, pad)
         self.tb = triangle_boxes(x0, x1, tri, pad)
         self.eb = edge_boxes(x0, x1, edges, pad)
+        origin, mean, span = _box_stats(self.vb, self.tb, self.eb)
         cell = self.cell_size
         if cell is None or not cell > 0:
-            cell = float((self.tb[:, 3:] - self.tb[:, :3]).max(axis=1).mean()) if len(self.tb) else 1.0
-            cell = cell if cell > 0 else 1.0
-        span = max(float((bx[:, 3:] - bx[:, :3]).max()) if len(bx) else 0.0
-                   for bx in (self.vb, self.tb, self.eb))
+            cell = mean if mean > 0 else 1.0
         if span > 64.0 * cell:  # guard against absurd cell counts (as box_pairs)
             cell = span / 64.0
         self.cell = cell
-        self.origin = self.vb[:, :3].min(axis=0) if len(self.vb) else np.zeros(3)
+        self.origin = origin
         self.vid = np.arange(len(x0), dtype=np.int32)[:, None]
         self.grid_t = BoxGrid(self.tb, cell, self.origin, tri)
         self.grid_e = BoxGrid(self.eb, cell, self.origin, edges)
@@ -336,10 +382,10 @@ class _StepBroadPhase:
             self.grid_v = BoxGrid(self.vb, self.cell, self.origin, self.vid)
         self.moved |= active
         moved = self.moved
-        moved_t = moved[tri].any(axis=1)
-        moved_e = moved[edges].any(axis=1)
-        active_t = active[tri].any(axis=1)
-        active_e = active[edges].any(axis=1)
+        moved_t = _touching(moved, tri)
+        moved_e = _touching(moved, edges)
+        active_t = _touching(active, tri)
+        active_e = _touching(active, edges)
         av = np.nonzero(active)[0]
         at = np.nonzero(active_t)[0]
         ae = np.nonzero(active_e)[0]
@@ -573,7 +619,7 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         project_collision_constraints(x1, w, constraints.indices, constraints.coef,
                                       constraints.normal, h, float(stiffness),
                                       int(iterations))
-        moved = (x1 != before).any(axis=1)
+        moved = _changed(x1, before)
         # still-crossing pairs whose vertices did not move are re-found too
         moved[found.indices.ravel()] = True
         active = moved
