@@ -46,7 +46,8 @@ DISK_KEYS = [YARROW / f"disk_{k}.floret" for k in ("bud", "open")]
 FIB = {1, 2, 3, 5, 8, 13, 21, 34, 55}
 # polygonize resolution per quality (the Makefile's RAY_RES / DISK_RES) and the expected counts
 RES = {"draft": dict(ray=("0.2", "9"), disk=("0.25", "3"), heads=21, ray_tris=80, disk_tris=80),
-       "final": dict(ray=("0.08", "15"), disk=("0.2", "5"), heads=66, ray_tris=336, disk_tris=200)}
+       "final": dict(ray=("0.08", "15"), disk=("0.25", str(YARROW / "disk_eta.func")), heads=66, ray_tris=336,
+                     disk_tris=200)}
 
 
 def _load(name):
