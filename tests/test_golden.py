@@ -367,6 +367,39 @@ def test_refresh_reports_changes_and_removes_stale_goldens(tmp_path):
     assert any("seq/frame_0006.obj: changed: faces differ from face 2" in s for s in out)
 
 
+def test_compressed_goldens_are_kept_gzipped_and_compared_as_their_content(tmp_path):
+    repo = _fake_repo(tmp_path)
+    man = repo / "tests" / "golden" / "fake" / "manifest.toml"
+    man.write_text(man.read_text().replace('pick = ["first", "middle", "last"]\n',
+                                           'pick = ["first", "middle", "last"]\ncompress = true\n'))
+    spec = G.load_species("fake", repo)
+    assert G.refresh_species(spec, out=lambda s: None) == 0
+    gz = spec.golden / "seq" / "frame_0002.obj.gz"
+    assert gz.is_file() and not (spec.golden / "seq" / "frame_0002.obj").exists()
+    assert spec.golden_path("seq/frame_0002.obj") == gz
+    first = gz.read_bytes()
+    assert all(d.status == "same" for d in G.check_species(spec))
+    # a second refresh of the same build writes the same bytes (no time or name in the header)
+    out = []
+    G.refresh_species(spec, out=out.append)
+    assert gz.read_bytes() == first and "nothing changed" in out[-1]
+    # a vertex moved beyond the tolerance is found through the compression
+    (spec.build / "seq" / "frame_0002.obj").write_text(_moved(OBJ, 2, 0.01))
+    res = _check(spec)
+    assert res["seq/frame_0002.obj"].status == "differs"
+    assert "vertices moved beyond tolerance" in res["seq/frame_0002.obj"].format()
+    # switching compression off replaces the .gz copies by plain ones
+    man.write_text(man.read_text().replace("compress = true\n", ""))
+    spec = G.load_species("fake", repo)
+    out = []
+    G.refresh_species(spec, out=out.append)
+    assert (spec.golden / "seq" / "frame_0002.obj").is_file() and not gz.exists()
+    assert any("frame_0002.obj.gz: removed" in line for line in out)
+    man.write_text(man.read_text() + 'compress = "yes"\n')
+    with pytest.raises(ValueError, match="compress must be true or false"):
+        G.load_species("fake", repo)
+
+
 def test_refresh_refuses_an_incomplete_build(tmp_path):
     repo = _fake_repo(tmp_path)
     (repo / "build" / "fake" / "log.csv").unlink()
@@ -486,7 +519,7 @@ def test_golden(species, kind, name, species_build):
             pytest.fail("\n".join(d.format() for d in diffs) + hint, pytrace=False)
         return
     entry = dict(spec.selection(listing))[name]
-    d = G.diff_files(spec.golden / name, spec.build / name, name, entry.tolerance, entry.options)
+    d = G.diff_files(spec.golden_path(name), spec.build / name, name, entry.tolerance, entry.options)
     if not d.ok:
         pytest.fail(f"{species}: " + d.format() + hint, pytrace=False)
 
@@ -501,3 +534,21 @@ def test_lily_goldens_are_small_and_complete():
     # first, middle and last frame of every sequence stage, the log, the final smoothed frame
     assert {"canopy/frame_0000.obj", "canopy/frame_0049.obj", "canopy/frame_0099.obj", "canopy/log.csv",
             "smooth/100.obj", "frames/frame_0099.floret", "obj/frame_0049.obj"} <= set(names)
+
+
+def test_yarrow_goldens_are_small_and_complete():
+    spec = G.load_species("yarrow", REPO)
+    listing = spec.golden_listing()
+    assert listing is not None, "run: python -m inflo.tools.common.golden refresh yarrow"
+    names = [n for n, _ in spec.selection(listing)]
+    paths = [spec.golden_path(n) for n in names]
+    assert all(p.is_file() for p in paths)
+    assert sum(p.stat().st_size for p in paths) < 5 * 2**20
+    # every stage: key-pose frames, polygons, head before/after dimorph, head canopy, corymb
+    # pattern (static and growing), corymb canopy, branches, the smoothed final frame, the check
+    assert {"ray_frames/frame_0039.floret", "disk_obj/frame_0019.obj", "head/scene.scn", "head/typed.scn",
+            "head_canopy/frame_0039.obj", "corymb/scene.scn", "growth/rba/0204.rba", "canopy/frame_0039.obj",
+            "canopy/log.csv", "branches/branches.obj", "smooth/final.obj", "check.txt"} <= set(names)
+    # the big frames are kept gzipped
+    assert spec.golden_path("smooth/final.obj").name == "final.obj.gz"
+    assert listing["canopy/frame_*.obj"][-1] == "canopy/frame_0039.obj" and len(listing["canopy/frame_*.obj"]) == 40

@@ -11,6 +11,7 @@
 """
 from __future__ import annotations
 
+import os
 import sys
 
 import numpy as np
@@ -28,6 +29,12 @@ def base_ids(obj_path) -> np.ndarray:
     return np.nonzero(y <= y.min() + tol)[0]
 
 
+def _rel(name, out) -> str:
+    """``name`` relative to the folder of the output file ``out`` (no absolute path in the file,
+    so it reads the same in every checkout; the goldens compare it)."""
+    return os.path.relpath(name, os.path.dirname(os.path.abspath(out)))
+
+
 def write_ids(path, ids, comment: str) -> None:
     rows = [" ".join(str(int(i)) for i in ids[k:k + 20]) for k in range(0, len(ids), 20)]
     write_text_atomic(path, f"# {comment}\n" + "\n".join(rows) + "\n")
@@ -36,7 +43,7 @@ def write_ids(path, ids, comment: str) -> None:
 def main(argv) -> int:
     if len(argv) >= 3 and argv[0] == "base":
         ids = base_ids(argv[1])
-        write_ids(argv[2], ids, f"base row of {argv[1]} ({len(ids)} vertices); written by weights.py")
+        write_ids(argv[2], ids, f"base row of {_rel(argv[1], argv[2])} ({len(ids)} vertices); written by weights.py")
         return 0
     if len(argv) >= 4 and argv[0] == "head":
         scene = read_scn(argv[1])
@@ -52,7 +59,7 @@ def main(argv) -> int:
             out.append(fixed + offset)
             offset += n
         ids = np.concatenate(out)
-        write_ids(argv[2], ids, f"floret bases of the head canopy of {argv[1]} ({len(scene)} florets, "
+        write_ids(argv[2], ids, f"floret bases of the head canopy of {_rel(argv[1], argv[2])} ({len(scene)} florets, "
                                 f"{offset} vertices); written by weights.py")
         return 0
     print(__doc__.strip().splitlines()[2], file=sys.stderr)

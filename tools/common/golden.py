@@ -24,6 +24,7 @@ import argparse
 import csv
 import dataclasses
 import fnmatch
+import gzip
 import json
 import math
 import os
@@ -31,6 +32,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 import tomllib
 from dataclasses import dataclass, field
@@ -66,6 +68,25 @@ TIMING_COLUMNS = ("t_*", "*_s", "*_ms", "*seconds*", "*elapsed*", "wall*", "time
 MANIFEST = "manifest.toml"
 LISTING = "listing.toml"
 _RESERVED = {MANIFEST, LISTING, "README.md"}
+GZ = ".gz"
+"""Suffix of a golden kept gzip-compressed (``compress = true`` in its ``[[golden]]`` table): it is
+compared as the file it holds."""
+
+
+def _gunzip_to(golden: Path, folder: Path) -> Path:
+    """Decompress ``x.obj.gz`` to ``folder/x.obj`` (the comparators go by the inner suffix)."""
+    out = folder / golden.name[: -len(GZ)]
+    with gzip.open(golden, "rb") as src, open(out, "wb") as dst:
+        shutil.copyfileobj(src, dst)
+    return out
+
+
+def _gzip_copy(src: Path, dst: Path) -> None:
+    """``src`` gzip-compressed to ``dst`` with no name or time in the header, so the same file
+    always gives the same bytes (no spurious change in git after a refresh)."""
+    with open(src, "rb") as fh, open(dst, "wb") as raw:
+        with gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0, compresslevel=9) as gz:
+            shutil.copyfileobj(fh, gz)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -626,6 +647,15 @@ def diff_files(golden, found, name: str | None = None, tol: Tolerance = DEFAULT,
     reader rejects ``unreadable`` (with the reader's one-line error).
     """
     golden, found = Path(golden), Path(found)
+    if golden.name.endswith(GZ) and not found.name.endswith(GZ) and golden.is_file():
+        with tempfile.TemporaryDirectory(prefix="inflo-golden-") as tmp:
+            try:
+                inner = _gunzip_to(golden, Path(tmp))
+            except (OSError, EOFError) as exc:
+                d = FileDiff(name or found.name, "unreadable")
+                d.findings.append(Finding(f"cannot compare: {golden}: {exc}"))
+                return d
+            return diff_files(inner, found, name, tol, options)
     d = FileDiff(name or found.name)
     if not golden.is_file():
         d.status = "no golden"
@@ -756,6 +786,8 @@ class Entry:
     pick: list | None
     tolerance: Tolerance
     options: dict
+    compress: bool = False
+    """keep the golden copies gzip-compressed (``name.gz``): for large frames"""
 
     @property
     def is_glob(self) -> bool:
@@ -805,6 +837,14 @@ class Species:
 
     def listing_path(self) -> Path:
         return self.golden / LISTING
+
+    def golden_path(self, name: str) -> Path:
+        """Where the golden copy of build file ``name`` is: ``name``, or ``name.gz`` when it is
+        kept compressed (the plain one when neither exists)."""
+        plain = self.golden / name
+        if not plain.is_file() and (self.golden / (name + GZ)).is_file():
+            return self.golden / (name + GZ)
+        return plain
 
     def build_listing(self, build: Path | None = None) -> dict:
         """pattern -> file names (relative to the build folder, natural order) for each glob entry."""
@@ -863,7 +903,10 @@ def load_species(name: str, repo=None) -> Species:
         if isinstance(pick, str) and pick != "all":
             pick = [pick]
         tol = base_tol.updated(t.pop("tolerance", None))
-        entries.append(Entry(files, pick, tol, t))
+        compress = t.pop("compress", False)
+        if not isinstance(compress, bool):
+            raise ValueError(f"{path}: [[golden]] table {k + 1}: compress must be true or false, found {compress!r}")
+        entries.append(Entry(files, pick, tol, t, compress))
     if not entries:
         raise ValueError(f"{path}: no [[golden]] tables")
     return Species(
@@ -952,7 +995,7 @@ def check_species(spec: Species, build: Path | None = None) -> list[FileDiff]:
     for name, e in spec.selection(listing):
         if name in reported:
             continue
-        out.append(diff_files(spec.golden / name, root / name, name, e.tolerance, e.options))
+        out.append(diff_files(spec.golden_path(name), root / name, name, e.tolerance, e.options))
     return out
 
 
@@ -994,8 +1037,10 @@ def refresh_species(spec: Species, out=print) -> int:
     old_listing = spec.golden_listing() or {}
     before = set(_golden_files(spec))
     changed = 0
+    stored = set()
     for name, e in selection:
-        src, dst = spec.build / name, spec.golden / name
+        src, dst = spec.build / name, spec.golden / (name + GZ if e.compress else name)
+        stored.add(dst.relative_to(spec.golden).as_posix())
         if dst.is_file():
             d = diff_files(dst, src, name, e.tolerance, e.options)
             if d.status == "same":
@@ -1007,9 +1052,12 @@ def refresh_species(spec: Species, out=print) -> int:
             out(f"  {name}: new")
         changed += 1
         dst.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(src, dst)
+        if e.compress:
+            _gzip_copy(src, dst)
+        else:
+            shutil.copyfile(src, dst)
     selected = {n for n, _ in selection}
-    for name in sorted(before - selected, key=_natural):
+    for name in sorted(before - stored, key=_natural):
         (spec.golden / name).unlink()
         out(f"  {name}: removed (no longer selected)")
         changed += 1
