@@ -178,6 +178,31 @@ def test_mesh_hinges_flat_grid_is_zero_and_matches_init():
         assert init_bending_constraint(*x[h[k]]) == pytest.approx(0.0, abs=1e-15)
 
 
+def test_bending_step_is_bounded_when_the_movable_vertex_barely_changes_the_angle():
+    """Only p1 may move and both wings project (almost) onto p2: grad_1 = -((1 - s3) grad_3 +
+    (1 - s4) grad_4) is ~1e-9 of the wings' gradients, so the linearized step C / |grad_1| would
+    throw p1 ~1e9 hinge sizes away. The bound keeps every move within pi x the hinge's size, in
+    the pure kernel and in the sweep alike; well-shaped hinges are untouched (the other tests)."""
+    d = 1e-9
+    p = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0 - d, 1.0, 0.0], [1.0 - d, -0.6, -0.8]])
+    w = np.array([1.0, 0.0, 0.0, 0.0])
+    rest = init_bending_constraint(*p) + 0.5
+    c = [np.zeros(3) for _ in range(4)]
+    g = [np.zeros(3) for _ in range(4)]
+    assert dihedral_angle_gradients(*p, *g)
+    assert np.linalg.norm(g[0]) < 1e-8 * np.linalg.norm(g[2])  # the runaway case
+    assert solve_bending_constraint(p[0], w[0], p[1], w[1], p[2], w[2], p[3], w[3], rest, 1.0, *c)
+    size = max(1.0, np.linalg.norm(np.cross(p[1] - p[0], p[2] - p[0])), np.linalg.norm(np.cross(p[1] - p[0], p[3] - p[0])))
+    move = np.linalg.norm(c[0])
+    assert 0.0 < move <= math.pi * size * (1 + 1e-12)
+    assert not c[1].any() and not c[2].any() and not c[3].any()
+    # the sweep does the same
+    x = p.copy()
+    project_bending_constraints(x, w, np.array([[0, 1, 2, 3]]), np.array([rest]), np.array([1.0]))
+    np.testing.assert_allclose(x[0], p[0] + c[0], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(x[1:], p[1:])
+
+
 def test_sweeps_equal_a_loop_over_the_pure_kernels():
     rng = np.random.default_rng(4)
     x, tri = strip(rng=rng)

@@ -29,6 +29,8 @@ __all__ = [
     "dihedral_angle_gradients",
     "init_bending_constraint",
     "solve_bending_constraint",
+    "bounded_bending_scale",
+    "BENDING_STEP_BOUND",
     "solve_attachment_constraint",
 ]
 
@@ -190,6 +192,30 @@ def dihedral_angle_gradients(p1, p2, p3, p4, g1, g2, g3, g4):
     return True
 
 
+BENDING_STEP_BOUND = math.pi
+"""A bending projection moves no vertex by more than this times the hinge's size (the longest of
+its shared edge and its two wing heights). The linearized step ``C / |grad C|`` grows without bound
+when the only movable vertices barely change the angle (an edge vertex whose wing vertices project
+onto the other end of the edge, a nearly degenerate wing); a step of the linearized projection of
+a well-shaped hinge turns a wing by at most pi, i.e. moves a vertex by at most pi x its height, so
+the bound only trims those runaway steps."""
+
+
+@njit(cache=True, inline="always")
+def bounded_bending_scale(s, m, le2, q1, q2):
+    """The bending step scale ``s = -k C / sum_i w_i |grad_i|^2`` reduced so that no vertex moves
+    by more than :data:`BENDING_STEP_BOUND` x the hinge's size.
+
+    ``m`` is ``max_i w_i^2 |grad_i|^2`` (the largest displacement is ``|s| sqrt(m)``), ``le2`` the
+    squared length of the shared edge, ``q1``, ``q2`` the squared norms of the unnormalized
+    normals (``|n_i| = |e| h_i``, so ``h_i^2 = q_i / le2``)."""
+    size2 = max(le2, max(q1, q2) / le2)
+    lim2 = BENDING_STEP_BOUND * BENDING_STEP_BOUND * size2
+    if s * s * m > lim2:
+        return math.copysign(math.sqrt(lim2 / m), s)
+    return s
+
+
 @njit(cache=True)
 def init_bending_constraint(p1, p2, p3, p4):
     """Rest angle phi of the bending constraint of the hinge (p1, p2, p3), (p1, p4, p2) (eq. 3.13)."""
@@ -231,10 +257,11 @@ def solve_bending_constraint(p1, w1, p2, w2, p3, w3, p4, w4, rest_angle, stiffne
     if not ok:
         return False
     c = wrap_angle(signed_dihedral_angle(p1, p2, p3, p4) - rest_angle)
-    denom = 0.0
-    for i in range(3):
-        denom += (w1 * corr1[i] * corr1[i] + w2 * corr2[i] * corr2[i]
-                  + w3 * corr3[i] * corr3[i] + w4 * corr4[i] * corr4[i])
+    d1 = w1 * (corr1[0] * corr1[0] + corr1[1] * corr1[1] + corr1[2] * corr1[2])
+    d2 = w2 * (corr2[0] * corr2[0] + corr2[1] * corr2[1] + corr2[2] * corr2[2])
+    d3 = w3 * (corr3[0] * corr3[0] + corr3[1] * corr3[1] + corr3[2] * corr3[2])
+    d4 = w4 * (corr4[0] * corr4[0] + corr4[1] * corr4[1] + corr4[2] * corr4[2])
+    denom = d1 + d2 + d3 + d4
     if denom <= _EPS:
         for i in range(3):
             corr1[i] = 0.0
@@ -243,6 +270,12 @@ def solve_bending_constraint(p1, w1, p2, w2, p3, w3, p4, w4, rest_angle, stiffne
             corr4[i] = 0.0
         return False
     s = -stiffness * c / denom
+    e = p2 - p1
+    le2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
+    # |n_i|^2 = le2 / |grad_i|^2 for the wing vertices (|grad_3| = |e| / |n1|)
+    g3 = corr3[0] * corr3[0] + corr3[1] * corr3[1] + corr3[2] * corr3[2]
+    g4 = corr4[0] * corr4[0] + corr4[1] * corr4[1] + corr4[2] * corr4[2]
+    s = bounded_bending_scale(s, max(w1 * d1, w2 * d2, w3 * d3, w4 * d4), le2, le2 / g3, le2 / g4)
     for i in range(3):
         corr1[i] *= s * w1
         corr2[i] *= s * w2
