@@ -14,6 +14,7 @@ from inflo.tools.collide import (
     detect_collisions,
     edge_edge_ccd,
     intersecting_pairs,
+    intersecting_pairs_between,
     intersecting_pairs_brute,
     resolve_collisions,
     solve_ee_collision_constraint,
@@ -259,6 +260,21 @@ def test_intersecting_pairs_match_brute_force():
     fast = intersecting_pairs(x, tri)
     np.testing.assert_array_equal(fast, intersecting_pairs_brute(x, tri))
     assert len(fast) > 10
+
+
+def test_intersecting_pairs_between_two_meshes_match_the_cross_pairs_of_their_union():
+    rng = np.random.default_rng(9)
+    xa, ta = random_soup(200, rng)
+    xb, tb = random_soup(150, rng)
+    got = intersecting_pairs_between(xa, ta, xb, tb)
+    union = intersecting_pairs_brute(np.vstack([xa, xb]), np.vstack([ta, tb + len(xa)]))
+    cross = union[(union[:, 0] < len(ta)) & (union[:, 1] >= len(ta))]
+    want = np.stack([cross[:, 0], cross[:, 1] - len(ta)], axis=1)
+    np.testing.assert_array_equal(got, want)
+    assert len(got) > 5
+    # a mesh against itself moved far away: nothing; an empty mesh: nothing
+    assert len(intersecting_pairs_between(xa, ta, xa + 100.0, ta)) == 0
+    assert intersecting_pairs_between(xa, ta, xb, tb[:0]).shape == (0, 2)
 
 
 # -- collision constraints and the resolution loop -------------------------------------------------

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from inflo.formats.obj import list_obj_sequence, read_obj
-from inflo.tools.collide import intersecting_pairs
+from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
 
 # polygonize's vertex order: sepals (3 copies of 19 rows x 17), then petals (3 copies of 20 x 19)
 TEPALS = [(c * 323, 17) for c in range(3)] + [(969 + c * 380, 19) for c in range(3)]
@@ -36,14 +36,10 @@ def joint_angles(vertices: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
-def cross_pairs(tepals, column) -> int:
+def cross_pairs(a, b) -> int:
     """Intersecting triangle pairs between the tepals and the pistil/stamens/receptacle (which are
     drawn with the canopy but not simulated: they must stay clear of the tepals)."""
-    v = np.vstack([tepals.vertices, column.vertices])
-    f = np.vstack([tepals.faces, column.faces + len(tepals.vertices)])
-    pairs = intersecting_pairs(v, f)
-    n = len(tepals.faces)
-    return int(np.count_nonzero((pairs[:, 0] < n) != (pairs[:, 1] < n)))
+    return len(intersecting_pairs_between(a.vertices, a.faces, b.vertices, b.faces))
 
 
 def main(build: Path) -> int:

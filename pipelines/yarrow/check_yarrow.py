@@ -13,10 +13,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from inflo.formats.obj import list_obj_sequence, read_obj
-from inflo.tools.collide import intersecting_pairs
+from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
 
 
 def count(mesh) -> int:
@@ -25,11 +23,7 @@ def count(mesh) -> int:
 
 def cross_pairs(a, b) -> int:
     """Intersecting triangle pairs with one triangle in ``a`` and the other in ``b``."""
-    v = np.vstack([a.vertices, b.vertices])
-    f = np.vstack([a.faces, b.faces + len(a.vertices)])
-    pairs = intersecting_pairs(v, f)
-    n = len(a.faces)
-    return int(np.count_nonzero((pairs[:, 0] < n) != (pairs[:, 1] < n)))
+    return len(intersecting_pairs_between(a.vertices, a.faces, b.vertices, b.faces))
 
 
 def main(build: Path) -> int:

@@ -258,6 +258,38 @@ def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_si
     return _decide(x, tri, pairs, flags)
 
 
+def intersecting_pairs_between(a_x: np.ndarray, a_tri: np.ndarray, b_x: np.ndarray, b_tri: np.ndarray, *,
+                               cell_size: float | None = None) -> np.ndarray:
+    """Intersecting triangle pairs with one triangle in mesh ``a`` and the other in mesh ``b``
+    (exact static test; two separate meshes share no vertex, so touching counts everywhere).
+
+    Used to check what is drawn with a canopy but not simulated with it (the lily's column, the
+    yarrow's branches) against the canopy. Broad phase: :func:`~inflo.tools.collide.broad.box_pairs`
+    of a's boxes against b's.
+
+    Returns
+    -------
+    (k, 2) int32
+        Pairs ``(i, j)``: triangle i of ``a`` intersects triangle j of ``b``; sorted.
+    """
+    from .broad import box_pairs, triangle_boxes
+
+    ax = np.ascontiguousarray(a_x, dtype=np.float64)
+    bx = np.ascontiguousarray(b_x, dtype=np.float64)
+    at = np.ascontiguousarray(a_tri, dtype=np.int32)
+    bt = np.ascontiguousarray(b_tri, dtype=np.int32)
+    if len(at) == 0 or len(bt) == 0:
+        return np.zeros((0, 2), np.int32)
+    pairs = box_pairs(triangle_boxes(ax, ax, at, 0.0), triangle_boxes(bx, bx, bt, 0.0), cell_size=cell_size)
+    x = np.vstack([ax, bx])
+    tri = np.vstack([at, bt + len(ax)]).astype(np.int32)
+    both = np.ascontiguousarray(np.stack([pairs[:, 0], pairs[:, 1] + len(at)], axis=1), dtype=np.int32)
+    flags = np.zeros(len(both), np.int8)
+    _test_pairs(x, tri, both, flags)
+    hit = _decide(x, tri, both, flags)
+    return np.stack([hit[:, 0], hit[:, 1] - len(at)], axis=1).astype(np.int32)
+
+
 def intersecting_pairs_brute(vertex_x, tri_indices):
     """Reference for tests: every pair tested, O(m^2). Returns (k, 2) int32 sorted."""
     x = np.ascontiguousarray(vertex_x, dtype=np.float64)
