@@ -16,6 +16,7 @@ from inflo.tools.collide import (
     intersecting_pairs,
     intersecting_pairs_between,
     intersecting_pairs_brute,
+    intersecting_pairs_with,
     resolve_collisions,
     solve_ee_collision_constraint,
     solve_vt_collision_constraint,
@@ -275,6 +276,19 @@ def test_intersecting_pairs_between_two_meshes_match_the_cross_pairs_of_their_un
     # a mesh against itself moved far away: nothing; an empty mesh: nothing
     assert len(intersecting_pairs_between(xa, ta, xa + 100.0, ta)) == 0
     assert intersecting_pairs_between(xa, ta, xb, tb[:0]).shape == (0, 2)
+
+
+def test_intersecting_pairs_with_a_subset_are_the_brute_force_pairs_touching_it():
+    rng = np.random.default_rng(11)
+    x, tri = random_soup(300, rng)
+    tri[7] = [0, 1, 40]  # shares vertices with triangle 0 (skipped)
+    which = np.array([0, 7, 13, 150, 299])
+    allp = intersecting_pairs_brute(x, tri)
+    want = allp[np.isin(allp[:, 0], which) | np.isin(allp[:, 1], which)]
+    got = intersecting_pairs_with(x, tri, which)
+    np.testing.assert_array_equal(got, want)
+    assert len(got) > 3
+    assert intersecting_pairs_with(x, tri, []).shape == (0, 2)
 
 
 # -- collision constraints and the resolution loop -------------------------------------------------

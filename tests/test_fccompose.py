@@ -159,6 +159,100 @@ def test_rigid_body_animation_moves_the_floret(inputs, tmp_path):
         assert np.abs(mesh.vertices - expect).max() < 0.01  # rest values interpolate, positions do not
 
 
+def _rba_case(inputs, tmp_path, frames):
+    """Two rba: placements (0 and 1) of the test floret moved by ``frames`` (RbaFrame list)."""
+    d = inputs["dir"]
+    shutil.copytree(d / "anim", tmp_path / "anim")
+    shutil.copy(d / "petal_base.txt", tmp_path / "petal_base.txt")
+    write_scene(tmp_path / "rba.scn", [Placement("rba", 0, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0],
+                                                 frame_start=0, frame_end=len(frames) - 1, material=k)
+                                       for k in range(2)])
+    write_rba_sequence(tmp_path / "rba", frames)
+    write_fcc_text(tmp_path / "rba.fcc", scene="rba.scn", extra="rigid body animation: 7 1 1 1 rba rba.scn\n")
+    return tmp_path / "rba.fcc"
+
+
+def _row(ids, xs):
+    n = len(ids)
+    return RbaFrame(list(ids), [[x, 0.0, 0.0] for x in xs], [[1, 1, 1]] * n, [[0, 1, 0]] * n, [[1, 0, 0]] * n)
+
+
+def test_rba_florets_emerge_at_their_first_rba_frame(inputs, tmp_path):
+    """Placement 1 is listed from RBA frame 2 on: frames 0 and 1 hold placement 0's faces only;
+    every frame keeps all vertices (stable numbering); the log counts the florets present."""
+    frames = [_row([0], [0.0]), _row([0], [0.0]), _row([0, 1], [0.0, 10.0]), _row([0, 1], [0.0, 10.0])]
+    out = tmp_path / "out"
+    res = run_cli("fccompose", _rba_case(inputs, tmp_path, frames), "-o", out, "-q")
+    assert res.returncode == 0, res.stderr
+    _, meshes = read_obj_sequence(out, same_topology=False)
+    nt, nv = len(inputs["faces"]), len(inputs["frames"][0])
+    assert [len(m.faces) for m in meshes] == [nt, nt, 2 * nt, 2 * nt]
+    assert all(len(m.vertices) == 2 * nv for m in meshes)
+    assert meshes[1].faces.max() < nv and meshes[2].faces.max() >= nv  # floret 1's vertices come after
+    assert "1 of 2 florets emerged" in (out / "frame_0001.obj").read_text().splitlines()[0]
+    # it appears at its first RBA pose, at its developmental time (u = 2/3 of the template)
+    tpl = opening_floret(N_FRAMES)[0]
+    u = 2 / 3 * (N_FRAMES - 1)
+    a = int(u)
+    expect = (1 - (u - a)) * tpl[a] + (u - a) * tpl[a + 1] + [10.0, 0, 0]
+    assert np.abs(meshes[2].vertices[nv:] - expect).max() < 0.01
+    log = read_log(out)
+    assert [int(r["florets_present"]) for r in log] == [1, 1, 2, 2]
+    assert all(int(r["florets_waiting"]) == 0 for r in log)
+
+
+def test_a_floret_with_no_room_waits_until_there_is_room(inputs, tmp_path):
+    """Placement 1 is listed from frame 1 where placement 0 still stands (they would intersect);
+    placement 0 moves away over frame 2, and placement 1 emerges then: every written frame is
+    free of intersections (exact test), the log shows the wait, and --resume carries it."""
+    frames = [_row([0], [0.0]), _row([0, 1], [0.0, 0.0]), _row([0, 1], [10.0, 0.0]), _row([0, 1], [10.0, 0.0])]
+    fcc = _rba_case(inputs, tmp_path, frames)
+    out = tmp_path / "out"
+    res = run_cli("fccompose", fcc, "-o", out, "-q")
+    assert res.returncode == 0, res.stderr
+    _, meshes = read_obj_sequence(out, same_topology=False)
+    nt = len(inputs["faces"])
+    assert [len(m.faces) for m in meshes] == [nt, nt, 2 * nt, 2 * nt]
+    for m in meshes:
+        assert len(intersecting_pairs(m.vertices, m.faces)) == 0
+    log = read_log(out)
+    assert [int(r["florets_waiting"]) for r in log] == [0, 1, 0, 0]
+    assert [int(r["florets_present"]) for r in log] == [1, 1, 2, 2]
+    # stopped after frame 1 (placement 1 waiting) and resumed: the same bytes
+    class StopAfterFrame1:
+        def __init__(self, total):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def update(self, n):
+            raise KeyboardInterrupt
+
+    part = tmp_path / "part"
+    with pytest.raises(KeyboardInterrupt):
+        compose_canopy(read_fcc(fcc), part, progress=StopAfterFrame1)
+    assert '"not_emerged": [1]' in (part / "state" / "run.json").read_text()
+    res = run_cli("fccompose", fcc, "-o", part, "--resume", "-q")
+    assert res.returncode == 0, res.stderr
+    for q in sorted(out.glob("*.obj")):
+        assert (part / q.name).read_bytes() == q.read_bytes(), q.name
+    assert [int(r["florets_waiting"]) for r in read_log(part)] == [0, 1, 0, 0]
+
+
+def test_a_floret_that_never_finds_room_is_reported(inputs, tmp_path):
+    frames = [_row([0], [0.0]), _row([0, 1], [0.0, 0.0]), _row([0, 1], [0.0, 0.0])]
+    out = tmp_path / "out"
+    res = run_cli("fccompose", _rba_case(inputs, tmp_path, frames), "-o", out)
+    assert res.returncode == 0, res.stderr
+    assert "1 florets due to emerge found no room by frame 2 (placement indices 1)" in res.stderr
+    assert [len(m.faces) for m in read_obj_sequence(out, same_topology=False)[1]] == [len(inputs["faces"])] * 3
+    assert [int(r["florets_waiting"]) for r in read_log(out)] == [0, 1, 1]
+
+
 def test_organ_materials_of_the_template_are_kept(inputs, tmp_path):
     """Triangles keep their template OBJ's usemtl (a floret's organs: a lily's sepals and petals);
     triangles without one take the placement's SCN mtl id."""
@@ -284,3 +378,26 @@ def test_initial_intersections_are_refused_then_allowed(inputs, tmp_path):
     write_fcc_text(tmp_path / "case" / "p.fcc", frames=1)
     res = run_cli("fccompose", tmp_path / "case" / "p.fcc", "-o", out, "--allow-initial-intersections", "-q")
     assert res.returncode == 0, res.stderr
+
+
+def test_rba_rows_and_nearest_present_frame_match_a_plain_search():
+    """A floret absent from an RBA frame takes the nearest frame where it is present (the earlier on
+    a tie); the tables fccompose builds once give the same frame and row as searching every frame."""
+    from inflo.tools.fccompose.model import _nearest_present, _rba_rows
+
+    rng = np.random.default_rng(3)
+    frames = []
+    for _ in range(30):
+        ids = np.nonzero(rng.random(6) < 0.4)[0]
+        rng.shuffle(ids)
+        frames.append(_row(ids.tolist(), [0.0] * len(ids)))
+    table = _rba_rows(frames, 6)
+    for pid in range(6):
+        present = [i for i, fr in enumerate(frames) if fr.index(pid) is not None]
+        if not present:
+            assert (table[pid] == -1).all()
+            continue
+        src, row = _nearest_present(table[pid])
+        for i in range(len(frames)):
+            want = i if i in present else min(present, key=lambda j: (abs(j - i), j))
+            assert src[i] == want and row[i] == frames[want].index(pid)

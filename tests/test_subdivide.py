@@ -70,6 +70,32 @@ def test_sequence_keeps_topology_and_vertex_order(tmp_path):
     assert no_partial_files(tmp_path / "out")
 
 
+def test_sequence_whose_faces_grow_keeps_every_frame_like_its_own_subdivision(tmp_path):
+    """A canopy whose florets emerge (fccompose rba: placements) keeps its vertices and gains
+    faces: each run of frames of one topology is subdivided by its own plan, and each output frame
+    equals the subdivision of that frame alone; a vertex no face uses yet stays where it is."""
+    V, F = corrugated_strip(4, 2, 0.2, 0.0)
+    W = V + [0.0, 2.0, 0.0]  # a second strip beside it, "emerging" at frame 2
+    both = np.vstack([V, W])
+    F2 = np.vstack([F, F + len(V)]).astype(np.int32)
+    frames = [ObjMesh(np.round(both * (1 + 0.1 * k), 6), F if k < 2 else F2) for k in range(4)]
+    write_obj_sequence(tmp_path / "in", frames)
+    res = run_cli("subdivide", tmp_path / "in", "--levels", 1, "-o", tmp_path / "out", "--check")
+    assert res.returncode == 0, res.stderr
+    assert "level 1: %d faces" % (4 * len(F2)) in res.stderr
+    _, out = read_obj_sequence(tmp_path / "out", same_topology=False)
+    assert [len(m.faces) for m in out] == [4 * len(F)] * 2 + [4 * len(F2)] * 2
+    for k in (1, 3):
+        alone = tmp_path / f"alone_{k}.obj"
+        res = run_cli("subdivide", tmp_path / "in" / f"frame_{k:04d}.obj", "--levels", 1, "-o", alone, "-q")
+        assert res.returncode == 0, res.stderr
+        one = read_obj(alone)
+        np.testing.assert_array_equal(one.faces, out[k].faces)
+        np.testing.assert_allclose(one.vertices, out[k].vertices, atol=2e-6)
+    # the second strip's vertices, used by no face in frame 1, are not moved by the smoothing
+    np.testing.assert_allclose(out[1].vertices[len(V):len(both)], frames[1].vertices[len(V):], atol=2e-6)
+
+
 def test_cli_single_file_with_collisions_and_check(tmp_path):
     V, F, n_a = interlocking_petals()
     group = np.r_[np.zeros(n_a, np.int32), np.ones(len(F) - n_a, np.int32)]

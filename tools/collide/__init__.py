@@ -24,7 +24,13 @@ from .response import (
     solve_ee_collision_constraint,
     solve_vt_collision_constraint,
 )
-from .tritri import intersecting_pairs, intersecting_pairs_between, intersecting_pairs_brute, triangles_intersect
+from .tritri import (
+    intersecting_pairs,
+    intersecting_pairs_between,
+    intersecting_pairs_brute,
+    intersecting_pairs_with,
+    triangles_intersect,
+)
 
 __all__ = [
     "box_pairs", "edge_boxes", "lattice_cell_size", "triangle_boxes", "vertex_boxes",
@@ -33,5 +39,6 @@ __all__ = [
     "CollisionResult", "Contacts", "default_tolerance", "detect_collisions", "resolve_collisions",
     "project_collision_constraints", "solve_collision_constraint", "solve_ee_collision_constraint",
     "solve_vt_collision_constraint",
-    "intersecting_pairs", "intersecting_pairs_between", "intersecting_pairs_brute", "triangles_intersect",
+    "intersecting_pairs", "intersecting_pairs_between", "intersecting_pairs_brute", "intersecting_pairs_with",
+    "triangles_intersect",
 ]

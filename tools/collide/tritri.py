@@ -258,6 +258,39 @@ def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_si
     return _decide(x, tri, pairs, flags)
 
 
+def intersecting_pairs_with(vertex_x: np.ndarray, tri_indices: np.ndarray, which, *,
+                            cell_size: float | None = None) -> np.ndarray:
+    """Intersecting triangle pairs (exact static test, pairs sharing a vertex skipped) in which at
+    least one triangle is one of ``which`` (indices into ``tri_indices``); the other may be any.
+
+    What :func:`intersecting_pairs` would report for those triangles, at the cost of a query of
+    every triangle's box against the boxes of ``which`` only (fccompose checks a newly emerging
+    floret against the canopy this way).
+
+    Returns
+    -------
+    (k, 2) int32
+        Pairs ``(i, j)``, ``i < j``, sorted, indices into ``tri_indices``.
+    """
+    from .broad import box_pairs, triangle_boxes
+
+    x = np.ascontiguousarray(vertex_x, dtype=np.float64)
+    tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
+    sub = np.asarray(which, dtype=np.int64).reshape(-1)
+    if len(sub) == 0 or len(tri) < 2:
+        return np.zeros((0, 2), np.int32)
+    boxes = triangle_boxes(x, x, tri, 0.0)
+    pairs = box_pairs(boxes, np.ascontiguousarray(boxes[sub]), cell_size=cell_size)
+    g = np.stack([pairs[:, 0].astype(np.int64), sub[pairs[:, 1]]], axis=1)
+    g = g[g[:, 0] != g[:, 1]]
+    if len(g) == 0:
+        return np.zeros((0, 2), np.int32)
+    g = np.unique(np.sort(g, axis=1), axis=0).astype(np.int32)
+    flags = np.zeros(len(g), np.int8)
+    _test_pairs(x, tri, g, flags)
+    return _decide(x, tri, g, flags)
+
+
 def intersecting_pairs_between(a_x: np.ndarray, a_tri: np.ndarray, b_x: np.ndarray, b_tri: np.ndarray, *,
                                cell_size: float | None = None) -> np.ndarray:
     """Intersecting triangle pairs with one triangle in mesh ``a`` and the other in mesh ``b``

@@ -499,7 +499,11 @@ def _compare_csv(d: FileDiff, golden: Path, found: Path, tol: Tolerance, opts: d
         return
     gh, fh_ = g[0], (f[0] if f else [])
     if gh != fh_:
-        d.add(f"columns: golden {_names(gh)}, found {_names(fh_)}")
+        new = [c for c in fh_ if c not in gh]
+        gone = [c for c in gh if c not in fh_]
+        what = "; ".join(x for x in (f"new {', '.join(new)}" if new else "",
+                                      f"gone {', '.join(gone)}" if gone else "") if x) or "reordered"
+        d.add(f"columns differ ({what}): golden {_names(gh)}, found {_names(fh_)}")
         return
     ignore_pat = list(opts.get("ignore_columns", TIMING_COLUMNS))
     exact = set(opts.get("exact_columns", ()))

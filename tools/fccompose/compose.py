@@ -21,6 +21,17 @@
    with ``strict``;
 5. the positions are accepted.
 
+**Emergence.** A floret of an ``rba:`` placement emerges at the first RBA frame that lists it
+(:attr:`.model.Floret.birth_frame`): until then it is not part of the canopy (its triangles and
+edges take part in no collision test and it has no faces in the output; its vertices wait, still
+numbered, at its first RBA pose). At the end of the first step that reaches its frame it appears
+there, at its developmental time, provided it intersects nothing: the exact static test of its
+triangles against the canopy's (:func:`inflo.tools.collide.intersecting_pairs_with`) keeps the
+positions collision-free, so the continuous detection that follows starts from a valid state. A
+floret with no room waits and is tried again after every step ("first available space"); florets
+due at the same step are taken in placement order. ``log.csv`` counts the florets present and
+those waiting.
+
 The canopy is written as ``OUT/frame_NNNN.obj`` (frame 0 is the initial state) every output
 period and at the last frame, one OBJ group ``floret_<index>`` per floret and per triangle the
 ``usemtl`` of its template OBJ (a floret's organs keep their materials), else ``mtl<id>`` from the
@@ -48,7 +59,7 @@ from inflo.formats.fcc import CanopyParams, check_references
 from inflo.formats.obj import ObjMesh, write_obj
 from inflo.tools.collide.broad import lattice_cell_size, triangle_boxes
 from inflo.tools.collide.resolve import default_tolerance, resolve_collisions
-from inflo.tools.collide.tritri import intersecting_pairs
+from inflo.tools.collide.tritri import intersecting_pairs, intersecting_pairs_with
 from inflo.tools.pbd.solver import (
     bending_residual,
     colour_constraints,
@@ -85,6 +96,8 @@ class ComposeResult:
     steps: int = 0
     remaining_reports: list = field(default_factory=list)
     seconds: float = 0.0
+    waiting: list = field(default_factory=list)
+    """florets due to emerge that found no room by the last frame (placement indices)"""
 
 
 def _pairs_by_floret(model: Model, tri_pairs: np.ndarray) -> list[tuple[int, int]]:
@@ -132,10 +145,74 @@ class Simulation:
             self.edge_parts = np.array([0, len(model.edge_indices)], np.int64)
             self.hinge_parts = np.array([0, len(model.hinge_indices)], np.int64)
         self.sweeps = np.zeros(len(self.edge_parts) - 1, np.int64)
+        self.set_born(model.floret_birth <= 0)
         self._sched_frame = None
         self._sched = None
         self.cell_size = None
         self.converged_below = None
+
+    def set_born(self, born: np.ndarray) -> None:
+        """Make the florets of the (nf,) bool mask ``born`` the canopy: only their triangles and
+        edges enter collision detection, the sanity checks and the output (see the module doc)."""
+        m = self.model
+        self.born = np.asarray(born, dtype=bool).copy()
+        if self.born.all():
+            self.tri_on = None
+            self.tri_active_ids = None
+            self.tri_active = m.tri_indices
+            self.vertex_ids = None
+            self.tri_local = m.tri_indices
+            self.edge_local = m.edge_indices
+            return
+        self.tri_on = self.born[m.tri_floret]
+        self.tri_active_ids = np.nonzero(self.tri_on)[0].astype(np.int32)
+        self.tri_active = np.ascontiguousarray(m.tri_indices[self.tri_on])
+        # the collision system of the present florets alone: their vertices, renumbered
+        self.vertex_ids = np.nonzero(self.born[m.vertex_floret])[0]
+        local = np.full(m.n_vertices, -1, np.int32)
+        local[self.vertex_ids] = np.arange(len(self.vertex_ids), dtype=np.int32)
+        e_on = self.born[m.vertex_floret[m.edge_indices[:, 0]]]
+        self.tri_local = np.ascontiguousarray(local[self.tri_active])
+        self.edge_local = np.ascontiguousarray(local[m.edge_indices[e_on]])
+
+    def global_tris(self, pairs: np.ndarray) -> np.ndarray:
+        """Triangle pairs indexing :attr:`tri_active` -> indices into the model's triangles."""
+        return pairs if self.tri_active_ids is None else self.tri_active_ids[pairs]
+
+    def intersecting(self, x: np.ndarray) -> np.ndarray:
+        """Exact static test of the present canopy: intersecting triangle pairs (model indices)."""
+        return self.global_tris(intersecting_pairs(x, self.tri_active))
+
+    def emerge(self, x: np.ndarray, frame: float) -> tuple[list, list]:
+        """Let the florets due by ``frame`` emerge where they intersect nothing (module doc).
+
+        Returns (the florets that emerged, those still waiting), placement indices.
+        """
+        m = self.model
+        due = ~self.born & (m.floret_birth <= frame + 1e-9)
+        if not due.any():
+            return [], []
+        cand = np.nonzero(due)[0]
+        ids = np.nonzero((self.born | due)[m.tri_floret])[0]
+        which = np.nonzero(due[m.tri_floret[ids]])[0]
+        pairs = intersecting_pairs_with(x, m.tri_indices[ids], which, cell_size=self._cell(x))
+        fl = m.tri_floret[ids[pairs]] if len(pairs) else np.zeros((0, 2), np.int32)
+        blocked_by: dict = {}
+        for a, b in fl.tolist():
+            blocked_by.setdefault(a, set()).add(b)
+            blocked_by.setdefault(b, set()).add(a)
+        born = self.born.copy()
+        out, waiting = [], []
+        for c in cand.tolist():
+            others = blocked_by.get(c, ())
+            if c in others or any(born[o] for o in others):  # self-intersecting, or no room
+                waiting.append(c)
+                continue
+            born[c] = True
+            out.append(c)
+        if out:
+            self.set_born(born)
+        return out, waiting
 
     def schedule(self, frame: float):
         if self._sched_frame != frame:
@@ -206,10 +283,18 @@ class Simulation:
                                          float(self.converged_below), self.sweeps)
             timing["sweeps"] = timing.get("sweeps", 0) + int(self.sweeps.sum())
         t2 = time.perf_counter()
-        res = resolve_collisions(x, xp, w, m.tri_indices, m.edge_indices, thickness=p.spacing,
-                                 stiffness=p.k_collision, iterations=p.collision_iterations,
-                                 max_retries=p.max_collision_retries,
-                                 tolerance=default_tolerance(x, p.spacing), cell_size=self._cell(x))
+        kw = dict(thickness=p.spacing, stiffness=p.k_collision, iterations=p.collision_iterations,
+                  max_retries=p.max_collision_retries, tolerance=default_tolerance(x, p.spacing),
+                  cell_size=self._cell(x))
+        if self.vertex_ids is None:
+            res = resolve_collisions(x, xp, w, m.tri_indices, m.edge_indices, **kw)
+        else:  # florets yet to emerge take no part: solve the present ones' system, then scatter
+            v = self.vertex_ids
+            x1 = xp[v]
+            res = resolve_collisions(x[v], x1, w[v], self.tri_local, self.edge_local, **kw)
+            xp[v] = x1
+            if len(res.remaining):
+                res.remaining.indices = v[res.remaining.indices]
         t3 = time.perf_counter()
         timing["rest"] = timing.get("rest", 0.0) + (t1 - t0)
         timing["internal"] = timing.get("internal", 0.0) + (t2 - t1)
@@ -226,29 +311,41 @@ def _fingerprint(params: CanopyParams, model: Model) -> str:
     return h.hexdigest()
 
 
-def _write_frame(out: Path, model: Model, x: np.ndarray, k: int) -> Path:
+def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndarray | None = None) -> Path:
+    """The canopy at frame ``k``: every vertex (stable numbering), the faces of the florets
+    present (``tri_on``: a mask over the model's triangles; None: all)."""
     mats, face_material = model.face_materials
+    faces, face_group = model.tri_indices, model.tri_floret.copy()
+    if tri_on is not None:
+        faces, face_group = faces[tri_on], face_group[tri_on]
+        if face_material is not None:
+            face_material = face_material[tri_on]
+    present = len(np.unique(face_group))
     mesh = ObjMesh(
         vertices=x,
-        faces=model.tri_indices,
+        faces=faces,
         groups=[f"floret_{fl.index}" for fl in model.florets],
-        face_group=model.tri_floret.copy(),
+        face_group=face_group,
         materials=mats,
         face_material=face_material,
     )
     path = out / frame_name(k, "frame_", ".obj", 4)
-    write_obj(path, mesh, header=f"fccompose canopy, frame {k}: {len(model.florets)} florets, "
-                                 f"{model.n_triangles} triangles")
+    florets = (f"{len(model.florets)} florets" if tri_on is None
+               else f"{present} of {len(model.florets)} florets emerged")
+    write_obj(path, mesh, header=f"fccompose canopy, frame {k}: {florets}, {len(faces)} triangles")
     return path
 
 
-def _save_state(out: Path, x: np.ndarray, k: int, fingerprint: str) -> None:
+def _save_state(out: Path, x: np.ndarray, k: int, fingerprint: str, born: np.ndarray | None = None) -> None:
     sdir = out / "state"
     sdir.mkdir(exist_ok=True)
     buf = io.BytesIO()
     np.save(buf, x, allow_pickle=False)
     write_bytes_atomic(sdir / frame_name(k, "frame_", ".npy", 4), buf.getvalue())
-    write_text_atomic(sdir / "run.json", json.dumps({"fingerprint": fingerprint, "frame": k}) + "\n")
+    info = {"fingerprint": fingerprint, "frame": k}
+    if born is not None and not born.all():
+        info["not_emerged"] = np.nonzero(~born)[0].tolist()
+    write_text_atomic(sdir / "run.json", json.dumps(info) + "\n")
     for old in sorted(sdir.glob("frame_*.npy")):
         if old.name != frame_name(k, "frame_", ".npy", 4):
             old.unlink()
@@ -271,7 +368,7 @@ def _load_resume(out: Path, fingerprint: str, n_vertices: int):
     x = np.load(st, allow_pickle=False)
     if x.shape != (n_vertices, 3):
         raise InputError(f"{st}: expected positions of {n_vertices} vertices, found shape {x.shape}")
-    return k, x
+    return k, x, [int(i) for i in info.get("not_emerged", [])]
 
 
 def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, strict: bool = False,
@@ -322,7 +419,10 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
     if resume:
         start = _load_resume(out, fp, model.n_vertices)
     if start is not None:
-        k0, x = start
+        k0, x, not_emerged = start
+        born = np.ones(len(model.florets), bool)
+        born[not_emerged] = False
+        sim.set_born(born)
         log_rows = [r for r in read_log(out / "log.csv") if r and int(r[0]) <= k0]
         result.first_frame = k0 + 1
         sim.update_rest(float(k0))
@@ -331,9 +431,10 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
         x = sim.initial_positions()
         row = FrameLog(0, 0)
         t0 = time.perf_counter()
-        pairs = intersecting_pairs(x, model.tri_indices)
+        pairs = sim.intersecting(x)
         row["t_sanity_s"] = time.perf_counter() - t0
         row["intersecting_pairs"] = len(pairs)
+        row["florets_present"] = int(sim.born.sum())
         if len(pairs):
             fl = _pairs_by_floret(model, pairs)
             msg = (f"{params.source}: expected a collision-free first frame (thesis 4.2), found "
@@ -347,8 +448,8 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
         row["rms_dihedral_error_deg"] = math.degrees(
             bending_residual(x, model.hinge_indices, sim.hinge_rest_angle))
         t0 = time.perf_counter()
-        result.frames_written.append(_write_frame(out, model, x, 0))
-        _save_state(out, x, 0, fp)
+        result.frames_written.append(_write_frame(out, model, x, 0, sim.tri_on))
+        _save_state(out, x, 0, fp, sim.born)
         row["t_write_s"] = time.perf_counter() - t0
         log_rows.append(row)
         write_log(out / "log.csv", log_rows)
@@ -357,6 +458,11 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
     bar_cm = progress(n - k0) if progress else contextlib.nullcontext(None)
     with bar_cm as bar:
         _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_rows, result, bar)
+    if result.waiting:
+        ids = result.waiting
+        warn(f"{len(ids)} florets due to emerge found no room by frame {n} (placement indices "
+             f"{', '.join(map(str, ids[:20]))}{' ...' if len(ids) > 20 else ''}): each intersects the "
+             f"canopy, or itself, where its RBA files place it")
     # frames of an earlier, longer run in the same folder are not part of this one
     remove_stale_frames(out, [frame_name(k, "frame_", ".obj", 4) for k in range(n + 1)
                               if k % every == 0 or k == n], ".obj")
@@ -370,10 +476,12 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
         row = FrameLog(k, upf)
         timing: dict = {}
         remaining = []
+        waiting: list = []
         for s in range(upf):
             f_from = (k - 1) + s / upf
             f_to = (k - 1) + (s + 1) / upf
             x, res = sim.step(x, f_from, f_to, timing)
+            _, waiting = sim.emerge(x, f_to)
             result.steps += 1
             row["vt_candidates"] += res.stats.get("vt_candidates", 0)
             row["ee_candidates"] += res.stats.get("ee_candidates", 0)
@@ -401,9 +509,12 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
         row["rms_edge_error"] = distance_residual(x, model.edge_indices, sim.edge_rest_length)
         row["rms_dihedral_error_deg"] = math.degrees(
             bending_residual(x, model.hinge_indices, sim.hinge_rest_angle))
+        row["florets_present"] = int(sim.born.sum())
+        row["florets_waiting"] = len(waiting)
+        result.waiting = waiting
         if params.sanity_check_every and k % params.sanity_check_every == 0:
             t0 = time.perf_counter()
-            pairs = intersecting_pairs(x, model.tri_indices)
+            pairs = sim.intersecting(x)
             row["t_sanity_s"] = time.perf_counter() - t0
             row["intersecting_pairs"] = len(pairs)
             if len(pairs):
@@ -416,8 +527,8 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
         log_rows.append(row)
         if k % every == 0 or k == n:
             t0 = time.perf_counter()
-            result.frames_written.append(_write_frame(out, model, x, k))
-            _save_state(out, x, k, fp)
+            result.frames_written.append(_write_frame(out, model, x, k, sim.tri_on))
+            _save_state(out, x, k, fp, sim.born)
             row["t_write_s"] = time.perf_counter() - t0
             write_log(out / "log.csv", log_rows)
         if bar is not None:

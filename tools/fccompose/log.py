@@ -17,6 +17,8 @@ else is deterministic):
 | remaining_florets | those pairs as ``floretA-floretB`` (placement indices), ``;``-separated |
 | reverted_vertices | vertices put back to their start-of-step position |
 | intersecting_pairs | triangle pairs found by the exact static test (-1: not checked this frame) |
+| florets_present | florets in the canopy at the end of the frame (``rba:`` florets emerge at their first RBA frame) |
+| florets_waiting | florets due to emerge that found no room yet (tried again every step) |
 | t_rest_s, t_internal_s, t_collide_s, t_sanity_s, t_write_s | seconds per phase |
 """
 from __future__ import annotations
@@ -32,7 +34,8 @@ __all__ = ["COLUMNS", "FrameLog", "read_log", "write_log"]
 COLUMNS = [
     "frame", "steps", "rms_edge_error", "rms_dihedral_error_deg", "vt_candidates", "ee_candidates",
     "collisions_found", "collision_rounds", "collision_constraints", "remaining_pairs",
-    "remaining_florets", "reverted_vertices", "intersecting_pairs", "t_rest_s", "t_internal_s",
+    "remaining_florets", "reverted_vertices", "intersecting_pairs", "florets_present", "florets_waiting",
+    "t_rest_s", "t_internal_s",
     "t_collide_s", "t_sanity_s", "t_write_s",
 ]
 

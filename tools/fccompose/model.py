@@ -28,7 +28,9 @@ Placement kinds (SCN, app. C.2) and developmental time u in [0, 1] (template fra
 - ``rba start end``: placement of each frame from the RBA files (linear interpolation between
   frames and of sub-steps; a floret absent from a frame takes the nearest frame where it is
   present); develops like ``ca``. The ``rigid body animation`` entry's scale multiplies the RBA
-  scales.
+  scales. The floret *emerges* at the first RBA frame that lists it (:attr:`Floret.birth_frame`,
+  the primordium's formation in a dynamic phyllotaxis): before that it is not part of the canopy
+  (no collisions, no faces in the output; :class:`inflo.tools.fccompose.compose.Simulation`).
 
 Weight files list fixed vertex ids: 0-based indices in the OBJ's vertex order, separated by blanks,
 commas or line breaks; ``#`` starts a comment.
@@ -115,6 +117,9 @@ class Floret:
     tri_offset: int = 0
     rba: object = None  # (paths, frames) of the RBA sequence moving it, or None
     rba_scale: np.ndarray | None = None
+    birth_frame: int = 0  # first RBA frame listing an rba: placement (its emergence); 0 otherwise
+    rba_source: np.ndarray | None = None  # per RBA frame: the frame whose row places it (nearest present)
+    rba_row: np.ndarray | None = None  # per RBA frame: its row in that frame
 
 
 def read_weight_file(path, n_vertices: int) -> np.ndarray:
@@ -216,6 +221,11 @@ class Model:
     @property
     def n_triangles(self) -> int:
         return len(self.tri_indices)
+
+    @functools.cached_property
+    def floret_birth(self) -> np.ndarray:
+        """(nf,) int64: the frame each floret emerges at (:attr:`Floret.birth_frame`)."""
+        return np.array([fl.birth_frame for fl in self.florets], np.int64)
 
     @functools.cached_property
     def face_materials(self) -> tuple[list, np.ndarray | None]:
@@ -332,22 +342,39 @@ def _rotation(axis, angle: float) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
 
 
+def _rba_rows(frames, n_placements: int) -> np.ndarray:
+    """(n_placements, n_frames) int64: the row of each placement in each RBA frame, -1 if absent."""
+    table = np.full((n_placements, len(frames)), -1, np.int64)
+    for i, fr in enumerate(frames):
+        ids = np.asarray(fr.ids, np.int64)
+        ok = (ids >= 0) & (ids < n_placements)
+        table[ids[ok], i] = np.nonzero(ok)[0]
+    return table
+
+
+def _nearest_present(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For each RBA frame, the frame whose row places the floret (itself when present, else the
+    nearest frame where it is, the earlier on a tie) and that row."""
+    present = np.nonzero(rows >= 0)[0]
+    i = np.arange(len(rows))
+    j = np.searchsorted(present, i)
+    lo = present[np.clip(j - 1, 0, len(present) - 1)]
+    hi = present[np.clip(j, 0, len(present) - 1)]
+    src = np.where(np.abs(i - lo) <= np.abs(hi - i), lo, hi)
+    src = np.where(rows >= 0, i, src)
+    return src, rows[src]
+
+
 def _rba_matrix(floret: Floret, frame: float) -> np.ndarray:
     _, frames = floret.rba
-    pid = floret.local_index
-    present = [i for i, fr in enumerate(frames) if fr.index(pid) is not None]
-    if not present:  # checked in build_model
-        raise InputError(f"placement {pid} appears in no RBA frame")
     f = min(max(frame, 0.0), len(frames) - 1.0)
     a = int(math.floor(f))
     b = min(a + 1, len(frames) - 1)
     s = f - a
 
     def row(i):
-        if frames[i].index(pid) is None:
-            i = min(present, key=lambda j: (abs(j - i), j))
-        fr = frames[i]
-        r = fr.index(pid)
+        fr = frames[floret.rba_source[i]]
+        r = floret.rba_row[i]
         return fr.pos[r], fr.scale[r], fr.up[r], fr.right[r]
 
     pa, sa, ua, ra = row(a)
@@ -385,6 +412,7 @@ def build_model(params: CanopyParams) -> Model:
             scene_paths.append(r.scene_path.resolved)
     scenes = {p: read_scn(p) for p in scene_paths}
     rbas = {}
+    rba_rows = {}
     for r in params.rigid_body_animations:
         sp = r.scene_path.resolved
         if sp in rbas:
@@ -394,6 +422,7 @@ def build_model(params: CanopyParams) -> Model:
         if not paths:
             raise FormatError(params.source, r.line, "a folder with RBA files", f"none in {r.rba_folder.raw}")
         rbas[sp] = (paths, frames, np.asarray(r.scale, float))
+        rba_rows[sp] = _rba_rows(frames, len(scenes[sp].placements))
 
     florets: list[Floret] = []
     for sp in scene_paths:
@@ -410,10 +439,13 @@ def build_model(params: CanopyParams) -> Model:
                     raise FormatError(sp, None, "a 'rigid body animation' line for this scene's 'rba:' placements",
                                       f"placement {k} and no such line")
                 paths, frames, scale = rbas[sp]
-                if not any(fr.index(k) is not None for fr in frames):
+                rows = rba_rows[sp][k]
+                if not (rows >= 0).any():
                     raise FormatError(paths[0].parent, None, f"placement {k} in at least one RBA file", "none")
                 fl.rba = (paths, frames)
                 fl.rba_scale = scale
+                fl.birth_frame = int(np.argmax(rows >= 0))
+                fl.rba_source, fl.rba_row = _nearest_present(rows)
             florets.append(fl)
     if not florets:
         raise InputError(f"{params.source}: expected placements in the scene files, found none")

@@ -27,6 +27,18 @@ from .smooth import subdivide_meshes
 __all__ = ["main"]
 
 
+def topology_runs(meshes) -> list[tuple[int, int]]:
+    """(start, stop) of each run of consecutive frames with the same faces (a canopy whose florets
+    emerge over time, fccompose's rba: placements, gains faces; its vertex numbering stays)."""
+    runs, start = [], 0
+    for k in range(1, len(meshes)):
+        if not meshes[k].same_topology(meshes[start]):
+            runs.append((start, k))
+            start = k
+    runs.append((start, len(meshes)))
+    return runs
+
+
 @inflo_command("subdivide", help="Loop subdivision that stays collision-free (thesis 4.4).")
 @click.argument("source", type=click.Path())
 @click.option("--levels", type=click.IntRange(0, 6), default=1, show_default=True, help="Subdivision levels.")
@@ -44,8 +56,8 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
     single = os.path.isfile(source)
     if single:
         meshes = [read_obj(paths[0])]
-    else:
-        paths, meshes = read_obj_sequence(source)
+    else:  # a canopy whose florets emerge over time changes its faces between runs of frames
+        paths, meshes = read_obj_sequence(source, same_topology=False)
     resolve = None
     if not no_collisions:
         from .collisions import collision_resolver, default_spacing
@@ -53,15 +65,19 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
         h = spacing if spacing is not None else default_spacing(meshes[0].vertices)
         resolve = collision_resolver(spacing=h, iterations=collision_iterations, max_retries=max_collision_retries)
     with progress(length=len(meshes), label="subdivide", quiet=quiet) as bar:
-        out, reports = subdivide_meshes(meshes, levels, resolve=resolve, name=str(paths[0]),
-                                        on_frame=lambda k: bar.update(1))
+        out, reports = [], []
+        for start, stop in topology_runs(meshes):  # one subdivision plan per topology
+            o, r = subdivide_meshes(meshes[start:stop], levels, resolve=resolve, name=str(paths[start]),
+                                    on_frame=lambda k: bar.update(1))
+            out.extend(o)
+            reports.extend(r)
     targets = [Path(output)] if single else [Path(output) / p.name for p in paths]
     for t, m in zip(targets, out):
         write_obj(t, m)
     if not quiet:
         for level in range(1, levels + 1):
             rows = [r for r in reports if r.level == level]
-            msg = f"subdivide: level {level}: {rows[0].n_faces} faces"
+            msg = f"subdivide: level {level}: {max(r.n_faces for r in rows)} faces"
             if resolve is not None:
                 msg += (f", collision constraints {sum(r.collision_constraints for r in rows)} "
                         f"(max {max(r.collision_constraints for r in rows)} in a frame), "
