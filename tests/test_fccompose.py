@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import no_partial_files, run_cli
+from conftest import REPO, no_partial_files, run_cli
 from inflo.formats.fcc import read_fcc
 from inflo.formats.obj import ObjMesh, read_obj, read_obj_sequence, write_obj, write_obj_sequence
 from inflo.formats.rba import RbaFrame, write_rba_sequence
@@ -401,3 +401,32 @@ def test_rba_rows_and_nearest_present_frame_match_a_plain_search():
         for i in range(len(frames)):
             want = i if i in present else min(present, key=lambda j: (abs(j - i), j))
             assert src[i] == want and row[i] == frames[want].index(pid)
+
+
+def test_a_dynamic_phyllotaxis_head_grows_with_florets_emerging(inputs, tmp_path):
+    """phyllotaxis (centripetal fractionation, 33 primordia over frames 0-7) -> fccompose: each
+    frame holds exactly the florets its RBA file lists, less those waiting for room; neighbours
+    collide as they open, and no frame has an intersecting triangle pair (exact test)."""
+    toml = (REPO / "pipelines" / "examples" / "phyllotaxis" / "dynamic_head.toml").read_text()
+    toml = toml.replace("frames = 120", "frames = 20").replace("primordium_area = 0.002", "primordium_area = 0.03")
+    (tmp_path / "head.toml").write_text(toml)
+    res = run_cli("phyllotaxis", tmp_path / "head.toml", "-o", tmp_path / "head", "-q")
+    assert res.returncode == 0, res.stderr
+    shutil.copytree(inputs["dir"] / "anim", tmp_path / "anim")
+    shutil.copy(inputs["dir"] / "petal_base.txt", tmp_path / "petal_base.txt")
+    write_fcc_text(tmp_path / "g.fcc", scene="head/scene.scn", sanity_every=1,
+                   extra="rigid body animation: 1 0.5 0.5 0.5 head/rba head/scene.scn\n")
+    out = tmp_path / "out"
+    res = run_cli("fccompose", tmp_path / "g.fcc", "-o", out, "--strict")
+    assert res.returncode == 0, res.stderr
+    listed = [len((tmp_path / "head" / "rba" / f"{k:04d}.rba").read_text().splitlines()) for k in range(20)]
+    assert listed[0] == 1 and listed[-1] == 33 and listed[5] < 33  # the head grows
+    log = read_log(out)
+    present = [int(r["florets_present"]) for r in log]
+    waiting = [int(r["florets_waiting"]) for r in log]
+    assert [p + w for p, w in zip(present, waiting)] == listed
+    assert all(int(r["intersecting_pairs"]) == 0 for r in log)
+    nt = len(inputs["faces"])
+    _, meshes = read_obj_sequence(out, same_topology=False)
+    assert [len(m.faces) for m in meshes] == [nt * p for p in present]
+    assert sum(int(r["collisions_found"]) for r in log) > 100  # neighbours touch as they open
