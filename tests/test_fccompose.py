@@ -403,10 +403,9 @@ def test_rba_rows_and_nearest_present_frame_match_a_plain_search():
             assert src[i] == want and row[i] == frames[want].index(pid)
 
 
-def test_a_dynamic_phyllotaxis_head_grows_with_florets_emerging(inputs, tmp_path):
-    """phyllotaxis (centripetal fractionation, 33 primordia over frames 0-7) -> fccompose: each
-    frame holds exactly the florets its RBA file lists, less those waiting for room; neighbours
-    collide as they open, and no frame has an intersecting triangle pair (exact test)."""
+def _small_dynamic_head(inputs, tmp_path, scale: float, spacing: float = 0.001) -> Path:
+    """phyllotaxis (centripetal fractionation, 33 primordia over frames 0-7 of 20) with the test
+    floret scaled ``scale`` x the primordium sizes; returns the .fcc."""
     toml = (REPO / "pipelines" / "examples" / "phyllotaxis" / "dynamic_head.toml").read_text()
     toml = toml.replace("frames = 120", "frames = 20").replace("primordium_area = 0.002", "primordium_area = 0.03")
     (tmp_path / "head.toml").write_text(toml)
@@ -414,10 +413,17 @@ def test_a_dynamic_phyllotaxis_head_grows_with_florets_emerging(inputs, tmp_path
     assert res.returncode == 0, res.stderr
     shutil.copytree(inputs["dir"] / "anim", tmp_path / "anim")
     shutil.copy(inputs["dir"] / "petal_base.txt", tmp_path / "petal_base.txt")
-    write_fcc_text(tmp_path / "g.fcc", scene="head/scene.scn", sanity_every=1,
-                   extra="rigid body animation: 1 0.5 0.5 0.5 head/rba head/scene.scn\n")
+    write_fcc_text(tmp_path / "g.fcc", scene="head/scene.scn", sanity_every=1, spacing=spacing,
+                   extra=f"rigid body animation: 1 {scale} {scale} {scale} head/rba head/scene.scn\n")
+    return tmp_path / "g.fcc"
+
+
+def test_a_dynamic_phyllotaxis_head_grows_with_florets_emerging(inputs, tmp_path):
+    """phyllotaxis (centripetal fractionation, 33 primordia over frames 0-7) -> fccompose: each
+    frame holds exactly the florets its RBA file lists, less those waiting for room; neighbours
+    collide as they open, and no frame has an intersecting triangle pair (exact test)."""
     out = tmp_path / "out"
-    res = run_cli("fccompose", tmp_path / "g.fcc", "-o", out, "--strict")
+    res = run_cli("fccompose", _small_dynamic_head(inputs, tmp_path, 0.5), "-o", out, "--strict")
     assert res.returncode == 0, res.stderr
     listed = [len((tmp_path / "head" / "rba" / f"{k:04d}.rba").read_text().splitlines()) for k in range(20)]
     assert listed[0] == 1 and listed[-1] == 33 and listed[5] < 33  # the head grows
@@ -430,3 +436,23 @@ def test_a_dynamic_phyllotaxis_head_grows_with_florets_emerging(inputs, tmp_path
     _, meshes = read_obj_sequence(out, same_topology=False)
     assert [len(m.faces) for m in meshes] == [nt * p for p in present]
     assert sum(int(r["collisions_found"]) for r in log) > 100  # neighbours touch as they open
+
+
+
+def test_florets_squeezed_until_they_tear_stop_the_run_with_a_clear_error(inputs, tmp_path):
+    """The same head with florets 1.2 x their primordia and a thickness h of a tenth of a floret:
+    open, they overlap so much that the collision response reverts vertices of florets carried
+    outward by the growing receptacle and tears them, and the constraint solve diverges (to 1e11
+    units within a frame). The run stops at the first frame with an edge over 50 x its rest
+    length: exit 1, one line naming the frame and florets, the complete frames before it kept,
+    nothing exploded written."""
+    out = tmp_path / "out"
+    res = run_cli("fccompose", _small_dynamic_head(inputs, tmp_path, 1.2, spacing=0.01), "-o", out)
+    assert res.returncode == 1
+    line = [l for l in res.stderr.splitlines() if "diverged" in l]
+    assert len(line) == 1 and "times their rest length" in line[0] and "give them room" in line[0]
+    k = int(line[0].split("frame ")[1].split(":")[0])
+    frames = sorted(out.glob("frame_*.obj"))
+    assert frames[-1].name == f"frame_{k - 1:04d}.obj" and len(frames) == k
+    last = read_obj(frames[-1])
+    assert np.ptp(last.vertices, axis=0).max() < 10.0  # no exploded coordinates written

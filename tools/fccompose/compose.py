@@ -64,6 +64,7 @@ from inflo.tools.pbd.solver import (
     bending_residual,
     colour_constraints,
     distance_residual,
+    overstretched_edges,
     project_bending_constraints_coloured,
     project_distance_constraints_coloured,
     project_internal_by_part,
@@ -73,7 +74,8 @@ from inflo.tools.pbd.solver import (
 from .log import FrameLog, read_log, write_log
 from .model import Model, build_model, predict, rest_values, template_positions
 
-__all__ = ["ComposeResult", "CollisionError", "InitialIntersectionError", "compose_canopy", "Simulation"]
+__all__ = ["ComposeResult", "CollisionError", "InitialIntersectionError", "SimulationDiverged", "compose_canopy",
+           "Simulation"]
 
 
 class InitialIntersectionError(InputError):
@@ -82,6 +84,19 @@ class InitialIntersectionError(InputError):
 
 class CollisionError(RuntimeError):
     """``strict``: pairs still crossing after the retries, or the sanity check found intersections."""
+
+
+class SimulationDiverged(RuntimeError):
+    """Florets torn apart (edges far beyond their rest length): the run stops at that frame."""
+
+
+DIVERGED_STRETCH = 50.0
+"""A frame in which an edge is longer than this many times its rest length stops the run
+(:class:`SimulationDiverged`) before that frame is written: florets squeezed harder than the
+collision response can resolve lose vertices to the revert fallback, get torn, and the constraint
+solve then diverges (within a frame or two, to coordinates of 1e11 and more). Crowded runs that
+stay whole stretch an edge to 5-15 times its rest length at the worst (collision constraints are
+projected after the internal ones)."""
 
 
 @dataclass
@@ -242,6 +257,22 @@ class Simulation:
             self.cell_size = lattice_cell_size(self.params.lattice, x.min(axis=0), x.max(axis=0), boxes)
         return self.cell_size
 
+    def check_whole(self, x: np.ndarray, frame: float) -> None:
+        """Raise :class:`SimulationDiverged` when an edge is over :data:`DIVERGED_STRETCH` x its
+        rest length (``frame``: the frame being computed, for the message)."""
+        m = self.model
+        torn = overstretched_edges(x, m.edge_indices, self.edge_rest_length, DIVERGED_STRETCH,
+                                   float(self.converged_below or 0.0) + 1e-300)
+        if len(torn):
+            k = int(math.ceil(frame))
+            fl = np.unique(m.vertex_floret[m.edge_indices[torn, 0]])
+            raise SimulationDiverged(
+                f"frame {k}: the simulation diverged: {len(torn)} edges of florets "
+                f"{', '.join(map(str, fl[:20].tolist()))}{' ...' if len(fl) > 20 else ''} are over "
+                f"{DIVERGED_STRETCH:g} times their rest length (florets squeezed harder than the collision "
+                f"response can resolve; give them room: smaller florets, a larger spacing, more "
+                f"updates per frame); frames up to {k - 1} are complete")
+
     def step(self, x: np.ndarray, frame_from: float, frame_to: float, timing: dict):
         """One simulation step from ``frame_from`` to ``frame_to``; returns (new x, CollisionResult)."""
         m = self.model
@@ -282,6 +313,7 @@ class Simulation:
                                          m.hinge_stiffness, self.hinge_parts, int(p.solver_iterations),
                                          float(self.converged_below), self.sweeps)
             timing["sweeps"] = timing.get("sweeps", 0) + int(self.sweeps.sum())
+        self.check_whole(xp, frame_to)  # a diverged solve: stop before detecting collisions on it
         t2 = time.perf_counter()
         kw = dict(thickness=p.spacing, stiffness=p.k_collision, iterations=p.collision_iterations,
                   max_retries=p.max_collision_retries, tolerance=default_tolerance(x, p.spacing),
@@ -503,6 +535,7 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
             if strict:
                 raise CollisionError(msg)
             warn(msg)
+        sim.check_whole(x, k)
         row["t_rest_s"] = timing.get("rest", 0.0)
         row["t_internal_s"] = timing.get("internal", 0.0)
         row["t_collide_s"] = timing.get("collide", 0.0)
