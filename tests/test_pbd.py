@@ -22,7 +22,7 @@ from inflo.tools.pbd import (
     solve_distance_constraint,
     wrap_angle,
 )
-from inflo.tools.pbd.solver import hinge_angles
+from inflo.tools.pbd.solver import hinge_angles, overstretched_edges
 
 
 def hinge(angle_deg: float) -> np.ndarray:
@@ -297,3 +297,12 @@ def test_solving_part_by_part_equals_the_serial_sweeps_and_stops_parts_at_rest()
     joined = e.copy()
     joined[0, 1] = len(x) - 1
     assert part_offsets(joined, part, 3) is None
+
+
+def test_overstretched_edges_finds_torn_and_non_finite_edges():
+    x = np.array([[0.0, 0, 0], [1.0, 0, 0], [0.0, 60.0, 0], [np.nan, 0, 0]])
+    e = np.array([[0, 1], [0, 2], [1, 3], [0, 1]], np.int32)
+    rest = np.array([1.0, 1.0, 1.0, 0.0])
+    np.testing.assert_array_equal(overstretched_edges(x, e, rest, 50.0, 1e-12), [1, 2, 3])
+    # a zero rest length counts as the floor: edge 3 (length 1) is fine with a floor of 0.1
+    np.testing.assert_array_equal(overstretched_edges(x, e, rest, 50.0, 0.1), [1, 2])

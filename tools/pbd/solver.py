@@ -450,17 +450,10 @@ def distance_residual(vertex_x, edge_indices, edge_rest_length):
 def overstretched_edges(vertex_x, edge_indices, edge_rest_length, factor, floor):
     """Indices of the edges longer than ``factor`` x their rest length (rest lengths below
     ``floor`` count as ``floor``): a floret torn apart, the sign of a diverging solve."""
-    n = edge_indices.shape[0]
-    hit = np.zeros(n, np.bool_)
-    for e in range(n):
-        i = edge_indices[e, 0]
-        j = edge_indices[e, 1]
-        dx = vertex_x[i, 0] - vertex_x[j, 0]
-        dy = vertex_x[i, 1] - vertex_x[j, 1]
-        dz = vertex_x[i, 2] - vertex_x[j, 2]
-        rest = max(edge_rest_length[e], floor)
-        lim = factor * rest
-        if not dx * dx + dy * dy + dz * dz <= lim * lim:  # NaN counts too
+    cur = edge_lengths(vertex_x, edge_indices)
+    hit = np.zeros(cur.shape[0], np.bool_)
+    for e in range(cur.shape[0]):
+        if not cur[e] <= factor * max(edge_rest_length[e], floor):  # NaN counts too
             hit[e] = True
     return np.nonzero(hit)[0]
 
