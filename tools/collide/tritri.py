@@ -220,6 +220,13 @@ def _test_pairs(x, tri, pairs, flags):
             flags[k] = 2
 
 
+def _exact_pairs(x, tri, pairs) -> np.ndarray:
+    """The intersecting ones among candidate ``pairs`` (float test where certified, exact else)."""
+    flags = np.zeros(len(pairs), np.int8)
+    _test_pairs(x, tri, pairs, flags)
+    return _decide(x, tri, pairs, flags)
+
+
 def _decide(x, tri, pairs, flags) -> np.ndarray:
     """Resolve undecided pairs exactly; returns the intersecting pairs."""
     from .exact import triangles_intersect_exact
@@ -253,9 +260,7 @@ def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_si
         return np.zeros((0, 2), np.int32)
     boxes = triangle_boxes(x, x, tri, 0.0)
     pairs = box_pairs(boxes, None, cell_size=cell_size)
-    flags = np.zeros(len(pairs), np.int8)
-    _test_pairs(x, tri, pairs, flags)
-    return _decide(x, tri, pairs, flags)
+    return _exact_pairs(x, tri, pairs)
 
 
 def intersecting_pairs_with(vertex_x: np.ndarray, tri_indices: np.ndarray, which, *,
@@ -286,9 +291,7 @@ def intersecting_pairs_with(vertex_x: np.ndarray, tri_indices: np.ndarray, which
     if len(g) == 0:
         return np.zeros((0, 2), np.int32)
     g = np.unique(np.sort(g, axis=1), axis=0).astype(np.int32)
-    flags = np.zeros(len(g), np.int8)
-    _test_pairs(x, tri, g, flags)
-    return _decide(x, tri, g, flags)
+    return _exact_pairs(x, tri, g)
 
 
 def intersecting_pairs_between(a_x: np.ndarray, a_tri: np.ndarray, b_x: np.ndarray, b_tri: np.ndarray, *,
@@ -317,9 +320,7 @@ def intersecting_pairs_between(a_x: np.ndarray, a_tri: np.ndarray, b_x: np.ndarr
     x = np.vstack([ax, bx])
     tri = np.vstack([at, bt + len(ax)]).astype(np.int32)
     both = np.ascontiguousarray(np.stack([pairs[:, 0], pairs[:, 1] + len(at)], axis=1), dtype=np.int32)
-    flags = np.zeros(len(both), np.int8)
-    _test_pairs(x, tri, both, flags)
-    hit = _decide(x, tri, both, flags)
+    hit = _exact_pairs(x, tri, both)
     return np.stack([hit[:, 0], hit[:, 1] - len(at)], axis=1).astype(np.int32)
 
 
@@ -330,6 +331,4 @@ def intersecting_pairs_brute(vertex_x, tri_indices):
     m = len(tri)
     ii, jj = np.triu_indices(m, 1)
     pairs = np.stack([ii, jj], axis=1).astype(np.int32)
-    flags = np.zeros(len(pairs), np.int8)
-    _test_pairs(x, tri, pairs, flags)
-    return _decide(x, tri, pairs, flags)
+    return _exact_pairs(x, tri, pairs)

@@ -125,6 +125,12 @@ def _florets_text(pairs) -> str:
     return ";".join(f"{a}-{b}" for a, b in pairs)
 
 
+def _ids_text(ids, most: int = 20) -> str:
+    """Placement indices for a message: the first ``most``, then ``...``."""
+    ids = list(ids)
+    return ", ".join(map(str, ids[:most])) + (" ..." if len(ids) > most else "")
+
+
 class Simulation:
     """The solver state and one-step update of Algorithm 1 (usable without files, e.g. benchmarks).
 
@@ -268,7 +274,7 @@ class Simulation:
             fl = np.unique(m.vertex_floret[m.edge_indices[torn, 0]])
             raise SimulationDiverged(
                 f"frame {k}: the simulation diverged: {len(torn)} edges of florets "
-                f"{', '.join(map(str, fl[:20].tolist()))}{' ...' if len(fl) > 20 else ''} are over "
+                f"{_ids_text(fl.tolist())} are over "
                 f"{DIVERGED_STRETCH:g} times their rest length (florets squeezed harder than the collision "
                 f"response can resolve; give them room: smaller florets, a larger spacing, more "
                 f"updates per frame); frames up to {k - 1} are complete")
@@ -493,7 +499,7 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
     if result.waiting:
         ids = result.waiting
         warn(f"{len(ids)} florets due to emerge found no room by frame {n} (placement indices "
-             f"{', '.join(map(str, ids[:20]))}{' ...' if len(ids) > 20 else ''}): each intersects the "
+             f"{_ids_text(ids)}): each intersects the "
              f"canopy, or itself, where its RBA files place it")
     # frames of an earlier, longer run in the same folder are not part of this one
     remove_stale_frames(out, [frame_name(k, "frame_", ".obj", 4) for k in range(n + 1)
