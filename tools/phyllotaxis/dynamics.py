@@ -33,8 +33,8 @@ from inflo.formats.atomic import frame_name
 from inflo.formats.errors import InputError
 from inflo.formats.scn import Group, Placement, Scene
 
+from .development import age_window
 from .rbatext import write_rba_fast
-
 from .surface import Profile, blend_profiles
 
 __all__ = ["MODE_CODES", "simulate_regions", "DynamicPattern", "simulate", "frame_state",
@@ -288,21 +288,25 @@ def frame_state(pattern: DynamicPattern, frame: int, *, size_factor: float = 1.0
             "area": area_rows, "centre": np.array([0.0, float(prof.y[0]), 0.0]), "profile": prof}
 
 
-def dynamic_scene(pattern: DynamicPattern, final: dict, *, floret_id: int = 0) -> Scene:
+def dynamic_scene(pattern: DynamicPattern, final: dict, *, floret_id: int = 0,
+                  development_frames: int | None = None) -> Scene:
     """The SCN of a dynamic pattern: one ``rba:`` placement per primordium in order of formation.
 
-    The preamble holds the floret's placement at the last frame; ``frameStart`` is its emergence
-    frame (rounded up), ``frameEnd`` the last frame; ``#@ emergence:`` the exact time; group 0 is
-    the head with its centre at the final apex.
+    The preamble holds the floret's position and frame at the last frame, with scale 1 1 1: an
+    ``rba:`` placement's SCN scale multiplies every RBA row's scale (the rows carry the primordium
+    sizes; dimorph's factors go into the SCN scale). ``frameStart`` is the emergence frame (rounded
+    up); ``frameEnd`` the last frame, or ``frameStart + development_frames`` when that is given
+    (not clamped: a late floret is still developing at the end, the phase effect);
+    ``#@ emergence:`` the exact time; group 0 is the head with its centre at the final apex.
     """
     scene = Scene()
     scene.groups[0] = Group(0, final["centre"], -1)
     last = pattern.frames - 1
     for k in range(len(pattern)):
-        start = min(int(math.ceil(pattern.emergence[k] - 1e-9)), last)
+        start, end = age_window(min(int(math.ceil(pattern.emergence[k] - 1e-9)), last), last, development_frames)
         scene.placements.append(Placement(
-            "rba", int(floret_id), final["pos"][k], final["scale"][k], final["up"][k], final["right"][k],
-            frame_start=start, frame_end=last, group=0, emergence=float(pattern.emergence[k])))
+            "rba", int(floret_id), final["pos"][k], np.ones(3), final["up"][k], final["right"][k],
+            frame_start=start, frame_end=end, group=0, emergence=float(pattern.emergence[k])))
     return scene
 
 

@@ -2,7 +2,8 @@
 
 Which model runs depends on the parameter file (``formats/phyllotaxis.md``):
 
-- no ``[dynamics]``/``[hierarchy]``: Ridley's static pattern (sec. 5.2) -> ``o:``/``ca:`` placements;
+- no ``[dynamics]``/``[hierarchy]``: Ridley's static pattern (sec. 5.2) -> ``o:``/``ca:`` placements
+  (``ca:`` with per-floret windows by ``[primordia] development_order``, the phase effect);
 - ``[dynamics]``: fractionation or segregation (sec. 5.3) -> ``rba:`` placements + ``rba/NNNN.rba``;
 - ``[compound]``: two-level pattern of conical heads (sec. 5.4, fig. 5.4) -> ``o:``/``ca:``;
 - ``[hierarchy]``: recursive segregation (sec. 5.4) -> static, or dynamic with ``dynamic = true``.
@@ -22,6 +23,7 @@ from inflo.formats.func import read_func
 from inflo.formats.scn import write_scn
 
 from .compound import compound_pattern, compound_scene
+from .development import apply_development_order
 from .dynamics import dynamic_scene, simulate, write_frames
 from .hierarchy import grow_hierarchy, hierarchy_scene, hierarchy_state
 from .rbatext import write_rba_fast
@@ -60,9 +62,10 @@ def generate(params: dict, out_dir, *, progress=None, header: str | None = None)
     """
     out = Path(out_dir)
     s, pr = params["surface"], params["primordia"]
+    notes = _unused_development_keys(params)
     curve_kw = dict(radius=s["radius"], height=s["height"], angle=s["angle"], samples=s["samples"])
     if "hierarchy" in params:
-        return _hierarchy(params, out, progress, header)
+        return _hierarchy(params, out, progress, header, notes)
     profile = load_curve(s["curve"], **curve_kw)
     if "dynamics" in params:
         d = params["dynamics"]
@@ -77,10 +80,10 @@ def generate(params: dict, out_dir, *, progress=None, header: str | None = None)
         ctx = progress(d["frames"], "phyllotaxis frames") if progress else _NoBar()
         with ctx as bar:
             state = write_frames(pat, out / "rba", size_factor=pr["size_factor"], bar=bar)
-        scene = dynamic_scene(pat, state, floret_id=pr["floret_id"])
+        scene = dynamic_scene(pat, state, floret_id=pr["floret_id"], development_frames=d["development_frames"])
         write_scn(out / "scene.scn", scene, header=header)
         preview = {"pos": state["pos"], "diameter": state["scale"][:, 0], "age": d["frames"] - 1 - pat.emergence}
-        return Summary(f"dynamic ({d['mode']})", len(pat), d["frames"], out / "scene.scn", [], preview)
+        return Summary(f"dynamic ({d['mode']})", len(pat), d["frames"], out / "scene.scn", notes, preview)
     area = area_function(pr["area"], profile.length)
     if "compound" in params:
         c = params["compound"]
@@ -90,24 +93,59 @@ def generate(params: dict, out_dir, *, progress=None, header: str | None = None)
                                 max_count=pr["max_count"])
         scene = compound_scene(comp, floret_id=pr["floret_id"], size_factor=pr["size_factor"],
                                kind=pr["placement"], frame_start=pr["frame_start"], frame_end=pr["frame_end"])
+        _static_development(scene, pr)
         out.mkdir(parents=True, exist_ok=True)
         write_scn(out / "scene.scn", scene, header=header)
         preview = {"pos": comp.floret_pos, "diameter": pr["size_factor"] * 2 * np.sqrt(comp.floret_area / np.pi),
                    "age": comp.floret_head.astype(np.float64)}
-        return Summary(f"compound ({len(comp.head_pos)} heads)", len(comp.floret_pos), 0, out / "scene.scn", [],
+        return Summary(f"compound ({len(comp.head_pos)} heads)", len(comp.floret_pos), 0, out / "scene.scn", notes,
                        preview)
     pat = static_pattern(profile, area, divergence=pr["divergence"], start=pr["start"], count=pr["count"],
                          max_count=pr["max_count"])
     scene = pattern_scene(pat, floret_id=pr["floret_id"], size_factor=pr["size_factor"], kind=pr["placement"],
                           frame_start=pr["frame_start"], frame_end=pr["frame_end"])
+    _static_development(scene, pr)
     out.mkdir(parents=True, exist_ok=True)
     write_scn(out / "scene.scn", scene, header=header)
     preview = {"pos": pat.pos, "diameter": pr["size_factor"] * 2 * np.sqrt(pat.area / np.pi),
                "age": np.arange(len(pat.s), dtype=np.float64)}
-    return Summary("static", len(pat.s), 0, out / "scene.scn", [], preview)
+    return Summary("static", len(pat.s), 0, out / "scene.scn", notes, preview)
 
 
-def _hierarchy(params, out: Path, progress, header) -> Summary:
+def _static_development(scene, pr: dict) -> None:
+    """The developmental windows of a static scene (``[primordia] development_*``), in place.
+
+    ``development_order`` other than ``none``: every placement becomes ``ca:`` with its window
+    by rank (:func:`.development.apply_development_order`); ``none`` with ``development_frames``
+    and ``placement = "ca"``: ``frameEnd = frame_start + development_frames``.
+    """
+    n = pr["development_frames"]
+    if pr["development_order"] != "none":
+        frames = n if n is not None else pr["frame_end"] - pr["frame_start"]
+        apply_development_order(scene, order=pr["development_order"], offset=pr["development_offset"],
+                                frame_start=pr["frame_start"], frames=frames)
+    elif n is not None:
+        for p in scene.placements:
+            if p.kind == "ca":
+                p.frame_end = p.frame_start + n
+
+
+def _unused_development_keys(params: dict) -> list:
+    """Warnings for ``[primordia] development_order``/``development_frames`` that the model ignores."""
+    pr = params["primordia"]
+    given = [k for k, unset in (("development_order", "none"), ("development_frames", None)) if pr[k] != unset]
+    dynamic = "dynamics" in params or ("hierarchy" in params and params["hierarchy"]["dynamic"])
+    if dynamic and given:
+        where = "[dynamics]" if "dynamics" in params else "[hierarchy]"
+        return [f"[primordia] {' and '.join(given)} apply to static patterns only and are ignored here "
+                f"(a dynamic pattern develops by age: {where} development_frames)"]
+    if not dynamic and given == ["development_frames"] and pr["placement"] != "ca":
+        return ["[primordia] development_frames has no effect on o: placements without a development_order "
+                "(or placement = \"ca\")"]
+    return []
+
+
+def _hierarchy(params, out: Path, progress, header, notes) -> Summary:
     h_p, pr = params["hierarchy"], params["primordia"]
     h = grow_hierarchy(levels=h_p["levels"], frames=h_p["frames"], growth_rate=h_p["growth_rate"],
                        initial_area=h_p["initial_area"], element_area=h_p["element_area"],
@@ -128,13 +166,16 @@ def _hierarchy(params, out: Path, progress, header) -> Summary:
                                st["up"], st["right"])
                 bar.update(1)
     scene = hierarchy_scene(h, final, floret_id=pr["floret_id"], dynamic=h_p["dynamic"], kind=pr["placement"],
-                            frame_start=pr["frame_start"], frame_end=pr["frame_end"])
+                            frame_start=pr["frame_start"], frame_end=pr["frame_end"],
+                            development_frames=h_p["development_frames"])
+    if not h_p["dynamic"]:
+        _static_development(scene, pr)
     out.mkdir(parents=True, exist_ok=True)
     write_scn(out / "scene.scn", scene, header=header)
     birth = h.element_birth[h.florets[final["ids"]]]
     preview = {"pos": final["pos"], "diameter": final["scale"][:, 0], "age": h_p["frames"] - birth}
     return Summary(f"hierarchy ({h_p['levels']} levels)", len(final["ids"]), frames, out / "scene.scn",
-                   list(h.messages), preview)
+                   notes + list(h.messages), preview)
 
 
 class _NoBar:

@@ -28,6 +28,7 @@ import numpy as np
 from inflo.formats.errors import InputError
 from inflo.formats.scn import Group, Placement, Scene
 
+from .development import age_window
 from .params import per_level
 from .ridley import diameter_of_area
 
@@ -261,14 +262,16 @@ def hierarchy_state(h: Hierarchy, t: float, *, size_factor: float = 1.0) -> dict
 
 
 def hierarchy_scene(h: Hierarchy, final: dict, *, floret_id: int = 0, dynamic: bool = False,
-                    kind: str = "o", frame_start: int = 0, frame_end: int = 100) -> Scene:
+                    kind: str = "o", frame_start: int = 0, frame_end: int = 100,
+                    development_frames: int | None = None) -> Scene:
     """The SCN at the end of the run: one placement per floret, groups = the meristems.
 
     Each meristem that formed florets or sub-meristems is a group (id = its element index) with
     its centre at the final time and its producing meristem as parent. Static: ``o:``
     placements, or ``ca: frame_start frame_end`` with ``kind = "ca"`` (``[primordia] placement``,
-    as for the static and compound models); dynamic: ``rba:`` with ``frameStart`` the emergence
-    frame (rounded up).
+    as for the static and compound models); dynamic: ``rba:`` with scale 1 1 1 (the RBA rows
+    carry the sizes; the SCN scale multiplies them), ``frameStart`` the emergence frame (rounded
+    up) and ``frameEnd`` the last frame, or ``frameStart + development_frames`` when given.
     """
     scene = Scene()
     centres = final["centres"]
@@ -282,12 +285,16 @@ def hierarchy_scene(h: Hierarchy, final: dict, *, floret_id: int = 0, dynamic: b
     for row, k in enumerate(final["ids"]):
         e = fl[k]
         kw = {}
+        scale = final["scale"][row]
         if dynamic:
-            kw = {"frame_start": min(int(math.ceil(h.element_birth[e] - 1e-9)), last), "frame_end": last}
+            start, end = age_window(min(int(math.ceil(h.element_birth[e] - 1e-9)), last), last,
+                                    development_frames)
+            kw = {"frame_start": start, "frame_end": end}
+            scale = np.ones(3)
         elif kind == "ca":
             kw = {"frame_start": int(frame_start), "frame_end": int(frame_end)}
         scene.placements.append(Placement(
-            "rba" if dynamic else kind, int(floret_id), final["pos"][row], final["scale"][row],
+            "rba" if dynamic else kind, int(floret_id), final["pos"][row], scale,
             final["up"][row], final["right"][row], group=int(final["group"][row]),
             emergence=float(h.element_birth[e]), **kw))
     return scene

@@ -24,10 +24,11 @@ from pathlib import Path
 
 from inflo.formats.errors import FormatError, InputError, shorten
 
-__all__ = ["SCHEMA", "read_params", "parse_params", "BUILTIN_CURVES", "DYNAMIC_MODES"]
+__all__ = ["SCHEMA", "read_params", "parse_params", "BUILTIN_CURVES", "DYNAMIC_MODES", "DEVELOPMENT_ORDERS"]
 
 BUILTIN_CURVES = ("disk", "cone", "sphere_cap", "paraboloid")
 DYNAMIC_MODES = ("centripetal", "divergent", "segregation")
+DEVELOPMENT_ORDERS = ("none", "centripetal", "centrifugal")
 GOLDEN_ANGLE = 137.50776405003785  # 360 (1 - 1/tau), degrees
 
 _NUM = (int, float)
@@ -35,7 +36,8 @@ _FUNC = "number-or-func"  # a number or the path of a .func file
 _CURVE = "curve"  # a built-in name or the path of a .con file
 
 # section -> key -> (kind, default); kind: "float", "int", "str", "bool", _FUNC, _CURVE,
-# "curves" (list of curve names), "floats" (list of numbers), ("choice", options)
+# "curves" (list of curve names), "floats" (list of numbers), ("choice", options); a default of
+# None: the key is optional and stays None when absent
 SCHEMA: dict[str, dict[str, tuple]] = {
     "surface": {
         "curve": (_CURVE, "disk"),
@@ -54,6 +56,9 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "placement": (("choice", ("o", "ca")), "o"),
         "frame_start": ("int", 0),
         "frame_end": ("int", 100),
+        "development_order": (("choice", DEVELOPMENT_ORDERS), "none"),
+        "development_offset": ("float", 1.0),
+        "development_frames": ("int", None),
         "max_count": ("int", 1_000_000),
     },
     "dynamics": {
@@ -70,6 +75,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "curves": ("curves", []),
         "curve_times": ("floats", []),
         "substeps": ("int", 0),
+        "development_frames": ("int", None),
         "max_count": ("int", 1_000_000),
     },
     "compound": {
@@ -88,6 +94,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "meristem_threshold": ("floats", [8.0]),
         "divergence": ("float", GOLDEN_ANGLE),
         "dynamic": ("bool", False),
+        "development_frames": ("int", None),
         "max_count": ("int", 200_000),
     },
 }
@@ -247,6 +254,10 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("primordia", "size_factor", "> 0")
     if not 0 <= pr["frame_start"] <= pr["frame_end"]:
         fail("primordia", "frame_end", ">= frame_start >= 0")
+    if pr["development_offset"] < 0:
+        fail("primordia", "development_offset", ">= 0 frames per rank")
+    if pr["development_frames"] is not None and pr["development_frames"] <= 0:
+        fail("primordia", "development_frames", "> 0 frames")
     if "dynamics" in p:
         d = p["dynamics"]
         if d["frames"] < 1:
@@ -267,6 +278,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
             fail("dynamics", "curve_times", "increasing")
         if d["substeps"] < 0:
             fail("dynamics", "substeps", ">= 0 (0: automatic)")
+        if d["development_frames"] is not None and d["development_frames"] <= 0:
+            fail("dynamics", "development_frames", "> 0 frames")
     if "compound" in p:
         c = p["compound"]
         if c["head_fill"] <= 0:
@@ -289,6 +302,12 @@ def _check_ranges(p: dict, text: str, path) -> None:
                 fail("hierarchy", "production_threshold", "> element_area at every level")
         if not 0 < h["divergence"] < 360:
             fail("hierarchy", "divergence", "in (0, 360) degrees")
+        if h["development_frames"] is not None:
+            if h["development_frames"] <= 0:
+                fail("hierarchy", "development_frames", "> 0 frames")
+            if not h["dynamic"]:
+                fail("hierarchy", "development_frames",
+                     "only with dynamic = true (static files: [primordia] development_order/_frames)")
 
 
 def _per_level(values: list, levels: int) -> list:
