@@ -11,11 +11,12 @@ import click
 from inflo.formats.scn import read_scn, write_scn
 from inflo.tools.common.cli import inflo_command
 
-from .dimorph import DimorphOptions, dimorph_scene
+from .dimorph import DimorphOptions, check_window_options, dimorph_scene
 from .sweep import write_sweep
 
 
-@inflo_command("dimorph", help="Set floret types and sizes by cones (thesis ch. 6).",
+@inflo_command("dimorph", help="Set floret types and sizes by cones (thesis ch. 6), and optionally each type's "
+                                "developmental window (--ray-lead, --ray/--disk-development-frames).",
                short_help="Type the florets of SCENE.scn (the default command).")
 @click.argument("scene", type=click.Path())
 @click.option("--alpha", type=float, required=True, help="Cone opening angle in degrees.")
@@ -31,8 +32,17 @@ from .sweep import write_sweep
 @click.option("--centre", type=click.Choice(["group", "top"]), default="group", show_default=True,
               help="Cone axis away from the floret's own head/umbellet centre, or its top-level group's.")
 @click.option("--half-angle", is_flag=True, help="Read --alpha as the cone's half-angle (eq. 6.1 as printed).")
+@click.option("--ray-lead", type=float, default=0.0, show_default=True, metavar="FRAMES",
+              help="Ray and small ray florets develop this many frames ahead of the disk florets: their "
+                   "frameStart and frameEnd move that much earlier (negative: later), rounded to whole "
+                   "frames, frameStart kept >= 0 and frameEnd >= frameStart + 1. Only placements with a "
+                   "window (ca, ta, ra, rba); o and i are untouched.")
+@click.option("--ray-development-frames", type=int, default=None, metavar="N",
+              help="Ray and small ray florets: frameEnd = frameStart + N (applied before --ray-lead).")
+@click.option("--disk-development-frames", type=int, default=None, metavar="N",
+              help="Disk florets: frameEnd = frameStart + N.")
 def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, disk_scale, centre,
-        half_angle, quiet, debug):
+        half_angle, ray_lead, ray_development_frames, disk_development_frames, quiet, debug):
     from inflo.formats.errors import InputError
 
     if len(thresholds) > 2:
@@ -43,14 +53,16 @@ def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_sca
     for name, v in (("--ray-scale", ray_scale), ("--disk-scale", disk_scale)):
         if not v > 0:
             raise InputError(f"{name} must be > 0, found {v}")
-    sc = read_scn(scene)
     opts = DimorphOptions(alpha, tuple(thresholds), ray_id, disk_id, small_ray_id, ray_scale, disk_scale,
-                          centre, half_angle)
+                          centre, half_angle, ray_lead, ray_development_frames, disk_development_frames)
+    check_window_options(opts)
+    sc = read_scn(scene)
     out, counts = dimorph_scene(sc, opts)
     write_scn(output, out)
     if not quiet:
-        click.echo(f"dimorph: {counts['ray']} ray, {counts['small_ray']} small ray, {counts['disk']} disk florets -> {output}",
-                   err=True)
+        windows = f", {counts['windows']} developmental windows set" if counts["windows"] else ""
+        click.echo(f"dimorph: {counts['ray']} ray, {counts['small_ray']} small ray, {counts['disk']} disk florets"
+                   f"{windows} -> {output}", err=True)
 
 
 @inflo_command("sweep", help="Ray floret counts vs head size (fig. 6.2) and vs cone angle (fig. 6.3): CSV + PNG.",
@@ -106,7 +118,7 @@ main = _SceneOrSubcommand(
     "dimorph", commands={"run": run, "sweep": sweep},
     params=[click.Option(["--quiet", "-q"], is_flag=True, help="No progress bar or messages (passed to the subcommand)."),
             click.Option(["--debug"], is_flag=True, help="Show a Python traceback on errors (passed to the subcommand).")],
-    help="Set floret types and sizes by cones (thesis ch. 6).\n\n"
+    help="Set floret types and sizes by cones (thesis ch. 6), and each type's developmental window.\n\n"
          "  dimorph SCENE.scn --alpha DEG -o OUT.scn   (same as: dimorph run ...)\n\n"
          "  dimorph sweep -o DIR                       (figs. 6.2-6.3 as CSV + PNG)",
     context_settings={"help_option_names": ["-h", "--help"]})

@@ -28,6 +28,12 @@ class DimorphOptions:
     ray_scale, disk_scale : factors applied to each placement's scale by fate; a small ray floret
         gets ``ray_scale * d_min / Th_b`` (size proportional to the available space, fig. 6.4c)
     centre : ``group`` (the floret's own head/umbellet) or ``top`` (its top-level group)
+    ray_lead : frames by which ray and small ray florets develop ahead of the others: their
+        ``frameStart`` and ``frameEnd`` both move that much earlier (negative: later), rounded to
+        whole frames, ``frameStart`` kept >= 0 and ``frameEnd`` >= ``frameStart + 1``
+    ray_development_frames, disk_development_frames : None, or N > 0: ``frameEnd = frameStart + N``
+        for ray and small ray (resp. disk) florets, before the lead is applied
+    Windows are changed only on placements that have one (``ca``, ``ta``, ``ra``, ``rba``).
     """
 
     alpha: float
@@ -39,6 +45,9 @@ class DimorphOptions:
     disk_scale: float = 1.0
     centre: str = "group"
     half_angle: bool = False
+    ray_lead: float = 0.0
+    ray_development_frames: int | None = None
+    disk_development_frames: int | None = None
 
 
 def group_centres(scene: Scene, how: str = "group") -> np.ndarray:
@@ -62,14 +71,50 @@ def group_centres(scene: Scene, how: str = "group") -> np.ndarray:
     return out
 
 
-def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
-    """A copy of ``scene`` with each placement's id, scale and ``#@ type`` set by its fate.
+WINDOW_KINDS = ("ca", "ta", "ra", "rba")
 
+
+def _round_frame(x: float) -> int:
+    return int(math.floor(x + 0.5))
+
+
+def shift_window(p, development_frames: int | None, lead: float) -> bool:
+    """Set ``p``'s developmental window in place (see :class:`DimorphOptions`); True if it has one."""
+    if p.kind not in WINDOW_KINDS or p.frame_start is None or p.frame_end is None:
+        return False
+    start, end = int(p.frame_start), int(p.frame_end)
+    if development_frames is not None:
+        end = start + int(development_frames)
+    if lead:
+        start, end = _round_frame(start - lead), _round_frame(end - lead)
+        start = max(start, 0)
+        end = max(end, start + 1)
+    p.frame_start, p.frame_end = start, end
+    return True
+
+
+def check_window_options(opts: DimorphOptions) -> None:
+    """InputError (one line) for a non-finite lead or a development window that is not > 0."""
+    if not math.isfinite(opts.ray_lead):
+        raise InputError(f"--ray-lead must be a finite number of frames, found {opts.ray_lead}")
+    for name, v in (("--ray-development-frames", opts.ray_development_frames),
+                    ("--disk-development-frames", opts.disk_development_frames)):
+        if v is not None and (isinstance(v, bool) or int(v) != v or v <= 0):
+            raise InputError(f"{name} must be an integer > 0, found {v}")
+
+
+def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
+    """A copy of ``scene`` with each placement's id, scale, ``#@ type`` and window set by its fate.
+
+    The scale is multiplied by the fate's factor (for ``rba:`` placements, whose SCN scale is a
+    factor on every RBA row's scale, it becomes that factor). Windows: see :class:`DimorphOptions`.
     Placement order (each floret's identity) is kept. Returns the new scene and counts
-    ``{"ray": N, "small_ray": M, "disk": K}`` plus ``d_min`` (n,) float64.
+    ``{"ray": N, "small_ray": M, "disk": K}``, ``windows`` (placements whose window was set) plus
+    ``d_min`` (n,) float64.
     """
     if not 0.0 < opts.alpha < 360.0:
         raise InputError(f"--alpha {opts.alpha} outside (0, 360) degrees")
+    check_window_options(opts)
     th = tuple(sorted(float(t) for t in opts.thresholds))
     if any(t < 0 or not math.isfinite(t) for t in th) or len(th) > 2:
         raise InputError(f"thresholds must be one or two finite numbers >= 0, found {opts.thresholds}")
@@ -82,6 +127,7 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
     fate = fates(dmin, th)
     small_id = opts.ray_id if opts.small_ray_id is None else opts.small_ray_id
     out = copy.deepcopy(scene)
+    windows = 0
     for k, p in enumerate(out.placements):
         f = int(fate[k])
         if f == FATE_RAY:
@@ -92,5 +138,11 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
             p.id, factor = opts.disk_id, opts.disk_scale
         p.scale = p.scale * factor
         p.type = TYPE_LABELS[f]
+        if f == FATE_DISK:
+            n_frames, lead = opts.disk_development_frames, 0.0
+        else:
+            n_frames, lead = opts.ray_development_frames, float(opts.ray_lead)
+        if (n_frames is not None or lead) and shift_window(p, n_frames, lead):
+            windows += 1
     counts = {TYPE_LABELS[c]: int(np.sum(fate == c)) for c in TYPE_LABELS}
-    return out, {**counts, "d_min": dmin}
+    return out, {**counts, "windows": windows, "d_min": dmin}
