@@ -240,6 +240,21 @@ class CanopyParams:
         animation/RBA sequence.
     sanity_check_every : int
         ``sanity check per frames``: exact intersection test every N frames; 0 never. 50.
+    max_substeps : int
+        ``max substeps``: a step that leaves crossing pairs or an edge outside the stretch bounds
+        is redone as two half steps, recursively, at most this deep (2**N substeps). 3.
+    stretch_bounds : tuple of 2 float
+        ``edge stretch bounds``: smallest and largest ratio of an edge's length to its rest length
+        a composed floret may show (0 < lo <= 1 <= hi). (0.5, 1.5).
+    relax_iterations : int
+        ``relax iterations``: internal-constraint sweeps of the florets a collision round moved,
+        between the rounds (0: none). 5.
+    emergence_scales : tuple of float
+        ``emergence scales``: sizes (fractions of its own, in (0, 1], decreasing) at which an
+        emerging floret is tried until one finds room. (1, 0.75, 0.5, 0.35, 0.25).
+    emergence_growth_frames : float
+        ``emergence growth frames``: frames over which a floret that emerged smaller grows back
+        to its own size (> 0). 10.
     output_frames_number : int or None
         ``output animation frames number``: write an OBJ every N frames (>= 1). None: not given.
     output_obj_skip : int or None
@@ -281,6 +296,11 @@ class CanopyParams:
     updates_per_frame: int = 1
     run_frames: int | None = None
     sanity_check_every: int = 50
+    max_substeps: int = 3
+    stretch_bounds: tuple = (0.5, 1.5)
+    relax_iterations: int = 5
+    emergence_scales: tuple = (1.0, 0.75, 0.5, 0.35, 0.25)
+    emergence_growth_frames: float = 10.0
     output_frames_number: int | None = None
     output_obj_skip: int | None = None
     lattice: LatticeParams = field(default_factory=LatticeParams)
@@ -304,6 +324,8 @@ class CanopyParams:
         for name in ("weights", "bending_stiffness", "distance_stiffness", "lines"):
             object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
         object.__setattr__(self, "scene_scale", tuple(float(v) for v in self.scene_scale))
+        object.__setattr__(self, "stretch_bounds", tuple(float(v) for v in self.stretch_bounds))
+        object.__setattr__(self, "emergence_scales", tuple(float(v) for v in self.emergence_scales))
 
     @property
     def output_every(self) -> int:
@@ -351,6 +373,11 @@ KNOWN_KEYS: tuple[str, ...] = (
     "updates per frame",
     "run for number of frames",
     "sanity check per frames",
+    "max substeps",
+    "edge stretch bounds",
+    "relax iterations",
+    "emergence scales",
+    "emergence growth frames",
     "output animation frames number",
     "output animation obj per frames",
     "lattice size multiply",
@@ -577,6 +604,28 @@ class _Reader:
             v["run_frames"] = self.count(key, value, n, 0)
         elif key == "sanity check per frames":
             v["sanity_check_every"] = self.count(key, value, n, 0)
+        elif key == "max substeps":
+            v["max_substeps"] = self.count(key, value, n, 0)
+        elif key == "edge stretch bounds":
+            lo, hi = self.floats(key, value, n, 2, positive=True)
+            if not (lo <= 1.0 <= hi) or not math.isfinite(hi):
+                raise self.err(n, f"two numbers lo <= 1 <= hi for '{key}'", shorten(value.strip()))
+            v["stretch_bounds"] = (lo, hi)
+        elif key == "relax iterations":
+            v["relax_iterations"] = self.count(key, value, n, 0)
+        elif key == "emergence scales":
+            toks = self.tokens(value)
+            if not toks:
+                raise self.err(n, f"one or more numbers in (0, 1] after '{key}:'", "nothing")
+            vals = [self.number(t, n, f"a number for '{key}'") for t in toks]
+            for t, x in zip(toks, vals):
+                if not 0.0 < x <= 1.0:
+                    raise self.err(n, f"numbers in (0, 1] for '{key}'", shorten(t))
+            if any(b >= a for a, b in zip(vals, vals[1:])):
+                raise self.err(n, f"decreasing numbers for '{key}'", shorten(value.strip()))
+            v["emergence_scales"] = tuple(vals)
+        elif key == "emergence growth frames":
+            (v["emergence_growth_frames"],) = self.floats(key, value, n, 1, positive=True)
         elif key == "output animation frames number":
             v["output_frames_number"] = self.count(key, value, n, 1)
         elif key == "output animation obj per frames":
@@ -828,6 +877,11 @@ def format_fcc(params: CanopyParams) -> str:
     opt("run for number of frames",
         None if p.run_frames is None else str(int(p.run_frames)), "all frames")
     add(f"sanity check per frames: {int(p.sanity_check_every)}")
+    add(f"max substeps: {int(p.max_substeps)}")
+    add(f"edge stretch bounds: {_num(p.stretch_bounds[0])} {_num(p.stretch_bounds[1])}")
+    add(f"relax iterations: {int(p.relax_iterations)}")
+    add("emergence scales: " + " ".join(_num(x) for x in p.emergence_scales))
+    add(f"emergence growth frames: {_num(p.emergence_growth_frames)}")
     opt("output animation frames number",
         None if p.output_frames_number is None else str(int(p.output_frames_number)), "not set")
     opt("output animation obj per frames",

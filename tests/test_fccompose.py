@@ -159,7 +159,7 @@ def test_rigid_body_animation_moves_the_floret(inputs, tmp_path):
         assert np.abs(mesh.vertices - expect).max() < 0.01  # rest values interpolate, positions do not
 
 
-def _rba_case(inputs, tmp_path, frames):
+def _rba_case(inputs, tmp_path, frames, extra=""):
     """Two rba: placements (0 and 1) of the test floret moved by ``frames`` (RbaFrame list)."""
     d = inputs["dir"]
     shutil.copytree(d / "anim", tmp_path / "anim")
@@ -168,7 +168,7 @@ def _rba_case(inputs, tmp_path, frames):
                                                  frame_start=0, frame_end=len(frames) - 1, material=k)
                                        for k in range(2)])
     write_rba_sequence(tmp_path / "rba", frames)
-    write_fcc_text(tmp_path / "rba.fcc", scene="rba.scn", extra="rigid body animation: 7 1 1 1 rba rba.scn\n")
+    write_fcc_text(tmp_path / "rba.fcc", scene="rba.scn", extra="rigid body animation: 7 1 1 1 rba rba.scn\n" + extra)
     return tmp_path / "rba.fcc"
 
 
@@ -206,7 +206,7 @@ def test_a_floret_with_no_room_waits_until_there_is_room(inputs, tmp_path):
     placement 0 moves away over frame 2, and placement 1 emerges then: every written frame is
     free of intersections (exact test), the log shows the wait, and --resume carries it."""
     frames = [_row([0], [0.0]), _row([0, 1], [0.0, 0.0]), _row([0, 1], [10.0, 0.0]), _row([0, 1], [10.0, 0.0])]
-    fcc = _rba_case(inputs, tmp_path, frames)
+    fcc = _rba_case(inputs, tmp_path, frames, "emergence scales: 1\n")  # no smaller tries
     out = tmp_path / "out"
     res = run_cli("fccompose", fcc, "-o", out, "-q")
     assert res.returncode == 0, res.stderr
@@ -246,11 +246,43 @@ def test_a_floret_with_no_room_waits_until_there_is_room(inputs, tmp_path):
 def test_a_floret_that_never_finds_room_is_reported(inputs, tmp_path):
     frames = [_row([0], [0.0]), _row([0, 1], [0.0, 0.0]), _row([0, 1], [0.0, 0.0])]
     out = tmp_path / "out"
-    res = run_cli("fccompose", _rba_case(inputs, tmp_path, frames), "-o", out)
+    res = run_cli("fccompose", _rba_case(inputs, tmp_path, frames, "emergence scales: 1\n"), "-o", out)
     assert res.returncode == 0, res.stderr
     assert "1 florets due to emerge found no room by frame 2 (placement indices 1)" in res.stderr
     assert [len(m.faces) for m in read_obj_sequence(out, same_topology=False)[1]] == [len(inputs["faces"])] * 3
     assert [int(r["florets_waiting"]) for r in read_log(out)] == [0, 1, 1]
+
+
+def test_a_floret_with_too_little_room_emerges_smaller_and_grows_back(inputs, tmp_path):
+    """Placement 1 is due at frame 1 so close to placement 0 that at its own size the two
+    intersect: it emerges on time at a smaller size (the first of the ``emergence scales`` that
+    fits), grows back to its own size over ``emergence growth frames``, collision-free all along,
+    every edge within the stretch bounds; nothing waits."""
+    tpl = opening_floret(N_FRAMES)[0]
+    u = 1 / 5 * (N_FRAMES - 1)  # placement 1's developmental time at frame 1 (window 0-5)
+    a = int(u)
+    pose = (1 - (u - a)) * tpl[a] + (u - a) * tpl[a + 1]
+    reach = float(np.hypot(pose[:, 0], pose[:, 2]).max())
+    d = 1.7 * reach  # the two overlap at their own size, not at 3/4 of it
+    frames = [_row([0], [0.0])] + [_row([0, 1], [0.0, d])] * 5
+    out = tmp_path / "out"
+    res = run_cli("fccompose", _rba_case(inputs, tmp_path, frames, "emergence growth frames: 3\n"), "-o", out)
+    assert res.returncode == 0, res.stderr
+    log = read_log(out)
+    assert [int(r["florets_present"]) for r in log] == [1, 2, 2, 2, 2, 2]
+    assert all(int(r["florets_waiting"]) == 0 for r in log)
+    assert [int(r["florets_smaller"]) for r in log][1:] == [1, 1, 1, 0, 0]
+    _, meshes = read_obj_sequence(out, same_topology=False)
+    for m in meshes:
+        assert len(intersecting_pairs(m.vertices, m.faces)) == 0
+    nv = len(inputs["frames"][0])
+    size = lambda v: float(np.ptp(v[:, 1]))  # noqa: E731 - floret height
+    own = size(meshes[1].vertices[:nv])  # floret 0 at frame 1, same stage
+    assert size(meshes[1].vertices[nv:]) < 0.9 * own  # emerged smaller
+    # grown back: its base (fixed on the receptacle) is placed at its own size again
+    base = inputs["fixed"]
+    assert np.abs(meshes[-1].vertices[nv + base] - meshes[-1].vertices[base] - [d, 0, 0]).max() < 1e-5
+    assert np.abs(meshes[1].vertices[nv + base] - meshes[1].vertices[base] - [d, 0, 0]).max() > 0.01
 
 
 def test_organ_materials_of_the_template_are_kept(inputs, tmp_path):

@@ -93,6 +93,11 @@ scene scale factor: 1, 2, 3
 updates per frame: 2
 run for number of frames: 120
 sanity check per frames: 10
+max substeps: 2
+edge stretch bounds: 0.6 1.4
+relax iterations: 3
+emergence scales: 1 0.5 0.2
+emergence growth frames: 4.5
 output animation frames number: 5
 output animation obj per frames: 4
 lattice size multiply: 1.1, 1.2, 1.3
@@ -143,6 +148,11 @@ def test_every_key_of_the_list(write, tmp_path):
         updates_per_frame=2,
         run_frames=120,
         sanity_check_every=10,
+        max_substeps=2,
+        stretch_bounds=(0.6, 1.4),
+        relax_iterations=3,
+        emergence_scales=(1, 0.5, 0.2),
+        emergence_growth_frames=4.5,
         output_frames_number=5,
         output_obj_skip=4,
         lattice=LatticeParams((1.1, 1.2, 1.3), True, (-1, -2, -3), (10, 20, 30), (2, 4, 6), False),
@@ -180,7 +190,7 @@ def test_every_key_of_the_list(write, tmp_path):
     assert p.stiffness(1) == (0.5, 0.3)
     assert p.entry(2).rba_folder.resolved == tmp_path / "rba"
     assert p.entry(99) is None
-    assert p.weights[0].line == 27
+    assert p.weights[0].line == 32
 
 
 def test_defaults_of_an_empty_file(write):
@@ -295,6 +305,10 @@ MALFORMED = [
     ("solver iterations: 5.0\n", 1, "an integer for 'solver iterations'"),
     ("solver iterations: 5f\n", 1, "an integer for 'solver iterations'"),
     ("updates per frame: 0\n", 1, "an integer >= 1"),
+    ("edge stretch bounds: 1.2 1.5\n", 1, "two numbers lo <= 1 <= hi"),
+    ("emergence scales: 1 0.5 0.7\n", 1, "decreasing numbers"),
+    ("emergence scales: 1.5\n", 1, "numbers in (0, 1]"),
+    ("emergence growth frames: 0\n", 1, "a number > 0"),
     ("run for number of frames: -3\n", 1, "an integer >= 0"),
     ("sanity check per frames: x\n", 1, "an integer"),
     ("output animation frames number: 0\n", 1, "an integer >= 1"),

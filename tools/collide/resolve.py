@@ -26,7 +26,8 @@ from .broad import BoxGrid, box_pairs, edge_boxes, triangle_boxes, vertex_boxes
 from .ccd import edge_edge_ccd, vertex_triangle_ccd
 from .response import project_collision_constraints
 
-__all__ = ["Contacts", "CollisionResult", "detect_collisions", "resolve_collisions", "default_tolerance"]
+__all__ = ["Contacts", "CollisionResult", "detect_collisions", "resolve_collisions", "default_tolerance",
+           "retreat_parts", "RetreatResult"]
 
 KIND_VT = 0
 KIND_EE = 1
@@ -395,6 +396,10 @@ class _StepBroadPhase:
         vb_m = vertex_boxes(x0[mv], x1[mv], pad)
         tb_m = triangle_boxes(x0, x1, tri[mt], pad)
         eb_m = edge_boxes(x0, x1, edges[me], pad)
+        if max(_box_stats(vb_m, tb_m, eb_m)[2], 0.0) > 64.0 * self.cell:
+            # a response moved something far (boxes of many cells): the cell-based grids would
+            # take absurd memory; pair the active elements afresh with box_pairs' own cell guard
+            return _candidates(x0, x1, tri, edges, pad, self.cell, active)
         # the active elements are among the moved ones: their boxes by position in mv/mt/me
         vb_a = vb_m[np.searchsorted(mv, av)]
         tb_a = tb_m[np.searchsorted(mt, at)]
@@ -544,12 +549,20 @@ class CollisionResult:
     remaining: Contacts = field(default_factory=Contacts.empty)
     reverted: int = 0
     stats: dict = field(default_factory=dict)
+    relaxed: int = 0
+    """rounds whose collision response was followed by a relaxation of the internal constraints"""
+    retreated: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    """parts the ``"parts"`` fallback moved back (:func:`retreat_parts`; fccompose: florets)"""
+    retreat_rounds: int = 0
+    whole_step: bool = False
 
 
 def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarray,
                        tri_indices: np.ndarray, edge_indices: np.ndarray, *, thickness: float,
                        stiffness: float = 1.0, iterations: int = 10, max_retries: int = 20,
-                       tolerance: float | None = None, cell_size: float | None = None) -> CollisionResult:
+                       tolerance: float | None = None, cell_size: float | None = None,
+                       relax=None, relax_rounds: int | None = None,
+                       fallback: str = "vertices", parts=None) -> CollisionResult:
     """Move ``x1`` (in place) until the step from ``x0`` is collision-free (Alg. 1 lines 10-20).
 
     Parameters
@@ -575,11 +588,35 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         Inside-test tolerance; None: :func:`default_tolerance`.
     cell_size : float or None
         Broad-phase cell size.
+    relax : callable or None
+        ``relax(x1, moved)``: called after the collision constraints of a round were projected,
+        with ``moved`` the (n,) bool mask of the vertices they moved; it re-solves the internal
+        constraints of what they moved, in place (the collision and internal constraints are then
+        solved together, as in Alg. 1, rather than the collision response having the last word on
+        the florets' shape). The next round's detection checks what it moved.
+    relax_rounds : int or None
+        Rounds that call ``relax`` (the first ones); the later rounds are the plain collision
+        response, so that the loop converges where the two disagree. None: half the rounds.
+    fallback : str
+        What to do with pairs still crossing after the last round: ``"vertices"`` puts their
+        vertices back to ``x0`` (the module doc); ``"none"`` leaves ``x1`` as the last round left
+        it and only reports them in ``remaining`` (the caller resolves them, e.g. by
+        :func:`retreat_parts`); ``"parts"``: :func:`retreat_parts` with ``parts``, on this step's
+        broad phase (incremental, as the rounds).
+    parts : dict or None
+        For ``fallback="parts"``: ``vertex_part``, ``n_parts``, ``carried`` (a callable giving the
+        carried positions, called only when needed), ``misshapen`` (callable or None: parts out of
+        shape are moved back too, also when no pair is left) and ``crossing`` (bool: also move back
+        the parts of pairs still crossing; False leaves those to the caller, e.g. to substep).
 
     Returns
     -------
     CollisionResult
     """
+    if fallback not in ("vertices", "none", "parts"):
+        raise ValueError(f"fallback must be 'vertices', 'none' or 'parts', not {fallback!r}")
+    if relax_rounds is None:
+        relax_rounds = (max_retries + 1) // 2
     tol = default_tolerance(x0, thickness) if tolerance is None else float(tolerance)
     h = max(float(thickness), 2.0 * tol)
     res = CollisionResult()
@@ -604,8 +641,7 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         if r == 0:
             res.stats = stats
         if len(found) == 0:
-            res.constraints = len(constraints)
-            return res
+            break
         if r == max_retries:
             break
         if best is None or len(found) < best:
@@ -619,12 +655,25 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         project_collision_constraints(x1, w, constraints.indices, constraints.coef,
                                       constraints.normal, h, float(stiffness),
                                       int(iterations))
+        if relax is not None and r < relax_rounds:
+            relax(x1, _changed(x1, before))
+            res.relaxed += 1
+            # and the collision constraints again, so that the round ends on them
+            project_collision_constraints(x1, w, constraints.indices, constraints.coef,
+                                          constraints.normal, h, float(stiffness),
+                                          int(iterations))
         moved = _changed(x1, before)
         # still-crossing pairs whose vertices did not move are re-found too
         moved[found.indices.ravel()] = True
         active = moved
     res.constraints = len(constraints)
     res.remaining = found
+    if fallback == "parts":
+        _retreat_fallback(res, x0, x1, tri, edges, tol, parts,
+                          lambda xs, act: _narrow(x0, xs, tri, edges, *broad.again(xs, act), tol)[0])
+        return res
+    if fallback == "none" or len(found) == 0:
+        return res
     # fallback: put the vertices of the pairs still crossing back to their start positions
     reverted = np.zeros(len(x1), np.bool_)
     for _ in range(10):
@@ -641,3 +690,195 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         reverted[:] = True
     res.reverted = int(np.count_nonzero(reverted))
     return res
+
+
+# --------------------------------------------------------------------------------------------------
+# The fallback that keeps parts whole
+# --------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class RetreatResult:
+    """What :func:`retreat_parts` did.
+
+    Attributes
+    ----------
+    fraction : (n_parts,) float64
+        How far along its own motion each part ended (1: where the solve put it; 0: at ``x0``).
+    vertices : int
+        Vertices of the parts that were moved back.
+    rounds : int
+        Detection rounds run.
+    whole_step : bool
+        Every vertex was put back to ``x0`` (the parts kept crossing).
+    """
+
+    fraction: np.ndarray
+    vertices: int = 0
+    rounds: int = 0
+    whole_step: bool = False
+
+
+def _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect) -> None:
+    """``fallback="parts"``: the florets of pairs still crossing are moved back along their own
+    motion (:func:`retreat_parts`, down to ``x0`` if need be: the step must end collision-free);
+    then the florets out of shape are put on their carried start-of-step shape where that
+    crosses nothing (:func:`reshape_parts`; elsewhere they keep the collision-free shape the solve
+    gave them: a floret frozen at ``x0`` while its rest values grow would tear later)."""
+    vp = np.asarray(parts["vertex_part"])
+    n_parts = int(parts["n_parts"])
+    misshapen = parts.get("misshapen")
+    carried = None
+    retreated = np.zeros(n_parts, bool)
+    if len(res.remaining):
+        if not parts.get("crossing", True):
+            return  # the caller redoes the step
+        start = np.zeros(n_parts, bool)
+        start[np.unique(vp[res.remaining.indices.ravel()])] = True
+        carried = parts["carried"]()
+        ret = retreat_parts(x0, x1, tri, edges, vp, n_parts, start, tolerance=tol, carried=carried,
+                            detect=detect)
+        retreated |= ret.fraction < 1.0
+        res.reverted += ret.vertices
+        res.retreat_rounds += ret.rounds
+        res.whole_step = ret.whole_step
+        if ret.whole_step:
+            res.retreated = np.arange(n_parts)
+            return
+    if misshapen is not None:
+        bad = np.asarray(misshapen(x1), dtype=bool) & ~retreated
+        if bad.any():
+            if carried is None:
+                carried = parts["carried"]()
+            moved, rounds = reshape_parts(x0, x1, carried, vp, bad, detect)
+            retreated |= moved
+            res.retreat_rounds += rounds
+            res.reverted += int(np.count_nonzero(moved[vp]))
+    res.retreated = np.nonzero(retreated)[0]
+
+
+def reshape_parts(x0, x1, carried, vertex_part, parts, detect, max_rounds: int = 8):
+    """Put the (n_parts,) bool ``parts`` (out of shape) on their ``carried`` positions (their
+    start-of-step shape carried by their own rigid motion) where that crosses nothing; those of a
+    pair still crossing go back to where they were (``x1`` on entry is collision-free, so this
+    ends). Returns ((n_parts,) bool: the parts now on ``carried``, detection rounds)."""
+    vp = np.asarray(vertex_part)
+    keep = x1.copy()
+    on = np.asarray(parts, dtype=bool).copy()
+    changed = on[vp]
+    x1[changed] = carried[changed]
+    rounds = 0
+    while changed.any() and rounds < max_rounds:
+        found = detect(x1, changed)
+        rounds += 1
+        if not len(found):
+            return on, rounds
+        back = np.zeros_like(on)
+        back[np.unique(vp[found.indices.ravel()])] = True
+        back &= on
+        if not back.any():  # crossing parts all unchanged: cannot be (x1 was free); give up safely
+            break
+        on &= ~back
+        changed = back[vp]
+        x1[changed] = keep[changed]
+    if changed.any():  # rounds spent: every part back where it was
+        x1[on[vp]] = keep[on[vp]]
+        on[:] = False
+    return on, rounds
+
+
+def retreat_parts(x0: np.ndarray, x1: np.ndarray, tri_indices: np.ndarray, edge_indices: np.ndarray,
+                  vertex_part: np.ndarray, n_parts: int, start: np.ndarray, *, tolerance: float,
+                  cell_size: float | None = None, misshapen=None, carried: np.ndarray | None = None,
+                  max_rounds: int = 16, detect=None) -> RetreatResult:
+    """Move whole parts back along their own motion until the step from ``x0`` is collision-free.
+
+    The fallback of the collision response that keeps every part (floret) whole: instead of putting
+    single vertices back to the start of the step, which strands them away from the rest of their
+    floret (and, for a floret the RBA motion carries, tears it), each part of ``start`` ((n_parts,)
+    bool) is moved back towards ``carried`` (its start-of-step shape carried by its own rigid motion
+    over the step: ``x0`` when not given) as ``carried + s (x1 - carried)``, ``s`` halved every
+    round (1/2, 1/4, 1/8, then 0), and as a last resort to ``x0`` itself, which is collision-free.
+    The parts of any pair still crossing after a round are taken back further in the next. Every
+    position tried is a blend of two whole shapes of the part, so the part stays whole; and a part
+    that keeps up with its rigid motion (``carried``) keeps its base where its placement puts it
+    (a part left at ``x0`` lags one step behind it).
+
+    Parameters
+    ----------
+    x0, x1 : (n, 3) float64
+        Collision-free start of the step, and the positions the solve reached (moved in place).
+    tri_indices, edge_indices : the mesh (as :func:`resolve_collisions`).
+    vertex_part : (n,) int32
+        Part of every vertex.
+    n_parts : int
+    start : (n_parts,) bool
+        Parts to move back first (those of the pairs still crossing; parts out of shape).
+    tolerance, cell_size : as :func:`detect_collisions`.
+    misshapen : callable or None
+        ``misshapen(x1) -> (n_parts,) bool``: parts out of shape; those among the moved-back ones
+        go straight to ``carried``.
+    carried : (n, 3) float64 or None
+        ``x0`` carried rigidly by each part's motion over the step (None: ``x0``).
+    max_rounds : int
+        Rounds before the whole step is put back (``x1[:] = x0``).
+    detect : callable or None
+        ``detect(x1, active) -> Contacts`` of the pairs with an active vertex crossing in the step
+        from ``x0`` to ``x1`` (e.g. the step's incremental broad phase); None:
+        :func:`detect_collisions`.
+
+    Returns
+    -------
+    RetreatResult
+        ``fraction``: 1 where the solve put the part, in (0, 1) a blend, 0 at ``carried``, -1 at
+        ``x0``.
+    """
+    x0 = np.ascontiguousarray(x0, dtype=np.float64)
+    base = x0 if carried is None else np.ascontiguousarray(carried, dtype=np.float64)
+    last = 0.0 if carried is None else -1.0  # the fraction of the last resort (x0)
+    vp = np.asarray(vertex_part)
+    target = x1.copy()
+    frac = np.ones(n_parts)
+    todo = np.asarray(start, dtype=bool).copy()
+    out = RetreatResult(frac)
+    straight = np.zeros(n_parts, bool)
+    if misshapen is not None:
+        straight = np.asarray(misshapen(x1), dtype=bool) & todo
+    for _ in range(max_rounds):
+        if not todo.any():
+            break
+        f = frac[todo]
+        nxt = np.where(f <= 0.125 + 1e-12, 0.0, 0.5 * f)
+        nxt = np.where(straight[todo] & (f > 0.0), 0.0, nxt)
+        nxt = np.where(f <= 0.0, last, nxt)
+        frac[todo] = nxt
+        changed = todo[vp]
+        s = frac[vp[changed]][:, None]
+        at_x0 = s[:, 0] < 0.0
+        blend = base[changed] + np.maximum(s, 0.0) * (target[changed] - base[changed])
+        blend[at_x0] = x0[changed][at_x0]
+        x1[changed] = blend
+        if detect is None:
+            found, _ = detect_collisions(x0, x1, tri_indices, edge_indices, tolerance=tolerance,
+                                         cell_size=cell_size, active=changed)
+        else:
+            found = detect(x1, changed)
+        out.rounds += 1
+        todo = np.zeros(n_parts, bool)
+        if len(found):
+            todo[np.unique(vp[found.indices.ravel()])] = True
+        straight[:] = False
+        if misshapen is not None:
+            bad = np.asarray(misshapen(x1), dtype=bool) & (frac < 1.0) & (frac > 0.0)
+            straight |= bad
+            todo |= bad
+        if todo.any() and (frac[todo] <= last).all():
+            # every part named is at x0 already and still crossing (rounding at contact): only
+            # putting back the whole step is certain (x0 is collision-free)
+            break
+    if todo.any():  # rounds exhausted, or nothing left to give way
+        x1[:] = x0
+        frac[:] = last
+        out.whole_step = True
+    out.vertices = int(np.count_nonzero(frac[vp] < 1.0))
+    return out

@@ -58,13 +58,16 @@ from inflo.formats.errors import InputError
 from inflo.formats.fcc import CanopyParams, check_references
 from inflo.formats.obj import ObjMesh, write_obj
 from inflo.tools.collide.broad import lattice_cell_size, triangle_boxes
-from inflo.tools.collide.resolve import default_tolerance, resolve_collisions
+from inflo.tools.collide.resolve import CollisionResult, default_tolerance, resolve_collisions
 from inflo.tools.collide.tritri import intersecting_pairs, intersecting_pairs_with
 from inflo.tools.pbd.solver import (
     bending_residual,
     colour_constraints,
     distance_residual,
+    edge_stretch_range,
     overstretched_edges,
+    parts_out_of_bounds,
+    project_internal_of_parts,
     project_bending_constraints_coloured,
     project_distance_constraints_coloured,
     project_internal_by_part,
@@ -72,10 +75,14 @@ from inflo.tools.pbd.solver import (
 )
 
 from .log import FrameLog, read_log, write_log
-from .model import Model, build_model, predict, rest_values, template_positions
+from .model import Model, build_model, carry, predict, rest_values, template_positions
 
 __all__ = ["ComposeResult", "CollisionError", "InitialIntersectionError", "SimulationDiverged", "compose_canopy",
            "Simulation"]
+
+
+#: collision rounds of a step followed by a relaxation of the florets they moved (the first ones)
+RELAX_ROUNDS = 3
 
 
 class InitialIntersectionError(InputError):
@@ -165,7 +172,11 @@ class Simulation:
         if self.edge_parts is None or self.hinge_parts is None:  # not grouped by floret: one part
             self.edge_parts = np.array([0, len(model.edge_indices)], np.int64)
             self.hinge_parts = np.array([0, len(model.hinge_indices)], np.int64)
+        self.one_part = len(self.edge_parts) - 1 != nf
         self.sweeps = np.zeros(len(self.edge_parts) - 1, np.int64)
+        # emergence at a smaller size (the module doc): per floret the size it emerged at and when
+        self.emerge_scale = np.ones(nf)
+        self.emerge_frame = np.zeros(nf)
         self.set_born(model.floret_birth <= 0)
         self._sched_frame = None
         self._sched = None
@@ -184,6 +195,7 @@ class Simulation:
             self.vertex_ids = None
             self.tri_local = m.tri_indices
             self.edge_local = m.edge_indices
+            self.edge_on = None
             return
         self.tri_on = self.born[m.tri_floret]
         self.tri_active_ids = np.nonzero(self.tri_on)[0].astype(np.int32)
@@ -194,6 +206,7 @@ class Simulation:
         local[self.vertex_ids] = np.arange(len(self.vertex_ids), dtype=np.int32)
         e_on = self.born[m.vertex_floret[m.edge_indices[:, 0]]]
         self.tri_local = np.ascontiguousarray(local[self.tri_active])
+        self.edge_on = e_on
         self.edge_local = np.ascontiguousarray(local[m.edge_indices[e_on]])
 
     def global_tris(self, pairs: np.ndarray) -> np.ndarray:
@@ -207,37 +220,80 @@ class Simulation:
     def emerge(self, x: np.ndarray, frame: float) -> tuple[list, list]:
         """Let the florets due by ``frame`` emerge where they intersect nothing (module doc).
 
-        Returns (the florets that emerged, those still waiting), placement indices.
+        A due floret is tried at each of the ``emergence scales`` in turn (its own size first):
+        the first size at which it intersects nothing is the size it emerges at, and it grows back
+        to its own size over ``emergence growth frames`` frames, into the room it gets (the
+        collision response keeps it there). ``x`` is updated in place for florets that emerged
+        smaller. Returns (the florets that emerged, those still waiting), placement indices.
         """
         m = self.model
         due = ~self.born & (m.floret_birth <= frame + 1e-9)
         if not due.any():
             return [], []
         cand = np.nonzero(due)[0]
-        ids = np.nonzero((self.born | due)[m.tri_floret])[0]
-        which = np.nonzero(due[m.tri_floret[ids]])[0]
-        pairs = intersecting_pairs_with(x, m.tri_indices[ids], which, cell_size=self._cell(x))
-        fl = m.tri_floret[ids[pairs]] if len(pairs) else np.zeros((0, 2), np.int32)
-        blocked_by: dict = {}
-        for a, b in fl.tolist():
-            blocked_by.setdefault(a, set()).add(b)
-            blocked_by.setdefault(b, set()).add(a)
         born = self.born.copy()
-        out, waiting = [], []
-        for c in cand.tolist():
-            others = blocked_by.get(c, ())
-            if c in others or any(born[o] for o in others):  # self-intersecting, or no room
-                waiting.append(c)
-                continue
-            born[c] = True
-            out.append(c)
+        out: list = []
+        for size in self.params.emergence_scales:
+            if not len(cand):
+                break
+            if size < 1.0:
+                self._pose(x, cand, frame, size)
+            ids = np.nonzero((born | due)[m.tri_floret])[0]
+            which = np.nonzero(due[m.tri_floret[ids]])[0]
+            pairs = intersecting_pairs_with(x, m.tri_indices[ids], which, cell_size=self._cell(x))
+            fl = m.tri_floret[ids[pairs]] if len(pairs) else np.zeros((0, 2), np.int32)
+            blocked_by: dict = {}
+            for a, b in fl.tolist():
+                blocked_by.setdefault(a, set()).add(b)
+                blocked_by.setdefault(b, set()).add(a)
+            left = []
+            for c in cand.tolist():
+                others = blocked_by.get(c, ())
+                if c in others or any(born[o] for o in others):  # self-intersecting, or no room
+                    left.append(c)
+                    continue
+                born[c] = True
+                due[c] = False
+                out.append(c)
+                if size < 1.0:
+                    self.emerge_scale[c] = size
+                    self.emerge_frame[c] = frame
+            cand = np.array(left, np.int64)
+            if size < 1.0 and len(cand):
+                self._pose(x, cand, frame, 1.0)  # still waiting: back at their own size
         if out:
+            self._sched_frame = None
             self.set_born(born)
-        return out, waiting
+            if (self.emerge_scale[out] < 1.0).any():
+                self.update_rest(frame)  # the rest values of the smaller florets' size
+        return out, cand.tolist()
+
+    def _pose(self, x: np.ndarray, florets, frame: float, size: float) -> None:
+        """Put the vertices of ``florets`` on their templates at ``frame``, scaled by ``size``."""
+        m = self.model
+        ba, bb, al, mats = self.schedule(frame)
+        mats = mats.copy()
+        mats[florets, :, :3] *= size
+        off = m.floret_vertex_offset
+        verts = np.concatenate([np.arange(off[f], off[f + 1]) for f in florets]).astype(np.int32)
+        template_positions(m.template_x, m.vertex_floret, off, ba, bb, al, mats, verts, x)
+
+    def size_factor(self, frame: float) -> np.ndarray:
+        """(nf,) the size of each floret relative to its own at ``frame``: 1, or growing linearly
+        from the size it emerged at to 1 over ``emergence growth frames``."""
+        s0 = self.emerge_scale
+        g = s0 + (1.0 - s0) * (frame - self.emerge_frame) / float(self.params.emergence_growth_frames)
+        return np.clip(np.where(s0 < 1.0, g, 1.0), 0.0, 1.0)
 
     def schedule(self, frame: float):
+        """:meth:`.model.Model.schedule` at ``frame``, each floret's placement scaled by
+        :meth:`size_factor` (about its base: the floret's local origin)."""
         if self._sched_frame != frame:
-            self._sched = self.model.schedule(frame)
+            ba, bb, al, mats = self.model.schedule(frame)
+            if (self.emerge_scale < 1.0).any():
+                mats = mats.copy()
+                mats[:, :, :3] *= self.size_factor(frame)[:, None, None]
+            self._sched = (ba, bb, al, mats)
             self._sched_frame = frame
         return self._sched
 
@@ -279,8 +335,48 @@ class Simulation:
                 f"response can resolve; give them room: smaller florets, a larger spacing, more "
                 f"updates per frame); frames up to {k - 1} are complete")
 
-    def step(self, x: np.ndarray, frame_from: float, frame_to: float, timing: dict):
-        """One simulation step from ``frame_from`` to ``frame_to``; returns (new x, CollisionResult)."""
+    @property
+    def stretch_floor(self) -> float:
+        """Rest length below which an edge's stretch is not measured: the collision thickness h
+        (the response pushes apart by h, so an edge shorter than h cannot keep its length; such
+        edges are the collapsed tips of buds and nearly coincident seams)."""
+        return max(float(self.params.spacing), float(self.converged_below or 0.0) * 1e3, 1e-300)
+
+    def stretch_range(self, x: np.ndarray) -> tuple[float, float]:
+        """(smallest, largest) edge length / rest length of the present florets (log columns)."""
+        m = self.model
+        if self.edge_on is None:
+            return edge_stretch_range(x, m.edge_indices, self.edge_rest_length, self.stretch_floor)
+        return edge_stretch_range(x, m.edge_indices[self.edge_on], self.edge_rest_length[self.edge_on],
+                                  self.stretch_floor)
+
+    def step(self, x: np.ndarray, frame_from: float, frame_to: float, timing: dict, depth: int = 0):
+        """One simulation step from ``frame_from`` to ``frame_to``; returns (new x, CollisionResult).
+
+        A step after which pairs still cross is redone as two half steps (recursively, ``max
+        substeps`` deep). Where the deepest half step still leaves pairs crossing, and wherever a
+        floret ends a step with an edge outside the ``edge stretch bounds``, the florets concerned
+        are moved back along their own motion (:func:`inflo.tools.collide.retreat_parts`), whole:
+        a floret with no room to open stays as open as it was (carried by its placement) until
+        its neighbours give it room.
+        """
+        last = depth >= self.params.max_substeps
+        xp, res = self._attempt(x, frame_from, frame_to, timing, retreat_crossing=last)
+        if len(res.remaining) and not last:
+            timing["substeps"] = timing.get("substeps", 0) + 1
+            mid = 0.5 * (frame_from + frame_to)
+            xm, r1 = self.step(x, frame_from, mid, timing, depth + 1)
+            xp, r2 = self.step(xm, mid, frame_to, timing, depth + 1)
+            return xp, _merged(res, r1, r2)
+        if len(res.remaining) and self.vertex_ids is not None:
+            res.remaining.indices = self.vertex_ids[res.remaining.indices]
+        return xp, res
+
+    def _attempt(self, x: np.ndarray, frame_from: float, frame_to: float, timing: dict,
+                 retreat_crossing: bool = True):
+        """Prediction, internal constraints and collision response of one step, with the
+        whole-floret fallback for florets out of the stretch bounds (and, ``retreat_crossing``,
+        for those of pairs still crossing). Returns (new x, CollisionResult)."""
         m = self.model
         p = self.params
         t0 = time.perf_counter()
@@ -323,21 +419,87 @@ class Simulation:
         t2 = time.perf_counter()
         kw = dict(thickness=p.spacing, stiffness=p.k_collision, iterations=p.collision_iterations,
                   max_retries=p.max_collision_retries, tolerance=default_tolerance(x, p.spacing),
-                  cell_size=self._cell(x))
-        if self.vertex_ids is None:
-            res = resolve_collisions(x, xp, w, m.tri_indices, m.edge_indices, **kw)
+                  cell_size=self._cell(x), fallback="parts")
+        v = self.vertex_ids
+        nf = len(m.florets)
+        lo, hi = p.stretch_bounds
+        # checked with a 1 % margin, so that the written (rounded) frame is within the bounds too
+        lo, hi = lo * 1.01, hi * 0.99
+        floor = self.stretch_floor
+        if v is None:
+            x0s, x1s, tri, edges, vp = x, xp, m.tri_indices, m.edge_indices, m.vertex_floret
+            rest = self.edge_rest_length
         else:  # florets yet to emerge take no part: solve the present ones' system, then scatter
-            v = self.vertex_ids
-            x1 = xp[v]
-            res = resolve_collisions(x[v], x1, w[v], self.tri_local, self.edge_local, **kw)
-            xp[v] = x1
-            if len(res.remaining):
-                res.remaining.indices = v[res.remaining.indices]
+            x0s, x1s, tri, edges = x[v], xp[v], self.tri_local, self.edge_local
+            vp = m.vertex_floret[v]
+            rest = self.edge_rest_length[self.edge_on]
+        relax = None
+        if p.relax_iterations > 0 and p.solver_iterations > 0 and not self.coloured:
+            relax = self._relaxer(xp, v, vp, int(p.relax_iterations), timing)
+
+        def misshapen(xs):
+            return parts_out_of_bounds(xs, edges, rest, vp, nf, lo, hi, floor)
+
+        def carried():
+            out = np.empty_like(x0s)
+            carry(x0s, vp, delta, out)
+            return out
+
+        parts = dict(vertex_part=vp, n_parts=nf, misshapen=misshapen, carried=carried,
+                     crossing=retreat_crossing)
+        res = resolve_collisions(x0s, x1s, w if v is None else w[v], tri, edges, relax=relax,
+                                 relax_rounds=RELAX_ROUNDS, parts=parts, **kw)
+        if v is not None:
+            xp[v] = x1s
+        if res.whole_step:
+            timing["whole_steps"] = timing.get("whole_steps", 0) + 1
         t3 = time.perf_counter()
         timing["rest"] = timing.get("rest", 0.0) + (t1 - t0)
         timing["internal"] = timing.get("internal", 0.0) + (t2 - t1)
         timing["collide"] = timing.get("collide", 0.0) + (t3 - t2)
         return xp, res
+
+    def _relaxer(self, xp: np.ndarray, v, vp: np.ndarray, iterations: int, timing: dict):
+        """``relax(x1, moved)`` for :func:`resolve_collisions`: a few internal-constraint sweeps
+        of the florets whose vertices the collision round moved (``x1``: the collision system's
+        positions, the present florets' vertices when ``v`` is not None)."""
+        m = self.model
+        w = m.vertex_inv_mass
+
+        def relax(x1, moved):
+            fl = np.unique(vp[moved])
+            if not len(fl):
+                return
+            parts = np.zeros(1, np.int64) if self.one_part else fl.astype(np.int64)
+            xg = x1
+            if v is not None:
+                xp[v] = x1
+                xg = xp
+            n = project_internal_of_parts(xg, w, m.edge_indices, self.edge_rest_length, m.edge_stiffness,
+                                          self.edge_parts, m.hinge_indices, self.hinge_rest_angle,
+                                          m.hinge_stiffness, self.hinge_parts, parts, iterations,
+                                          float(self.converged_below))
+            timing["relax_sweeps"] = timing.get("relax_sweeps", 0) + int(n)
+            if v is not None:
+                x1[:] = xp[v]
+
+        return relax
+
+
+def _merged(failed: CollisionResult, a: CollisionResult, b: CollisionResult) -> CollisionResult:
+    """The result of a step redone as two half steps ``a`` and ``b`` (``failed``: the first try,
+    whose detection work counts too)."""
+    out = CollisionResult()
+    out.rounds = failed.rounds + a.rounds + b.rounds
+    out.found = list(failed.found[:1]) + list(a.found) + list(b.found)
+    out.constraints = a.constraints + b.constraints
+    out.reverted = a.reverted + b.reverted
+    out.relaxed = failed.relaxed + a.relaxed + b.relaxed
+    out.stats = dict(failed.stats)
+    rem = [r for r in (a.remaining, b.remaining) if len(r)]
+    out.remaining = rem[0] if len(rem) == 1 else (rem[0].concat(rem[1]) if rem else a.remaining)
+    out.retreated = np.union1d(a.retreated, b.retreated)
+    return out
 
 
 def _fingerprint(params: CanopyParams, model: Model) -> str:
@@ -374,7 +536,8 @@ def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndar
     return path
 
 
-def _save_state(out: Path, x: np.ndarray, k: int, fingerprint: str, born: np.ndarray | None = None) -> None:
+def _save_state(out: Path, x: np.ndarray, k: int, fingerprint: str, born: np.ndarray | None = None,
+                sim: "Simulation | None" = None) -> None:
     sdir = out / "state"
     sdir.mkdir(exist_ok=True)
     buf = io.BytesIO()
@@ -383,6 +546,10 @@ def _save_state(out: Path, x: np.ndarray, k: int, fingerprint: str, born: np.nda
     info = {"fingerprint": fingerprint, "frame": k}
     if born is not None and not born.all():
         info["not_emerged"] = np.nonzero(~born)[0].tolist()
+    if sim is not None and (sim.emerge_scale < 1.0).any():
+        small = np.nonzero(sim.emerge_scale < 1.0)[0]
+        info["emerged_smaller"] = [[int(i), float(sim.emerge_scale[i]), float(sim.emerge_frame[i])]
+                                   for i in small]
     write_text_atomic(sdir / "run.json", json.dumps(info) + "\n")
     for old in sorted(sdir.glob("frame_*.npy")):
         if old.name != frame_name(k, "frame_", ".npy", 4):
@@ -406,7 +573,7 @@ def _load_resume(out: Path, fingerprint: str, n_vertices: int):
     x = np.load(st, allow_pickle=False)
     if x.shape != (n_vertices, 3):
         raise InputError(f"{st}: expected positions of {n_vertices} vertices, found shape {x.shape}")
-    return k, x, [int(i) for i in info.get("not_emerged", [])]
+    return k, x, [int(i) for i in info.get("not_emerged", [])], info.get("emerged_smaller", [])
 
 
 def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, strict: bool = False,
@@ -457,10 +624,13 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
     if resume:
         start = _load_resume(out, fp, model.n_vertices)
     if start is not None:
-        k0, x, not_emerged = start
+        k0, x, not_emerged, smaller = start
         born = np.ones(len(model.florets), bool)
         born[not_emerged] = False
         sim.set_born(born)
+        for i, size, frame in smaller:
+            sim.emerge_scale[int(i)] = size
+            sim.emerge_frame[int(i)] = frame
         log_rows = [r for r in read_log(out / "log.csv") if r and int(r[0]) <= k0]
         result.first_frame = k0 + 1
         sim.update_rest(float(k0))
@@ -485,9 +655,10 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
         row["rms_edge_error"] = distance_residual(x, model.edge_indices, sim.edge_rest_length)
         row["rms_dihedral_error_deg"] = math.degrees(
             bending_residual(x, model.hinge_indices, sim.hinge_rest_angle))
+        row["min_edge_stretch"], row["max_edge_stretch"] = sim.stretch_range(x)
         t0 = time.perf_counter()
         result.frames_written.append(_write_frame(out, model, x, 0, sim.tri_on))
-        _save_state(out, x, 0, fp, sim.born)
+        _save_state(out, x, 0, fp, sim.born, sim)
         row["t_write_s"] = time.perf_counter() - t0
         log_rows.append(row)
         write_log(out / "log.csv", log_rows)
@@ -514,6 +685,7 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
         row = FrameLog(k, upf)
         timing: dict = {}
         remaining = []
+        retreated: set = set()
         waiting: list = []
         for s in range(upf):
             f_from = (k - 1) + s / upf
@@ -527,6 +699,7 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
             row["collision_rounds"] += res.rounds
             row["collision_constraints"] += res.constraints
             row["reverted_vertices"] += res.reverted
+            retreated.update(res.retreated.tolist())
             if len(res.remaining):
                 row["remaining_pairs"] += len(res.remaining)
                 fl = np.unique(np.sort(model.vertex_floret[res.remaining.indices[:, [0, 3]]], axis=1), axis=0)
@@ -536,12 +709,17 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
             row["remaining_florets"] = _florets_text(remaining)
             msg = (f"frame {k}: {row['remaining_pairs']} colliding pairs left after "
                    f"{params.max_collision_retries} retries between florets {_florets_text(remaining[:20])}"
-                   f" (their vertices were kept at the previous step)")
+                   f" (those florets were moved back along their own motion, whole)")
             result.remaining_reports.append((k, remaining))
             if strict:
                 raise CollisionError(msg)
             warn(msg)
         sim.check_whole(x, k)
+        row["substeps"] = timing.get("substeps", 0)
+        row["relax_sweeps"] = timing.get("relax_sweeps", 0)
+        row["florets_retreated"] = len(retreated)
+        row["min_edge_stretch"], row["max_edge_stretch"] = sim.stretch_range(x)
+        row["florets_smaller"] = int(np.count_nonzero(sim.size_factor(float(k)) < 1.0))
         row["t_rest_s"] = timing.get("rest", 0.0)
         row["t_internal_s"] = timing.get("internal", 0.0)
         row["t_collide_s"] = timing.get("collide", 0.0)
@@ -567,7 +745,7 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
         if k % every == 0 or k == n:
             t0 = time.perf_counter()
             result.frames_written.append(_write_frame(out, model, x, k, sim.tri_on))
-            _save_state(out, x, k, fp, sim.born)
+            _save_state(out, x, k, fp, sim.born, sim)
             row["t_write_s"] = time.perf_counter() - t0
             write_log(out / "log.csv", log_rows)
         if bar is not None:

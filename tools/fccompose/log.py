@@ -13,12 +13,17 @@ else is deterministic):
 | collisions_found | pairs needing a response found in the first round, summed over steps |
 | collision_rounds | detection rounds, summed over steps |
 | collision_constraints | collision constraints solved, summed over steps |
-| remaining_pairs | pairs still crossing after the last retry (reported, then reverted) |
+| remaining_pairs | pairs still crossing after the last retry of the deepest substep (reported; their florets moved back) |
 | remaining_florets | those pairs as ``floretA-floretB`` (placement indices), ``;``-separated |
-| reverted_vertices | vertices put back to their start-of-step position |
+| reverted_vertices | vertices of the florets the fallback moved back along their motion |
 | intersecting_pairs | triangle pairs found by the exact static test (-1: not checked this frame) |
 | florets_present | florets in the canopy at the end of the frame (``rba:`` florets emerge at their first RBA frame) |
-| florets_waiting | florets due to emerge that found no room yet (tried again every step) |
+| florets_waiting | florets due to emerge that found no room yet, at any of the ``emergence scales`` (tried again every step) |
+| florets_smaller | florets that emerged smaller than their own size and are still growing back to it |
+| min_edge_stretch, max_edge_stretch | smallest and largest edge length / rest length at the end of the frame (edges whose rest length is at least the collision thickness h); the ``edge stretch bounds`` (default 0.5, 1.5) hold them |
+| substeps | steps redone as two half steps (crossing pairs or an edge out of bounds), summed over the frame's steps |
+| relax_sweeps | internal-constraint sweeps of florets in contact between collision rounds |
+| florets_retreated | florets moved back along their own motion by the fallback |
 | t_rest_s, t_internal_s, t_collide_s, t_sanity_s, t_write_s | seconds per phase |
 """
 from __future__ import annotations
@@ -35,6 +40,7 @@ COLUMNS = [
     "frame", "steps", "rms_edge_error", "rms_dihedral_error_deg", "vt_candidates", "ee_candidates",
     "collisions_found", "collision_rounds", "collision_constraints", "remaining_pairs",
     "remaining_florets", "reverted_vertices", "intersecting_pairs", "florets_present", "florets_waiting",
+    "florets_smaller", "min_edge_stretch", "max_edge_stretch", "substeps", "relax_sweeps", "florets_retreated",
     "t_rest_s", "t_internal_s",
     "t_collide_s", "t_sanity_s", "t_write_s",
 ]
@@ -42,6 +48,8 @@ COLUMNS = [
 _FORMATS = {
     "rms_edge_error": "{:.6e}",
     "rms_dihedral_error_deg": "{:.6f}",
+    "min_edge_stretch": "{:.4f}",
+    "max_edge_stretch": "{:.4f}",
     "t_rest_s": "{:.4f}",
     "t_internal_s": "{:.4f}",
     "t_collide_s": "{:.4f}",

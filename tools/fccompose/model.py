@@ -27,8 +27,9 @@ Placement kinds (SCN, app. C.2) and developmental time u in [0, 1] (template fra
   placement position; develops like ``ca``.
 - ``rba start end``: placement of each frame from the RBA files (linear interpolation between
   frames and of sub-steps; a floret absent from a frame takes the nearest frame where it is
-  present); develops like ``ca``. The ``rigid body animation`` entry's scale multiplies the RBA
-  scales. The floret *emerges* at the first RBA frame that lists it (:attr:`Floret.birth_frame`,
+  present); develops like ``ca``. The ``rigid body animation`` entry's scale and the placement's
+  own SCN scale (a factor: the floret's size relative to its primordium, e.g. ``dimorph``'s ray
+  scale; ``phyllotaxis`` writes 1) multiply the RBA scales. The floret *emerges* at the first RBA frame that lists it (:attr:`Floret.birth_frame`,
   the primordium's formation in a dynamic phyllotaxis): before that it is not part of the canopy
   (no collisions, no faces in the output; :class:`inflo.tools.fccompose.compose.Simulation`).
 
@@ -380,7 +381,8 @@ def _rba_matrix(floret: Floret, frame: float) -> np.ndarray:
     pa, sa, ua, ra = row(a)
     pb, sb, ub, rb = row(b)
     lerp = lambda x, y: (1 - s) * x + s * y  # noqa: E731
-    scale = lerp(sa, sb) * floret.rba_scale
+    # the placement's own scale (SCN, e.g. set by dimorph) multiplies every RBA row's scale
+    scale = lerp(sa, sb) * floret.rba_scale * np.asarray(floret.placement.scale, float)
     return placement_matrix(lerp(pa, pb), scale, lerp(ua, ub), lerp(ra, rb))
 
 
@@ -619,3 +621,14 @@ def predict(vertex_x, vertex_floret, floret_vertex_offset, delta, template_x, ol
         for d in range(3):
             out[v, d] = (delta[f, d, 0] * x0 + delta[f, d, 1] * x1 + delta[f, d, 2] * x2 + delta[f, d, 3]
                          + matrix_new[f, d, 0] * g0 + matrix_new[f, d, 1] * g1 + matrix_new[f, d, 2] * g2)
+
+
+@njit(cache=True)
+def carry(vertex_x, vertex_floret, delta, out):
+    """``out[v] = D_f x[v]``: positions carried rigidly by each floret's placement change over a
+    step (``delta`` (nf, 3, 4)), without growth: the fallback's whole-floret target."""
+    for v in range(vertex_x.shape[0]):
+        f = vertex_floret[v]
+        for d in range(3):
+            out[v, d] = (delta[f, d, 0] * vertex_x[v, 0] + delta[f, d, 1] * vertex_x[v, 1]
+                         + delta[f, d, 2] * vertex_x[v, 2] + delta[f, d, 3])

@@ -44,8 +44,11 @@ __all__ = [
     "project_bending_constraints",
     "project_bending_constraints_coloured",
     "project_internal_by_part",
+    "project_internal_of_parts",
     "part_offsets",
     "edge_lengths",
+    "edge_stretch_range",
+    "parts_out_of_bounds",
     "hinge_angles",
     "distance_residual",
     "bending_residual",
@@ -401,6 +404,41 @@ def project_internal_by_part(vertex_x, vertex_inv_mass, edge_indices, edge_rest_
         sweeps[f] = n
 
 
+@njit(cache=True, parallel=True)
+def project_internal_of_parts(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness,
+                              edge_offsets, hinge_indices, hinge_rest_angle, hinge_stiffness,
+                              hinge_offsets, parts, iterations, tolerance):
+    """:func:`project_internal_by_part` over the listed ``parts`` only ((k,) int64 part indices,
+    each at most once), in place; returns the total number of sweeps run.
+
+    fccompose relaxes the florets a collision round moved with it, between the rounds of the
+    collision response (thesis Alg. 1 solves collision and internal constraints together), so that
+    the florets keep their shape while their contacts are resolved.
+    """
+    sweeps = np.zeros(parts.shape[0], np.int64)
+    for k in prange(parts.shape[0]):
+        f = parts[k]
+        n = 0
+        for _ in range(iterations):
+            m = 0.0
+            for e in range(edge_offsets[f], edge_offsets[f + 1]):
+                d = _distance_one(vertex_x, vertex_inv_mass, edge_indices[e, 0], edge_indices[e, 1],
+                                  edge_rest_length[e], edge_stiffness[e])
+                if d > m:
+                    m = d
+            for h in range(hinge_offsets[f], hinge_offsets[f + 1]):
+                d = _bending_one(vertex_x, vertex_inv_mass, hinge_indices[h, 0], hinge_indices[h, 1],
+                                 hinge_indices[h, 2], hinge_indices[h, 3], hinge_rest_angle[h],
+                                 hinge_stiffness[h])
+                if d > m:
+                    m = d
+            n += 1
+            if m <= tolerance:
+                break
+        sweeps[k] = n
+    return sweeps.sum()
+
+
 # --------------------------------------------------------------------------------------------------
 # Rest values and residuals
 # --------------------------------------------------------------------------------------------------
@@ -456,6 +494,53 @@ def overstretched_edges(vertex_x, edge_indices, edge_rest_length, factor, floor)
         if not cur[e] <= factor * max(edge_rest_length[e], floor):  # NaN counts too
             hit[e] = True
     return np.nonzero(hit)[0]
+
+
+@njit(cache=True)
+def edge_stretch_range(vertex_x, edge_indices, edge_rest_length, floor):
+    """(smallest, largest) ratio of an edge's length to its rest length over the edges whose rest
+    length is at least ``floor`` (shorter ones, e.g. the collapsed tip of a bud, have no meaningful
+    ratio); (1, 1) when there are none. NaN lengths give NaN. The believability bounds of a canopy
+    are [0.5, 1.5] (ARCHITECTURE: every edge within [0.5, 1.5] x its rest length)."""
+    lo = 1.0
+    hi = 1.0
+    for e in range(edge_indices.shape[0]):
+        r = edge_rest_length[e]
+        if not r >= floor:
+            continue
+        i = edge_indices[e, 0]
+        j = edge_indices[e, 1]
+        dx = vertex_x[i, 0] - vertex_x[j, 0]
+        dy = vertex_x[i, 1] - vertex_x[j, 1]
+        dz = vertex_x[i, 2] - vertex_x[j, 2]
+        q = math.sqrt(dx * dx + dy * dy + dz * dz) / r
+        if q != q:
+            return q, q
+        if q < lo:
+            lo = q
+        if q > hi:
+            hi = q
+    return lo, hi
+
+
+@njit(cache=True)
+def parts_out_of_bounds(vertex_x, edge_indices, edge_rest_length, vertex_part, n_parts, lo, hi, floor):
+    """(n_parts,) bool: the part (floret) has an edge (rest length >= ``floor``) shorter than ``lo``
+    or longer than ``hi`` times its rest length, or a non-finite one."""
+    out = np.zeros(n_parts, np.bool_)
+    for e in range(edge_indices.shape[0]):
+        r = edge_rest_length[e]
+        if not r >= floor:
+            continue
+        i = edge_indices[e, 0]
+        j = edge_indices[e, 1]
+        dx = vertex_x[i, 0] - vertex_x[j, 0]
+        dy = vertex_x[i, 1] - vertex_x[j, 1]
+        dz = vertex_x[i, 2] - vertex_x[j, 2]
+        q = math.sqrt(dx * dx + dy * dy + dz * dz) / r
+        if not (q >= lo and q <= hi):
+            out[vertex_part[i]] = True
+    return out
 
 
 @njit(cache=True)
