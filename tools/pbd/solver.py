@@ -371,6 +371,31 @@ def part_offsets(indices: np.ndarray, vertex_part: np.ndarray, n_parts: int) -> 
     return np.searchsorted(first, np.arange(n_parts + 1), side="left").astype(np.int64)
 
 
+@njit(cache=True, inline="always")
+def _solve_part(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness, edge_offsets,
+                hinge_indices, hinge_rest_angle, hinge_stiffness, hinge_offsets, f, iterations, tolerance):
+    """Up to ``iterations`` sweeps of part ``f``'s constraints, stopping after the first whose
+    largest correction is ``<= tolerance``; returns the sweeps run."""
+    n = 0
+    for _ in range(iterations):
+        m = 0.0
+        for e in range(edge_offsets[f], edge_offsets[f + 1]):
+            d = _distance_one(vertex_x, vertex_inv_mass, edge_indices[e, 0], edge_indices[e, 1],
+                              edge_rest_length[e], edge_stiffness[e])
+            if d > m:
+                m = d
+        for h in range(hinge_offsets[f], hinge_offsets[f + 1]):
+            d = _bending_one(vertex_x, vertex_inv_mass, hinge_indices[h, 0], hinge_indices[h, 1],
+                             hinge_indices[h, 2], hinge_indices[h, 3], hinge_rest_angle[h],
+                             hinge_stiffness[h])
+            if d > m:
+                m = d
+        n += 1
+        if m <= tolerance:
+            break
+    return n
+
+
 @njit(cache=True, parallel=True)
 def project_internal_by_part(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness,
                              edge_offsets, hinge_indices, hinge_rest_angle, hinge_stiffness,
@@ -384,24 +409,9 @@ def project_internal_by_part(vertex_x, vertex_inv_mass, edge_indices, edge_rest_
     """
     n_parts = edge_offsets.shape[0] - 1
     for f in prange(n_parts):
-        n = 0
-        for _ in range(iterations):
-            m = 0.0
-            for e in range(edge_offsets[f], edge_offsets[f + 1]):
-                d = _distance_one(vertex_x, vertex_inv_mass, edge_indices[e, 0], edge_indices[e, 1],
-                                  edge_rest_length[e], edge_stiffness[e])
-                if d > m:
-                    m = d
-            for h in range(hinge_offsets[f], hinge_offsets[f + 1]):
-                d = _bending_one(vertex_x, vertex_inv_mass, hinge_indices[h, 0], hinge_indices[h, 1],
-                                 hinge_indices[h, 2], hinge_indices[h, 3], hinge_rest_angle[h],
-                                 hinge_stiffness[h])
-                if d > m:
-                    m = d
-            n += 1
-            if m <= tolerance:
-                break
-        sweeps[f] = n
+        sweeps[f] = _solve_part(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness,
+                                edge_offsets, hinge_indices, hinge_rest_angle, hinge_stiffness,
+                                hinge_offsets, f, iterations, tolerance)
 
 
 @njit(cache=True, parallel=True)
@@ -417,25 +427,9 @@ def project_internal_of_parts(vertex_x, vertex_inv_mass, edge_indices, edge_rest
     """
     sweeps = np.zeros(parts.shape[0], np.int64)
     for k in prange(parts.shape[0]):
-        f = parts[k]
-        n = 0
-        for _ in range(iterations):
-            m = 0.0
-            for e in range(edge_offsets[f], edge_offsets[f + 1]):
-                d = _distance_one(vertex_x, vertex_inv_mass, edge_indices[e, 0], edge_indices[e, 1],
-                                  edge_rest_length[e], edge_stiffness[e])
-                if d > m:
-                    m = d
-            for h in range(hinge_offsets[f], hinge_offsets[f + 1]):
-                d = _bending_one(vertex_x, vertex_inv_mass, hinge_indices[h, 0], hinge_indices[h, 1],
-                                 hinge_indices[h, 2], hinge_indices[h, 3], hinge_rest_angle[h],
-                                 hinge_stiffness[h])
-                if d > m:
-                    m = d
-            n += 1
-            if m <= tolerance:
-                break
-        sweeps[k] = n
+        sweeps[k] = _solve_part(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness,
+                                edge_offsets, hinge_indices, hinge_rest_angle, hinge_stiffness,
+                                hinge_offsets, parts[k], iterations, tolerance)
     return sweeps.sum()
 
 
