@@ -53,6 +53,10 @@ class Contacts:
         First time of impact in the step.
     element : (k, 2) int32
         (vertex, triangle) or (edge, edge) indices of the pair.
+    reach : (k,) float64
+        Deepest violation the constraint may correct (beyond 2 h): four times the largest motion
+        of its vertices over the step, plus four tolerances (see
+        :func:`.response.project_collision_constraints`).
     """
 
     kind: np.ndarray
@@ -61,6 +65,7 @@ class Contacts:
     normal: np.ndarray
     toi: np.ndarray
     element: np.ndarray
+    reach: np.ndarray
 
     def __len__(self) -> int:
         return len(self.kind)
@@ -68,7 +73,7 @@ class Contacts:
     @staticmethod
     def empty() -> "Contacts":
         return Contacts(np.zeros(0, np.int8), np.zeros((0, 4), np.int32), np.zeros((0, 4)),
-                        np.zeros((0, 3)), np.zeros(0), np.zeros((0, 2), np.int32))
+                        np.zeros((0, 3)), np.zeros(0), np.zeros((0, 2), np.int32), np.zeros(0))
 
     def concat(self, other: "Contacts") -> "Contacts":
         """Rows of ``self`` then the new rows of ``other``; a pair already in ``self`` (same kind
@@ -84,11 +89,14 @@ class Contacts:
         where = np.array([row.get(tuple(r), -1) for r in key_b.tolist()], dtype=np.int64)
         new = where < 0
         old = ~new
-        merged = Contacts(*(getattr(self, f).copy() for f in ("kind", "indices", "coef", "normal", "toi", "element")))
-        for f in ("coef", "normal", "toi", "element"):
+        merged = Contacts(*(getattr(self, f).copy() for f in _FIELDS))
+        for f in ("coef", "normal", "toi", "element", "reach"):
             getattr(merged, f)[where[old]] = getattr(other, f)[old]
         return Contacts(*(np.concatenate([getattr(merged, f), getattr(other, f)[new]])
-                          for f in ("kind", "indices", "coef", "normal", "toi", "element")))
+                          for f in _FIELDS))
+
+
+_FIELDS = ("kind", "indices", "coef", "normal", "toi", "element", "reach")
 
 
 def default_tolerance(x0: np.ndarray, thickness: float) -> float:
@@ -512,7 +520,11 @@ def _narrow(x0, x1, tri, edges, vt_pairs, ee_pairs, tolerance) -> tuple[Contacts
     ok = np.zeros(k, np.bool_)
     if k:
         _build_contacts(x0, x1, kind, idx, coef, toi, normal, ok)
-    contacts = Contacts(kind, idx, coef, normal, toi, element)
+    reach = np.zeros(k)
+    if k:
+        motion = np.sqrt(((x1[idx] - x0[idx]) ** 2).sum(axis=2)).max(axis=1)
+        reach = 4.0 * motion + 4.0 * float(tolerance)
+    contacts = Contacts(kind, idx, coef, normal, toi, element, reach)
     if not ok.all():
         stats["degenerate"] = int(np.count_nonzero(~ok))
     return contacts, stats
@@ -654,14 +666,14 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         before = x1.copy()
         project_collision_constraints(x1, w, constraints.indices, constraints.coef,
                                       constraints.normal, h, float(stiffness),
-                                      int(iterations))
+                                      int(iterations), constraints.reach)
         if relax is not None and r < relax_rounds:
             relax(x1, _changed(x1, before))
             res.relaxed += 1
             # and the collision constraints again, so that the round ends on them
             project_collision_constraints(x1, w, constraints.indices, constraints.coef,
                                           constraints.normal, h, float(stiffness),
-                                          int(iterations))
+                                          int(iterations), constraints.reach)
         moved = _changed(x1, before)
         # still-crossing pairs whose vertices did not move are re-found too
         moved[found.indices.ravel()] = True

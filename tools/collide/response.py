@@ -134,9 +134,8 @@ def collision_constraint_value(vertex_x, indices, coef, normal, thickness):
     return out
 
 
-@njit(cache=True)
 def project_collision_constraints(vertex_x, vertex_inv_mass, indices, coef, normal, thickness,
-                                  stiffness, iterations):
+                                  stiffness, iterations, reach=None):
     """``iterations`` Gauss-Seidel sweeps over the collision constraints (Alg. 1 lines 16-20).
 
     Parameters
@@ -153,12 +152,28 @@ def project_collision_constraints(vertex_x, vertex_inv_mass, indices, coef, norm
     thickness, stiffness : float
         ``h`` and ``kCollision``.
     iterations : int
+    reach : (k,) float64 or None
+        Deepest violation each constraint may correct, beyond ``2 h`` (None: any). A crossing that
+        started collision-free cannot be deeper than the motion of its elements over the step; a
+        constraint violated further than that is stale (its elements have moved apart since the
+        round that found it, and its plane, kept fixed, would fling a vertex far away): it is
+        skipped.
 
     Returns
     -------
     int
         Projections that found their constraint violated, over all sweeps.
     """
+    if reach is None:
+        reach = np.full(indices.shape[0], np.inf)
+    return _project_collision_constraints(vertex_x, vertex_inv_mass, indices, coef, normal,
+                                          float(thickness), float(stiffness), int(iterations),
+                                          np.ascontiguousarray(reach, dtype=np.float64))
+
+
+@njit(cache=True)
+def _project_collision_constraints(vertex_x, vertex_inv_mass, indices, coef, normal, thickness,
+                                   stiffness, iterations, reach):
     n = indices.shape[0]
     active = 0
     for _ in range(iterations):
@@ -168,7 +183,7 @@ def project_collision_constraints(vertex_x, vertex_inv_mass, indices, coef, norm
                 v = indices[k, j]
                 for d in range(3):
                     c += coef[k, j] * normal[k, d] * vertex_x[v, d]
-            if c >= 0.0:
+            if c >= 0.0 or -c > reach[k] + 2.0 * thickness:
                 continue
             denom = 0.0
             for j in range(4):

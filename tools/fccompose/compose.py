@@ -475,15 +475,41 @@ class Simulation:
             if v is not None:
                 xp[v] = x1
                 xg = xp
+            off = m.floret_vertex_offset
+            verts = (np.arange(len(xg)) if self.one_part
+                     else np.concatenate([np.arange(off[f], off[f + 1]) for f in fl]))
+            before = xg[verts]
             n = project_internal_of_parts(xg, w, m.edge_indices, self.edge_rest_length, m.edge_stiffness,
                                           self.edge_parts, m.hinge_indices, self.hinge_rest_angle,
                                           m.hinge_stiffness, self.hinge_parts, parts, iterations,
                                           float(self.converged_below))
             timing["relax_sweeps"] = timing.get("relax_sweeps", 0) + int(n)
+            _undo_runaway(xg, verts, before, m.vertex_floret[verts])
             if v is not None:
                 x1[:] = xp[v]
 
         return relax
+
+
+def _undo_runaway(x: np.ndarray, verts: np.ndarray, before: np.ndarray, floret: np.ndarray) -> None:
+    """Put back the florets a relaxation moved by more than half their own size: the bending
+    projection can run away on a floret the collision response left badly out of shape, and one
+    flung vertex would make the next detection round's boxes span the canopy."""
+    disp = np.sqrt(((x[verts] - before) ** 2).sum(axis=1))
+    if not len(disp):
+        return
+    ids, inv = np.unique(floret, return_inverse=True)
+    worst = np.zeros(len(ids))
+    np.maximum.at(worst, inv, disp)
+    lo = np.full((len(ids), 3), np.inf)
+    hi = np.full((len(ids), 3), -np.inf)
+    np.minimum.at(lo, inv, before)
+    np.maximum.at(hi, inv, before)
+    size = np.sqrt(((hi - lo) ** 2).sum(axis=1))
+    bad = ~(worst <= 0.5 * size)
+    if bad.any():
+        back = bad[inv]
+        x[verts[back]] = before[back]
 
 
 def _merged(failed: CollisionResult, a: CollisionResult, b: CollisionResult) -> CollisionResult:
