@@ -417,3 +417,54 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
         assert set(got_vt) == {tuple(p) for p in ref_vt.tolist()}
         assert set(got_ee) == {tuple(p) for p in ref_ee.tolist()}
         assert len(ref_vt) and len(ref_ee)
+
+
+# ----------------------------------------------------------------------------------------------
+# The whole-part fallback (issue 13)
+# ----------------------------------------------------------------------------------------------
+
+
+def _two_squares(gap):
+    """Two unit squares (two triangles each) in planes z = 0 and z = gap; parts 0 and 1."""
+    sq = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    x = np.concatenate([sq, sq + [0, 0, gap]])
+    tri = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]], np.int32)
+    return x, tri, mesh_edges(tri), np.array([0, 0, 0, 0, 1, 1, 1, 1], np.int32)
+
+
+def test_retreat_parts_moves_whole_parts_back_along_their_motion():
+    """Square 1 passes through square 0 in the step; moved back whole, it ends at a blend of its
+    start and end (every vertex at the same fraction), the step collision-free, square 0 as it was."""
+    from inflo.tools.collide.resolve import detect_collisions, retreat_parts
+
+    x0, tri, edges, vp = _two_squares(0.5)
+    x1 = x0.copy()
+    x1[4:, 2] = -0.3  # through square 0
+    x1[0, 2] = 0.01  # square 0 moves a little
+    start = np.array([False, True])
+    res = retreat_parts(x0, x1, tri, edges, vp, 2, start, tolerance=1e-9)
+    found, _ = detect_collisions(x0, x1, tri, edges, tolerance=1e-9)
+    assert len(found) == 0
+    s = (x1[4:, 2] - 0.5) / (-0.8)  # fraction of its motion square 1 kept
+    assert np.allclose(s, 0.5)  # halfway (z = 0.1) is free
+    assert x1[0, 2] == 0.01  # square 0 untouched
+    assert res.fraction[0] == 1.0 and res.fraction[1] < 1.0 and not res.whole_step
+    assert res.vertices == 4
+
+
+def test_retreat_parts_keeps_up_with_the_carried_motion():
+    """With ``carried`` (the start shape carried by each part's rigid motion), a part moved back
+    goes towards that rather than to x0: here the carried square is free, so it ends there."""
+    from inflo.tools.collide.resolve import detect_collisions, retreat_parts
+
+    x0, tri, edges, vp = _two_squares(0.5)
+    carried = x0.copy()
+    carried[4:, 0] += 3.0  # square 1's placement moves it aside
+    x1 = carried.copy()
+    x1[4:, 0] -= 3.0
+    x1[4:, 2] = -0.5  # its solve put it through square 0
+    res = retreat_parts(x0, x1, tri, edges, vp, 2, np.array([False, True]), tolerance=1e-9,
+                        carried=carried)
+    assert len(detect_collisions(x0, x1, tri, edges, tolerance=1e-9)[0]) == 0
+    assert res.fraction[1] >= 0.0  # not at x0
+    assert np.all(x1[4:, 0] > 1.0)  # moved aside with its placement

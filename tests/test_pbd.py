@@ -306,3 +306,60 @@ def test_overstretched_edges_finds_torn_and_non_finite_edges():
     np.testing.assert_array_equal(overstretched_edges(x, e, rest, 50.0, 1e-12), [1, 2, 3])
     # a zero rest length counts as the floor: edge 3 (length 1) is fine with a floor of 0.1
     np.testing.assert_array_equal(overstretched_edges(x, e, rest, 50.0, 0.1), [1, 2])
+
+
+# ----------------------------------------------------------------------------------------------
+# Parts, stretch figures (issue 13)
+# ----------------------------------------------------------------------------------------------
+
+
+def _two_triangles():
+    """Two separate triangles (parts 0 and 1), each with its three edges."""
+    x = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [5, 0, 0], [6, 0, 0], [5, 1, 0]], float)
+    edges = np.array([[0, 1], [1, 2], [0, 2], [3, 4], [4, 5], [3, 5]], np.int32)
+    rest = np.sqrt(((x[edges[:, 0]] - x[edges[:, 1]]) ** 2).sum(axis=1))
+    return x, edges, rest
+
+
+def test_project_internal_of_parts_solves_only_the_listed_parts():
+    from inflo.tools.pbd.solver import project_internal_by_part, project_internal_of_parts
+
+    x, edges, rest = _two_triangles()
+    x[1, 0] = 2.0  # both parts stretched
+    x[4, 0] = 7.0
+    w = np.ones(6)
+    hinges = np.zeros((0, 4), np.int32)
+    e_off = np.array([0, 3, 6], np.int64)
+    h_off = np.zeros(3, np.int64)
+    k = np.ones(6)
+    y = x.copy()
+    n = project_internal_of_parts(y, w, edges, rest, k, e_off, hinges, np.zeros(0), np.zeros(0), h_off,
+                                  np.array([1], np.int64), 50, 1e-12)
+    assert n > 1
+    assert np.array_equal(y[:3], x[:3])  # part 0 untouched
+    assert np.allclose(np.sqrt(((y[edges[3:, 0]] - y[edges[3:, 1]]) ** 2).sum(axis=1)), rest[3:], atol=1e-6)
+    # the same arithmetic as the whole-canopy solve, part by part
+    z = x.copy()
+    project_internal_by_part(z, w, edges, rest, k, e_off, hinges, np.zeros(0), np.zeros(0), h_off, 50, 1e-12,
+                             np.zeros(2, np.int64))
+    assert np.array_equal(z[3:], y[3:])
+
+
+def test_edge_stretch_range_and_parts_out_of_bounds():
+    from inflo.tools.pbd.solver import edge_stretch_range, parts_out_of_bounds
+
+    x, edges, rest = _two_triangles()
+    assert edge_stretch_range(x, edges, rest, 1e-9) == (1.0, 1.0)
+    x[4, 0] = 7.0  # edge 3-4 twice its rest length, 4-5 longer too
+    lo, hi = edge_stretch_range(x, edges, rest, 1e-9)
+    assert hi == pytest.approx(2.0) and lo == 1.0
+    vp = np.array([0, 0, 0, 1, 1, 1], np.int32)
+    assert parts_out_of_bounds(x, edges, rest, vp, 2, 0.5, 1.5, 1e-9).tolist() == [False, True]
+    assert parts_out_of_bounds(x, edges, rest, vp, 2, 0.5, 2.5, 1e-9).tolist() == [False, False]
+    # edges shorter than the floor are not measured; a squeezed edge and NaN count
+    assert edge_stretch_range(x, edges, rest, 10.0) == (1.0, 1.0)
+    x[1] = [0.1, 0.0, 0.0]
+    assert parts_out_of_bounds(x, edges, rest, vp, 2, 0.5, 2.5, 1e-9).tolist() == [True, False]
+    x[5, 0] = np.nan
+    assert parts_out_of_bounds(x, edges, rest, vp, 2, 0.0, 1e9, 1e-9)[1]
+    assert math.isnan(edge_stretch_range(x, edges, rest, 1e-9)[1])
