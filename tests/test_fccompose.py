@@ -506,3 +506,55 @@ def test_a_torn_floret_stops_the_run_with_a_clear_error(inputs):
     x[nv + 5] += 1e3  # a vertex of floret 1 torn away
     with pytest.raises(SimulationDiverged, match=r"frame 3: .* florets 1 are over 50 times their rest length"):
         sim.check_whole(x, 3.0)
+
+
+def test_phase_effect_each_floret_at_the_stage_its_age_gives(inputs, tmp_path):
+    """phyllotaxis with ``development_frames`` -> fccompose: florets that emerged at staggered
+    frames each sit, at the last frame, at their own developmental stage: every floret, mapped
+    back by its placement, is the template at u = (last - frameStart) / N (florets small enough
+    never to touch); the outer (older) florets are further open than the inner ones; and a
+    ray/disk scale from the SCN reaches the canopy."""
+    from inflo.formats.placement import placement_matrix
+    from inflo.formats.rba import read_rba
+    from inflo.formats.scn import read_scn, write_scn
+
+    toml = (REPO / "pipelines" / "examples" / "phyllotaxis" / "dynamic_head.toml").read_text()
+    toml = toml.replace("frames = 120", "frames = 20").replace("primordium_area = 0.002", "primordium_area = 0.03")
+    toml = toml.replace("curve_times = [0.0, 1.0]", "curve_times = [0.0, 1.0]\ndevelopment_frames = 10")
+    (tmp_path / "head.toml").write_text(toml)
+    res = run_cli("phyllotaxis", tmp_path / "head.toml", "-o", tmp_path / "head", "-q")
+    assert res.returncode == 0, res.stderr
+    scene = read_scn(tmp_path / "head" / "scene.scn")
+    starts = np.array([p.frame_start for p in scene.placements])
+    assert all(p.frame_end - p.frame_start == 10 for p in scene.placements)
+    assert starts.min() == 0 and starts.max() >= 6  # staggered emergence
+    for p in scene.placements[::2]:  # every other floret at 1.5 x (as dimorph's ray scale would)
+        p.scale = p.scale * 1.5
+    write_scn(tmp_path / "head" / "scene.scn", scene)
+    shutil.copytree(inputs["dir"] / "anim", tmp_path / "anim")
+    shutil.copy(inputs["dir"] / "petal_base.txt", tmp_path / "petal_base.txt")
+    write_fcc_text(tmp_path / "g.fcc", scene="head/scene.scn", sanity_every=5, spacing=0.001,
+                   extra="rigid body animation: 1 0.1 0.1 0.1 head/rba head/scene.scn\n"
+                         "run for number of frames: 12\n")
+    out = tmp_path / "out"
+    res = run_cli("fccompose", tmp_path / "g.fcc", "-o", out, "-q", "--strict")
+    assert res.returncode == 0, res.stderr
+    log = read_log(out)
+    assert sum(int(r["collisions_found"]) for r in log) == 0  # apart: shapes are the templates'
+    last = read_obj(out / "frame_0012.obj").vertices
+    rba = read_rba(tmp_path / "head" / "rba" / "0012.rba", scene)
+    tpl = opening_floret(N_FRAMES)[0]
+    nv = len(tpl[0])
+    opened = []
+    for k, p in enumerate(scene.placements):
+        u = min(max((12 - p.frame_start) / 10, 0.0), 1.0) * (N_FRAMES - 1)
+        a = min(int(u), N_FRAMES - 2)
+        local = (1 - (u - a)) * tpl[a] + (u - a) * tpl[a + 1]
+        r = list(rba.ids).index(k)
+        m = placement_matrix(rba.pos[r], np.asarray(rba.scale[r]) * 0.1 * p.scale, rba.up[r], rba.right[r])
+        expect = local @ m[:3, :3].T + m[:3, 3]
+        size = float(np.ptp(expect, axis=0).max())
+        assert np.abs(last[k * nv:(k + 1) * nv] - expect).max() < 0.01 * size, k  # (stages differ by ~0.1)
+        opened.append(u)
+    # centripetal: the florets formed first (outer) are the most open
+    assert opened[0] == N_FRAMES - 1 and opened[-1] < opened[0]
