@@ -31,6 +31,10 @@ __all__ = ["Contacts", "CollisionResult", "detect_collisions", "resolve_collisio
 
 KIND_VT = 0
 KIND_EE = 1
+#: repair passes for parts left out of shape (``fallback="parts"`` with ``relax``), and the
+#: relaxations (each ``relax`` call's sweeps) of one pass
+REPAIR_PASSES = 2
+REPAIR_RELAXATIONS = 4
 #: detect/solve rounds without fewer crossing pairs after which the retries stop early
 STALL_ROUNDS = 4
 
@@ -567,6 +571,8 @@ class CollisionResult:
     """parts the ``"parts"`` fallback moved back (:func:`retreat_parts`; fccompose: florets)"""
     retreat_rounds: int = 0
     whole_step: bool = False
+    repairs: int = 0
+    """passes that relaxed parts left out of shape and resolved what that moved"""
 
 
 def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarray,
@@ -635,49 +641,68 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
     w = np.ascontiguousarray(vertex_inv_mass, dtype=np.float64)
     tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
     edges = np.ascontiguousarray(edge_indices, dtype=np.int32)
-    constraints = Contacts.empty()
-    found = Contacts.empty()
-    active = None
-    best, stalled = None, 0
     x0 = np.ascontiguousarray(x0, dtype=np.float64)
     broad = _StepBroadPhase(x0, tri, edges, 0.5 * tol, cell_size)
+    state = {"constraints": Contacts.empty()}
 
     def detect(active):
         pairs = broad.first(x1) if active is None else broad.again(x1, active)
         return _narrow(x0, x1, tri, edges, pairs[0], pairs[1], tol)
 
-    for r in range(max_retries + 1):
-        found, stats = detect(active)
-        res.rounds += 1
-        res.found.append(len(found))
-        if r == 0:
-            res.stats = stats
-        if len(found) == 0:
-            break
-        if r == max_retries:
-            break
-        if best is None or len(found) < best:
-            best, stalled = len(found), 0
-        else:
-            stalled += 1
-            if stalled >= STALL_ROUNDS:  # the same pairs keep crossing: retrying will not help
+    def run_rounds(active):
+        """Detect/solve rounds from ``active`` (None: everything); returns the pairs still crossing."""
+        best, stalled = None, 0
+        found = Contacts.empty()
+        for r in range(max_retries + 1):
+            found, stats = detect(active)
+            res.rounds += 1
+            res.found.append(len(found))
+            if active is None and r == 0:
+                res.stats = stats
+            if len(found) == 0 or r == max_retries:
                 break
-        constraints = constraints.concat(found)
-        before = x1.copy()
-        project_collision_constraints(x1, w, constraints.indices, constraints.coef,
-                                      constraints.normal, h, float(stiffness),
-                                      int(iterations), constraints.reach)
-        if relax is not None and r < relax_rounds:
-            relax(x1, _changed(x1, before))
-            res.relaxed += 1
-            # and the collision constraints again, so that the round ends on them
+            if best is None or len(found) < best:
+                best, stalled = len(found), 0
+            else:
+                stalled += 1
+                if stalled >= STALL_ROUNDS:  # the same pairs keep crossing: retrying will not help
+                    break
+            constraints = state["constraints"] = state["constraints"].concat(found)
+            before = x1.copy()
             project_collision_constraints(x1, w, constraints.indices, constraints.coef,
                                           constraints.normal, h, float(stiffness),
                                           int(iterations), constraints.reach)
-        moved = _changed(x1, before)
-        # still-crossing pairs whose vertices did not move are re-found too
-        moved[found.indices.ravel()] = True
-        active = moved
+            if relax is not None and r < relax_rounds:
+                relax(x1, _changed(x1, before))
+                res.relaxed += 1
+                # and the collision constraints again, so that the round ends on them
+                project_collision_constraints(x1, w, constraints.indices, constraints.coef,
+                                              constraints.normal, h, float(stiffness),
+                                              int(iterations), constraints.reach)
+            moved = _changed(x1, before)
+            # still-crossing pairs whose vertices did not move are re-found too
+            moved[found.indices.ravel()] = True
+            active = moved
+        return found
+
+    found = run_rounds(None)
+    misshapen = parts.get("misshapen") if (fallback == "parts" and parts) else None
+    if relax is not None and misshapen is not None:
+        # repair: relax the florets the rounds left out of shape harder, and resolve what that moved
+        vp = np.asarray(parts["vertex_part"])
+        for _ in range(REPAIR_PASSES):
+            bad = np.asarray(misshapen(x1), dtype=bool) if not len(found) else None
+            if bad is None or not bad.any():
+                break
+            before = x1.copy()
+            for _ in range(REPAIR_RELAXATIONS):
+                relax(x1, bad[vp])
+            moved = _changed(x1, before)
+            if not moved.any():
+                break
+            res.repairs += 1
+            found = run_rounds(moved)
+    constraints = state["constraints"]
     res.constraints = len(constraints)
     res.remaining = found
     if fallback == "parts":
