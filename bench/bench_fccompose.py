@@ -99,4 +99,44 @@ def growth(ctx: BenchContext) -> list[Result]:
     return out
 
 
-BENCHMARKS = [growth]
+def dense_head(ctx: BenchContext) -> list[Result]:
+    """The dense growing head of ``pipelines/examples/growing_head`` (issue 13): 278 florets of a
+    dynamic phyllotaxis with the phase effect, 88,960 triangles, 80 frames; its fccompose stage
+    timed, with the crowding figures of its log (edge stretch, florets present)."""
+    if ctx.quick:
+        return []
+    bin_dir = Path(sys.executable).parent
+    repo = Path(__file__).resolve().parent.parent
+    ex = repo / "pipelines" / "examples"
+    d = ctx.workdir / "dense_head"
+    d.mkdir(parents=True, exist_ok=True)
+    run = lambda *a: subprocess.run([str(bin_dir / a[0]), *map(str, a[1:]), "-q"], check=True)  # noqa: E731
+    run("phyllotaxis", ex / "phyllotaxis" / "dense_head.toml", "-o", d / "head")
+    run("floret-animate", ex / "disk_bud.floret", ex / "disk_open.floret", "--frames", 30, "-o", d / "frames")
+    run("polygonize", d / "frames", "--lambda", 0.25, "--eta", 5, "-o", d / "obj")
+    # the example's .fcc, its paths pointed at this folder
+    text = (ex / "growing_head" / "growing.fcc").read_text()
+    text = text.replace("../../../build/examples/growing_head/", f"{d}/").replace(
+        "weight: 0 floret.weights", f"weight: 0 {ex / 'growing_head' / 'floret.weights'}")
+    (d / "growing.fcc").write_text(text)
+    out = d / "canopy"
+    t0 = time.perf_counter()
+    res = subprocess.run([_cli(), str(d / "growing.fcc"), "-o", str(out), "-q"], capture_output=True, text=True)
+    seconds = time.perf_counter() - t0
+    if res.returncode != 0:
+        raise RuntimeError(f"fccompose failed ({res.returncode}): {res.stderr.strip()}")
+    with open(out / "log.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    lo = min(float(r["min_edge_stretch"]) for r in rows)
+    hi = max(float(r["max_edge_stretch"]) for r in rows)
+    outside = sum(float(r["min_edge_stretch"]) < 0.5 or float(r["max_edge_stretch"]) > 1.5 for r in rows)
+    inter = [int(r["intersecting_pairs"]) for r in rows if int(r["intersecting_pairs"]) >= 0]
+    note = (f"88,960 triangles, {len(rows) - 1} frames; {sum(int(r['collisions_found']) for r in rows)} "
+            f"collisions found, {sum(int(r['remaining_pairs']) for r in rows)} left; intersecting pairs at "
+            f"sanity checks {max(inter) if inter else 'n/a'}; edge stretch {lo:.2f}-{hi:.2f}, {outside} frames "
+            f"outside [0.5, 1.5]; florets present at the end {rows[-1]['florets_present']}, waiting "
+            f"{rows[-1]['florets_waiting']}; florets retreated {sum(int(r['florets_retreated']) for r in rows)}")
+    return [Result("fccompose_dense_head", seconds / 60, "min", "", None, note)]
+
+
+BENCHMARKS = [growth, dense_head]
