@@ -13,6 +13,9 @@ and, so that the output stays collision-free, their vertices are put back where 
 start of the step (``x0`` is collision-free; repeated while crossings are left, at most 10 times,
 then the whole step is put back). Used by
 ``fccompose`` (growth) and ``subdivide`` (from the in-plane quadrisected mesh to the Loop positions).
+``fccompose`` uses the whole-part fallback instead (``fallback="parts"``, :func:`retreat_parts`,
+:func:`reshape_parts`), with a relaxation of the internal constraints between rounds and repair
+passes for parts left out of shape, so that a floret is never torn by the fallback.
 """
 from __future__ import annotations
 
@@ -569,7 +572,6 @@ class CollisionResult:
     """rounds whose collision response was followed by a relaxation of the internal constraints"""
     retreated: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     """parts the ``"parts"`` fallback moved back (:func:`retreat_parts`; fccompose: florets)"""
-    retreat_rounds: int = 0
     whole_step: bool = False
     repairs: int = 0
     """passes that relaxed parts left out of shape and resolved what that moved"""
@@ -777,7 +779,6 @@ def _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect) -> None:
                             detect=detect)
         retreated |= ret.fraction < 1.0
         res.reverted += ret.vertices
-        res.retreat_rounds += ret.rounds
         res.whole_step = ret.whole_step
         if ret.whole_step:
             res.retreated = np.arange(n_parts)
@@ -787,9 +788,8 @@ def _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect) -> None:
         if bad.any():
             if carried is None:
                 carried = parts["carried"]()
-            moved, rounds = reshape_parts(x0, x1, carried, vp, bad, detect)
+            moved, _ = reshape_parts(x0, x1, carried, vp, bad, detect)
             retreated |= moved
-            res.retreat_rounds += rounds
             res.reverted += int(np.count_nonzero(moved[vp]))
     res.retreated = np.nonzero(retreated)[0]
 

@@ -16,9 +16,15 @@
 4. continuous collision detection from the collision-free positions of the previous step to the
    predicted ones, collision constraints C_vt/C_ee (eqs. 4.6-4.7) solved for ``collision
    iterations``, re-detected up to ``max collision retries`` times
-   (:func:`inflo.tools.collide.resolve_collisions`); pairs still crossing are reported by floret
-   and frame, and their vertices put back (so the canopy stays collision-free), or the run stops
-   with ``strict``;
+   (:func:`inflo.tools.collide.resolve_collisions`). After each of the first ``RELAX_ROUNDS``
+   rounds the florets it moved get ``relax iterations`` internal sweeps (collision and internal
+   constraints solved together, as Alg. 1 intends), and florets left outside the ``edge stretch
+   bounds`` get repair passes. A step that leaves pairs crossing is redone as two half steps, up
+   to ``max substeps`` deep; where the deepest still leaves some, they are reported by floret and
+   frame and those florets moved back whole along their own motion
+   (:func:`inflo.tools.collide.retreat_parts`; so the canopy stays collision-free), or the run
+   stops with ``strict``; florets still out of shape are put on their carried start-of-step shape
+   where that crosses nothing (formats/fcc.md, "Crowding");
 5. the positions are accepted.
 
 **Emergence.** A floret of an ``rba:`` placement emerges at the first RBA frame that lists it
@@ -28,8 +34,10 @@ numbered, at its first RBA pose). At the end of the first step that reaches its 
 there, at its developmental time, provided it intersects nothing: the exact static test of its
 triangles against the canopy's (:func:`inflo.tools.collide.intersecting_pairs_with`) keeps the
 positions collision-free, so the continuous detection that follows starts from a valid state. A
-floret with no room waits and is tried again after every step ("first available space"); florets
-due at the same step are taken in placement order. ``log.csv`` counts the florets present and
+floret with no room at its own size is tried at each of the ``emergence scales`` and emerges at
+the first that fits, then grows back to its own size over ``emergence growth frames``
+(:meth:`Simulation.size_factor`); one that fits at none waits and is tried again after every step
+("first available space"); florets due at the same step are taken in placement order. ``log.csv`` counts the florets present and
 those waiting.
 
 The canopy is written as ``OUT/frame_NNNN.obj`` (frame 0 is the initial state) every output
@@ -99,11 +107,10 @@ class SimulationDiverged(RuntimeError):
 
 DIVERGED_STRETCH = 50.0
 """A frame in which an edge is longer than this many times its rest length stops the run
-(:class:`SimulationDiverged`) before that frame is written: florets squeezed harder than the
-collision response can resolve lose vertices to the revert fallback, get torn, and the constraint
-solve then diverges (within a frame or two, to coordinates of 1e11 and more). Crowded runs that
-stay whole stretch an edge to 5-15 times its rest length at the worst (collision constraints are
-projected after the internal ones)."""
+(:class:`SimulationDiverged`) before that frame is written: the last guard against a constraint
+solve running away (to coordinates of 1e11 and more within a frame or two) on florets squeezed
+far harder than the collision response can resolve. (The per-vertex revert fallback, which tore
+florets carried by their RBA motion, is gone: florets are moved back whole.)"""
 
 
 @dataclass
