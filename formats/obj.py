@@ -319,12 +319,13 @@ def _fmt_rows(arr: np.ndarray, prefix: str, fmt: str, block: int = 4096) -> str:
     """Rows of ``arr`` as ``prefix x y z\n`` lines; one %-format per block of rows (fast)."""
     if len(arr) == 0:
         return ""
-    row = prefix + " ".join([fmt] * arr.shape[1]) + "\n"
-    flat = np.asarray(arr, dtype=np.float64).tolist()
+    c = arr.shape[1]
+    row = prefix + " ".join([fmt] * c) + "\n"
+    flat = np.asarray(arr, dtype=np.float64).ravel().tolist()
     out = []
-    for k in range(0, len(flat), block):
-        chunk = flat[k:k + block]
-        out.append((row * len(chunk)) % tuple(x for r in chunk for x in r))
+    for k in range(0, len(arr), block):
+        n = min(block, len(arr) - k)
+        out.append((row * n) % tuple(flat[k * c:(k + n) * c]))
     return "".join(out)
 
 

@@ -47,3 +47,44 @@ def test_float_path_agrees_with_rational_arithmetic_on_random_pairs():
             decided += 1
             assert triangles_intersect(*x) == got
     assert decided > 200
+
+
+def test_exact_fallback_agrees_with_rational_arithmetic_across_magnitudes():
+    """The integer evaluation (one power-of-two scale for both triangles) decides as rational
+    arithmetic does, with coordinates of very different magnitudes in one pair (tiny offsets on
+    large coordinates, subnormal-sized ones), touching, coplanar and coincident cases; a
+    non-finite coordinate shares no point."""
+    from fractions import Fraction
+
+    def rational(p0, p1, p2, q0, q1, q2):  # the same predicates on Fractions, as a reference
+        import inflo.tools.collide.exact as ex
+        P = [tuple(Fraction(float(c)) for c in v) for v in (p0, p1, p2)]
+        Q = [tuple(Fraction(float(c)) for c in v) for v in (q0, q1, q2)]
+        s = [ex._orient3d(*P, q) for q in Q]
+        if min(s) > 0 or max(s) < 0:
+            return False
+        t = [ex._orient3d(*Q, p) for p in P]
+        if min(t) > 0 or max(t) < 0:
+            return False
+        return (any(ex._seg_tri(P[k], P[(k + 1) % 3], *Q) for k in range(3))
+                or any(ex._seg_tri(Q[k], Q[(k + 1) % 3], *P) for k in range(3)))
+
+    rng = np.random.default_rng(3)
+    hits = 0
+    for k in range(600):
+        x = rng.integers(-2, 3, (6, 3)).astype(float) * rng.choice([1.0, 1e-9, 1e6, 1e-300])
+        if k % 4 == 0:
+            x[3] = x[0]  # a coincident vertex
+        if k % 4 == 1:
+            x[:, 2] = 0.0  # coplanar
+        if k % 4 == 2:
+            x[3:] += rng.choice([0.0, 2.0 ** -40])  # a tiny offset on the second triangle
+        want = rational(*x)
+        assert triangles_intersect_exact(*x) == want
+        hits += want
+    assert 0 < hits < 600
+    x = np.zeros((6, 3))
+    x[1, 0] = x[2, 1] = x[4, 0] = x[5, 1] = 1.0
+    assert triangles_intersect_exact(*x)
+    x[0, 0] = np.nan
+    assert not triangles_intersect_exact(*x)

@@ -40,6 +40,8 @@ REPAIR_PASSES = 2
 REPAIR_RELAXATIONS = 4
 #: detect/solve rounds without fewer crossing pairs after which the retries stop early
 STALL_ROUNDS = 4
+#: slack of the round-0 broad-phase boxes, in grid cells (:class:`_StepBroadPhase`)
+BROAD_SLACK = 0.02
 
 
 @dataclass
@@ -90,10 +92,13 @@ class Contacts:
             return self
         if len(self) == 0:
             return other
-        key_a = np.concatenate([self.kind[:, None].astype(np.int64), self.indices], axis=1)
-        key_b = np.concatenate([other.kind[:, None].astype(np.int64), other.indices], axis=1)
-        row = {tuple(r): i for i, r in enumerate(key_a.tolist())}
-        where = np.array([row.get(tuple(r), -1) for r in key_b.tolist()], dtype=np.int64)
+        key = np.concatenate([np.concatenate([self.kind, other.kind])[:, None].astype(np.int64),
+                              np.concatenate([self.indices, other.indices])], axis=1)
+        _, inv = np.unique(key, axis=0, return_inverse=True)
+        inv = inv.ravel()
+        row = np.full(len(key), -1, np.int64)
+        row[inv[: len(self)]] = np.arange(len(self))  # the rows of self are distinct pairs
+        where = row[inv[len(self):]]
         new = where < 0
         old = ~new
         merged = Contacts(*(getattr(self, f).copy() for f in _FIELDS))
@@ -356,11 +361,15 @@ def _changed(x, before):
 class _StepBroadPhase:
     """The broad phase of one step's detection rounds (Alg. 1 lines 10-20).
 
-    Round 0 builds grids over every element's box (from ``x0`` to the predicted ``x1``) and pairs
-    them all. Later rounds are queried by the boxes of the active elements only (those with a
-    vertex the last round's constraints moved, or in a pair still crossing): against round 0's grids
-    for partners none of whose vertices has moved since round 0 (their boxes are unchanged), and
-    against a small grid over the current boxes of the elements that have moved.
+    Round 0 builds grids over every element's box (from ``x0`` to the predicted ``x1``), grown by
+    a slack of ``BROAD_SLACK`` grid cells, pairs them all and keeps the pairs. Later rounds test
+    only pairs with an active element (one with a vertex the last round's constraints moved, or in
+    a pair still crossing). A vertex that has moved by no more than the slack in any coordinate
+    since round 0 is still inside its grown round-0 box, and so are its elements' boxes: the pairs
+    of two such elements are among round 0's (kept where an element is active and the current
+    boxes overlap). Elements with a vertex that has left its box (few: the collision response
+    moves vertices by about the thickness) are paired afresh: the active ones against round 0's
+    grids, and every active one against a small grid over the current boxes of those that left.
     """
 
     def __init__(self, x0, tri, edges, pad, cell_size):
@@ -370,13 +379,14 @@ class _StepBroadPhase:
         self.pad = pad
         self.cell_size = cell_size
         self.moved = np.zeros(len(x0), np.bool_)
+        """vertices that have left their round-0 box (the slack), in some round since round 0"""
 
     def first(self, x1):
         x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
-        self.vb = vertex_boxes(x0, x1, pad)
-        self.tb = triangle_boxes(x0, x1, tri, pad)
-        self.eb = edge_boxes(x0, x1, edges, pad)
-        origin, mean, span = _box_stats(self.vb, self.tb, self.eb)
+        vb = vertex_boxes(x0, x1, pad)
+        tb = triangle_boxes(x0, x1, tri, pad)
+        eb = edge_boxes(x0, x1, edges, pad)
+        origin, mean, span = _box_stats(vb, tb, eb)
         cell = self.cell_size
         if cell is None or not cell > 0:
             cell = mean if mean > 0 else 1.0
@@ -384,56 +394,143 @@ class _StepBroadPhase:
             cell = span / 64.0
         self.cell = cell
         self.origin = origin
+        self.slack = BROAD_SLACK * cell
+        self.x1_ref = x1.copy()
+        fat = pad + self.slack
+        self.vb = vertex_boxes(x0, x1, fat)
+        self.tb = triangle_boxes(x0, x1, tri, fat)
+        self.eb = edge_boxes(x0, x1, edges, fat)
         self.vid = np.arange(len(x0), dtype=np.int32)[:, None]
         self.grid_t = BoxGrid(self.tb, cell, self.origin, tri)
         self.grid_e = BoxGrid(self.eb, cell, self.origin, edges)
         self.grid_v = None
-        vt = self.grid_t.query(self.vb, vertices=self.vid)
-        ee = self.grid_e.query(self.eb, same=True, vertices=edges)
+        # the grown boxes' pairs, for the later rounds; this round tests those of the true boxes
+        self.vt0 = self.grid_t.query(self.vb, vertices=self.vid)
+        self.ee0 = self.grid_e.query(self.eb, same=True, vertices=edges)
+        none = np.zeros(len(x0), np.bool_)
+        no_t = np.zeros(len(tri), np.bool_)
+        no_e = np.zeros(len(edges), np.bool_)
+        vt = _live_pairs(self.vt0, self.vid, tri, x0, x1, pad, none, none, no_t, False)
+        ee = _live_pairs(self.ee0, edges, edges, x0, x1, pad, none, no_e, no_e, False)
         return vt, ee
 
     def again(self, x1, active):
         x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
-        if self.grid_v is None:
-            self.grid_v = BoxGrid(self.vb, self.cell, self.origin, self.vid)
-        self.moved |= active
+        # the active vertices moved since the last round; those now out of their round-0 box's
+        # slack have left the round-0 grids (once out, counted out for the rest of the step)
+        _escape(x1, self.x1_ref, active, self.slack, self.moved)
         moved = self.moved
         moved_t = _touching(moved, tri)
         moved_e = _touching(moved, edges)
         active_t = _touching(active, tri)
         active_e = _touching(active, edges)
-        av = np.nonzero(active)[0]
-        at = np.nonzero(active_t)[0]
-        ae = np.nonzero(active_e)[0]
+        vt = [_live_pairs(self.vt0, self.vid, tri, x0, x1, pad, active, moved, moved_t, True)]
+        ee = [_live_pairs(self.ee0, edges, edges, x0, x1, pad, active, moved_e, moved_e, True)]
         mv = np.nonzero(moved)[0]
-        mt = np.nonzero(moved_t)[0]
-        me = np.nonzero(moved_e)[0]
-        vb_m = vertex_boxes(x0[mv], x1[mv], pad)
-        tb_m = triangle_boxes(x0, x1, tri[mt], pad)
-        eb_m = edge_boxes(x0, x1, edges[me], pad)
-        if max(_box_stats(vb_m, tb_m, eb_m)[2], 0.0) > 64.0 * self.cell:
-            # a response moved something far (boxes of many cells): the cell-based grids would
-            # take absurd memory; pair the active elements afresh with box_pairs' own cell guard
-            return _candidates(x0, x1, tri, edges, pad, self.cell, active)
-        # the active elements are among the moved ones: their boxes by position in mv/mt/me
-        vb_a = vb_m[np.searchsorted(mv, av)]
-        tb_a = tb_m[np.searchsorted(mt, at)]
-        eb_a = eb_m[np.searchsorted(me, ae)]
-        small_t = BoxGrid(tb_m, self.cell, self.origin, tri[mt])
-        small_v = BoxGrid(vb_m, self.cell, self.origin, self.vid[mv])
-        small_e = BoxGrid(eb_m, self.cell, self.origin, edges[me])
-        va, ta, ea = self.vid[av], tri[at], edges[ae]
-        vt = np.concatenate([
-            _merge_vt(self.grid_t.query(vb_a, skip=moved_t, vertices=va), av, None,
-                      self.grid_v.query(tb_a, skip=moved, vertices=ta), at, active),
-            _merge_vt(small_t.query(vb_a, vertices=va), av, mt, small_v.query(tb_a, vertices=ta), at,
-                      active, v_map=mv),
-        ])
-        ee = np.concatenate([
-            _merge_ee(self.grid_e.query(eb_a, skip=moved_e, vertices=ea), ae, None, active_e),
-            _merge_ee(small_e.query(eb_a, vertices=ea), ae, me, active_e),
-        ])
-        return np.ascontiguousarray(vt, dtype=np.int32), np.ascontiguousarray(ee, dtype=np.int32)
+        if len(mv):
+            if self.grid_v is None:
+                self.grid_v = BoxGrid(self.vb, self.cell, self.origin, self.vid)
+            mt = np.nonzero(moved_t)[0]
+            me = np.nonzero(moved_e)[0]
+            vb_m = vertex_boxes(x0[mv], x1[mv], pad)
+            tb_m = triangle_boxes(x0, x1, tri[mt], pad)
+            eb_m = edge_boxes(x0, x1, edges[me], pad)
+            if max(_box_stats(vb_m, tb_m, eb_m)[2], 0.0) > 64.0 * self.cell:
+                # a response moved something far (boxes of many cells): the cell-based grids would
+                # take absurd memory; pair the active elements afresh with box_pairs' own cell guard
+                return _candidates(x0, x1, tri, edges, pad, self.cell, active)
+            av = np.nonzero(active)[0]
+            at = np.nonzero(active_t)[0]
+            ae = np.nonzero(active_e)[0]
+            # the active elements that left: against round 0's grids (partners still inside)
+            sv = np.nonzero(active & moved)[0]
+            st = np.nonzero(active_t & moved_t)[0]
+            se = np.nonzero(active_e & moved_e)[0]
+            vb_s = vertex_boxes(x0[sv], x1[sv], pad)
+            tb_s = triangle_boxes(x0, x1, tri[st], pad)
+            eb_s = edge_boxes(x0, x1, edges[se], pad)
+            vt.append(_merge_vt(self.grid_t.query(vb_s, skip=moved_t, vertices=self.vid[sv]), sv, None,
+                                self.grid_v.query(tb_s, skip=moved, vertices=tri[st]), st, active))
+            ee.append(_merge_ee(self.grid_e.query(eb_s, skip=moved_e, vertices=edges[se]), se, None,
+                                active_e))
+            # every active element against those that left
+            vb_a = vertex_boxes(x0[av], x1[av], pad)
+            tb_a = triangle_boxes(x0, x1, tri[at], pad)
+            eb_a = edge_boxes(x0, x1, edges[ae], pad)
+            small_t = BoxGrid(tb_m, self.cell, self.origin, tri[mt])
+            small_v = BoxGrid(vb_m, self.cell, self.origin, self.vid[mv])
+            small_e = BoxGrid(eb_m, self.cell, self.origin, edges[me])
+            vt.append(_merge_vt(small_t.query(vb_a, vertices=self.vid[av]), av, mt,
+                                small_v.query(tb_a, vertices=tri[at]), at, active, v_map=mv))
+            ee.append(_merge_ee(small_e.query(eb_a, vertices=edges[ae]), ae, me, active_e))
+        return (np.ascontiguousarray(np.concatenate(vt), dtype=np.int32),
+                np.ascontiguousarray(np.concatenate(ee), dtype=np.int32))
+
+
+@njit(cache=True)
+def _escape(x1, ref, active, slack, out):
+    """Flag in ``out`` the active vertices of ``x1`` more than ``slack`` from ``ref`` in a coordinate."""
+    for i in range(x1.shape[0]):
+        if active[i] and not out[i]:
+            for d in range(3):
+                if not abs(x1[i, d] - ref[i, d]) <= slack:
+                    out[i] = True
+                    break
+
+
+@njit(cache=True, inline="always")
+def _element_box(verts, k, x0, x1, pad, box):
+    for d in range(3):
+        box[d] = np.inf
+        box[d + 3] = -np.inf
+    for j in range(verts.shape[1]):
+        v = verts[k, j]
+        for d in range(3):
+            box[d] = min(box[d], x0[v, d], x1[v, d])
+            box[d + 3] = max(box[d + 3], x0[v, d], x1[v, d])
+    for d in range(3):
+        box[d] -= pad
+        box[d + 3] += pad
+
+
+@njit(cache=True)
+def _live_pairs(pairs, verts_a, verts_b, x0, x1, pad, active, left_a, left_b, need_active):
+    """The rows (a, b) of ``pairs`` whose elements (rows of ``verts_a`` / ``verts_b``) have
+    overlapping boxes from ``x0`` to ``x1`` (grown by ``pad``), neither flagged in ``left_a`` /
+    ``left_b`` and, with ``need_active``, one with an ``active`` vertex; in their order."""
+    keep = np.zeros(pairs.shape[0], np.bool_)
+    ba = np.empty(6)
+    bb = np.empty(6)
+    for k in range(pairs.shape[0]):
+        a = pairs[k, 0]
+        b = pairs[k, 1]
+        if left_a[a] or left_b[b]:
+            continue
+        if need_active:
+            hit = False
+            for j in range(verts_a.shape[1]):
+                if active[verts_a[a, j]]:
+                    hit = True
+            for j in range(verts_b.shape[1]):
+                if active[verts_b[b, j]]:
+                    hit = True
+            if not hit:
+                continue
+        _element_box(verts_a, a, x0, x1, pad, ba)
+        _element_box(verts_b, b, x0, x1, pad, bb)
+        ok = True
+        for d in range(3):
+            if ba[d] > bb[d + 3] or bb[d] > ba[d + 3]:
+                ok = False
+        keep[k] = ok
+    out = np.empty((np.count_nonzero(keep), 2), np.int32)
+    n = 0
+    for k in range(pairs.shape[0]):
+        if keep[k]:
+            out[n, 0] = pairs[k, 0]
+            out[n, 1] = pairs[k, 1]
+            n += 1
+    return out
 
 
 def detect_collisions(x0: np.ndarray, x1: np.ndarray, tri_indices: np.ndarray, edge_indices: np.ndarray,
@@ -610,10 +707,10 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         Broad-phase cell size.
     relax : callable or None
         ``relax(x1, moved)``: called after the collision constraints of a round were projected,
-        with ``moved`` the (n,) bool mask of the vertices they moved; it re-solves the internal
-        constraints of what they moved, in place (the collision and internal constraints are then
-        solved together, as in Alg. 1, rather than the collision response having the last word on
-        the florets' shape). The next round's detection checks what it moved.
+        with ``moved`` the (n,) bool mask of the vertices they moved; it re-solves the internal constraints of what they moved, in place (the collision and
+        internal constraints are then solved together, as in Alg. 1, rather than the collision
+        response having the last word on the florets' shape). The next round's detection checks
+        what it moved.
     relax_rounds : int or None
         Rounds that call ``relax`` (the first ones); the later rounds are the plain collision
         response, so that the loop converges where the two disagree. None: half the rounds.

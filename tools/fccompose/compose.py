@@ -502,21 +502,41 @@ def _undo_runaway(x: np.ndarray, verts: np.ndarray, before: np.ndarray, floret: 
     """Put back the florets a relaxation moved by more than half their own size: the bending
     projection can run away on a floret the collision response left badly out of shape, and one
     flung vertex would make the next detection round's boxes span the canopy."""
-    disp = np.sqrt(((x[verts] - before) ** 2).sum(axis=1))
-    if not len(disp):
-        return
-    ids, inv = np.unique(floret, return_inverse=True)
-    worst = np.zeros(len(ids))
-    np.maximum.at(worst, inv, disp)
-    lo = np.full((len(ids), 3), np.inf)
-    hi = np.full((len(ids), 3), -np.inf)
-    np.minimum.at(lo, inv, before)
-    np.maximum.at(hi, inv, before)
-    size = np.sqrt(((hi - lo) ** 2).sum(axis=1))
-    bad = ~(worst <= 0.5 * size)
-    if bad.any():
-        back = bad[inv]
-        x[verts[back]] = before[back]
+    if len(verts):
+        _undo_runaway_kernel(x, np.ascontiguousarray(verts, dtype=np.int64), before,
+                             np.ascontiguousarray(floret, dtype=np.int64))
+
+
+@numba.njit(cache=True)
+def _undo_runaway_kernel(x, verts, before, floret):
+    """:func:`_undo_runaway`: ``verts`` grouped or not, ``floret`` their florets."""
+    nf = floret.max() + 1
+    worst = np.zeros(nf)
+    lo = np.full((nf, 3), np.inf)
+    hi = np.full((nf, 3), -np.inf)
+    for k in range(verts.shape[0]):
+        f = floret[k]
+        i = verts[k]
+        d = 0.0
+        for c in range(3):
+            e = x[i, c] - before[k, c]
+            d += e * e
+            lo[f, c] = min(lo[f, c], before[k, c])
+            hi[f, c] = max(hi[f, c], before[k, c])
+        d = math.sqrt(d)
+        if not d <= worst[f]:
+            worst[f] = d if d == d else np.inf
+    bad = np.zeros(nf, np.bool_)
+    for f in range(nf):
+        if worst[f] > 0.0:
+            size = 0.0
+            for c in range(3):
+                size += (hi[f, c] - lo[f, c]) ** 2
+            bad[f] = not worst[f] <= 0.5 * math.sqrt(size)
+    for k in range(verts.shape[0]):
+        if bad[floret[k]]:
+            for c in range(3):
+                x[verts[k], c] = before[k, c]
 
 
 def _merged(failed: CollisionResult, a: CollisionResult, b: CollisionResult) -> CollisionResult:
