@@ -558,3 +558,56 @@ def test_phase_effect_each_floret_at_the_stage_its_age_gives(inputs, tmp_path):
         opened.append(u)
     # centripetal: the florets formed first (outer) are the most open
     assert opened[0] == N_FRAMES - 1 and opened[-1] < opened[0]
+
+
+def test_dense_growing_head_stays_in_shape_collision_free_and_whole(tmp_path):
+    """The growing_head example made small for CI (issue 13): the disk floret of
+    pipelines/examples (polygonized as the example does), a centripetal dense head from
+    phyllotaxis with the phase effect (36 frames, each floret opening over 20), fccompose with the
+    example's parameters. Neighbouring corollas touch (collisions are found and resolved), and in
+    every frame: no intersecting pair at the sanity checks, every edge within [0.5, 1.5] x its
+    rest length, and at the end every floret present and whole (the florets emerge over more than
+    half the run, so the outer ones are open at the end and the inner ones not: the phase effect
+    itself is checked floret by floret in the test above)."""
+    ex = REPO / "pipelines" / "examples"
+    gh = ex / "growing_head"
+    res = run_cli("floret-animate", ex / "disk_bud.floret", ex / "disk_open.floret", "--frames", "12",
+                  "-o", tmp_path / "frames", "-q")
+    assert res.returncode == 0, res.stderr
+    res = run_cli("polygonize", tmp_path / "frames", "--lambda", "0.25", "--eta", gh / "lobe_eta.func",
+                  "-o", tmp_path / "obj", "-q")
+    assert res.returncode == 0, res.stderr
+    toml = (ex / "phyllotaxis" / "dense_head.toml").read_text()
+    assert "frames = 90" in toml and "development_frames = 50" in toml
+    toml = toml.replace("frames = 90", "frames = 36").replace("development_frames = 50", "development_frames = 20")
+    (tmp_path / "head.toml").write_text(toml)
+    res = run_cli("phyllotaxis", tmp_path / "head.toml", "-o", tmp_path / "head", "-q")
+    assert res.returncode == 0, res.stderr
+    from inflo.formats.scn import read_scn
+    scene = read_scn(tmp_path / "head" / "scene.scn")
+    starts = np.array([p.frame_start for p in scene.placements])
+    assert all(p.frame_end - p.frame_start == 20 for p in scene.placements)
+    assert starts.max() - starts.min() > 18 and starts.max() > 36 - 20
+    shutil.copy(gh / "floret.weights", tmp_path / "floret.weights")
+    fcc = (gh / "growing.fcc").read_text().replace("../../../build/examples/growing_head/", "")
+    assert "run for number of frames: 80" in fcc
+    (tmp_path / "g.fcc").write_text(fcc.replace("run for number of frames: 80", "run for number of frames: 36"))
+    res = run_cli("fccompose", tmp_path / "g.fcc", "-o", tmp_path / "out", "-q", "--strict")
+    assert res.returncode == 0, res.stderr
+    log = read_log(tmp_path / "out")
+    assert len(log) == 37
+    assert sum(int(r["collisions_found"]) for r in log) > 500  # crowded: corollas meet
+    assert all(int(r["intersecting_pairs"]) in (-1, 0) for r in log)
+    assert sum(int(r["intersecting_pairs"]) == 0 for r in log) >= 4  # the sanity checks ran
+    lo = min(float(r["min_edge_stretch"]) for r in log)
+    hi = max(float(r["max_edge_stretch"]) for r in log)
+    assert 0.5 <= lo and hi <= 1.5, (lo, hi)
+    last = log[-1]
+    assert int(last["florets_waiting"]) == 0 and int(last["florets_smaller"]) == 0
+    n = int(last["florets_present"])
+    assert n > 100
+    # every floret in the last frame, none torn: its own template's triangle count, exact check
+    mesh = read_obj(tmp_path / "out" / "frame_0036.obj")
+    tpl = read_obj(tmp_path / "obj" / "frame_0000.obj")
+    assert len(mesh.faces) == n * len(tpl.faces)
+    assert len(intersecting_pairs(mesh.vertices, mesh.faces)) == 0
