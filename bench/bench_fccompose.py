@@ -133,7 +133,8 @@ def dense_head(ctx: BenchContext) -> list[Result]:
     hi = max(float(r["max_edge_stretch"]) for r in rows)
     outside = sum(float(r["min_edge_stretch"]) < 0.5 or float(r["max_edge_stretch"]) > 1.5 for r in rows)
     inter = [int(r["intersecting_pairs"]) for r in rows if int(r["intersecting_pairs"]) >= 0]
-    note = (f"88,960 triangles, {len(rows) - 1} frames; {sum(int(r['collisions_found']) for r in rows)} "
+    n_tri = sum(1 for line in open(out / f"frame_{len(rows) - 1:04d}.obj") if line.startswith("f "))
+    note = (f"{n_tri:,} triangles, {len(rows) - 1} frames; {sum(int(r['collisions_found']) for r in rows)} "
             f"collisions found, {sum(int(r['remaining_pairs']) for r in rows)} left; intersecting pairs at "
             f"sanity checks {max(inter) if inter else 'n/a'}; edge stretch {lo:.2f}-{hi:.2f}, {outside} frames "
             f"outside [0.5, 1.5]; florets present at the end {rows[-1]['florets_present']}, waiting "
