@@ -20,6 +20,7 @@ CLI_NAMES = [
     "subdivide",
     "branch-gen",
     "canopy-render",
+    "canopy-export",
 ]
 
 

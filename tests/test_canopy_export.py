@@ -1,0 +1,213 @@
+"""canopy-export (issue 21): OBJ sequences + colours -> one USD file, read back with pxr.
+
+A tiny synthetic build: a 3-frame sequence whose third frame gains a vertex and a face (a floret
+emerging), and a static part (one OBJ file without materials). The USD is opened with
+``Usd.Stage.Open`` and checked against the OBJ frames: points per time code (float32 rounding),
+time range and fps, faces sampled only where they change, subsets and linear material colours,
+upAxis and metersPerUnit; bad input exits 2 with one line and leaves no file.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+pxr = pytest.importorskip("pxr")
+from pxr import Usd, UsdGeom, UsdShade  # noqa: E402
+
+from conftest import no_partial_files  # noqa: E402
+from inflo.formats.obj import read_obj  # noqa: E402
+from inflo.formats.pc2 import encode_pc2, read_pc2  # noqa: E402
+from inflo.tools.canopy_export import cli as export_cli  # noqa: E402
+from inflo.tools.canopy_export.usd import srgb_to_linear, vertex_normals  # noqa: E402
+
+# frame k: the quad's far corner rises; frame 2 adds vertex 5 and face (2, 5, 3), material mtl4
+_BASE = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0)]
+
+
+def _frame_text(k: int) -> str:
+    verts = [list(v) for v in _BASE]
+    verts[2][2] = 0.1234567 * k
+    faces = [("mtl3", (1, 2, 3)), ("mtl4", (1, 3, 4))]
+    if k == 2:
+        verts.append([0.5, 1.5, 0.3333333])
+        faces.append(("mtl4", (3, 5, 4)))
+    lines = [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in verts]
+    current = None
+    for mtl, f in faces:
+        if mtl != current:
+            lines.append(f"usemtl {mtl}")
+            current = mtl
+        lines.append("f " + " ".join(map(str, f)))
+    return "\n".join(lines) + "\n"
+
+
+@pytest.fixture
+def build(tmp_path):
+    seq = tmp_path / "canopy"
+    seq.mkdir()
+    for k in range(3):
+        (seq / f"frame_{k:04d}.obj").write_text(_frame_text(k))
+    static = tmp_path / "stem.obj"
+    static.write_text("v 0 0 0\nv 0 -1 0\nv 0.1 -1 0\nf 1 2 3\n")
+    colors = tmp_path / "colors.toml"
+    colors.write_text('3 = [0.5, 0.25, 1.0]\nmtl4 = "#ff8000"\n')
+    return tmp_path, seq, static, colors
+
+
+def _run(*args):
+    return CliRunner().invoke(export_cli.main, ["-q", *map(str, args)])
+
+
+def _error_line(res) -> str:
+    lines = [l for l in res.stderr.splitlines() if l.strip()]
+    assert len(lines) == 1, res.stderr
+    return lines[0]
+
+
+def test_usd_matches_the_obj_frames(build):
+    tmp, seq, static, colors = build
+    out = tmp / "out" / "flower.usdc"
+    res = _run(f"petals={seq}", static, "--colors", colors, "--fps", 30, "--units", "mm", "-o", out)
+    assert res.exit_code == 0, res.output
+    assert out.read_bytes()[:8] == b"PXR-USDC"
+    stage = Usd.Stage.Open(str(out))
+    assert UsdGeom.GetStageUpAxis(stage) == "Y"
+    assert UsdGeom.GetStageMetersPerUnit(stage) == pytest.approx(0.001)
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1.0, 3.0)
+    assert stage.GetTimeCodesPerSecond() == 30.0 and stage.GetFramesPerSecond() == 30.0
+    assert stage.GetDefaultPrim().GetPath() == "/flower"
+
+    mesh = UsdGeom.Mesh.Get(stage, "/flower/petals")
+    assert mesh and mesh.GetSubdivisionSchemeAttr().Get() == "none" and mesh.GetDoubleSidedAttr().Get()
+    assert mesh.GetPointsAttr().GetTimeSamples() == [1.0, 2.0, 3.0]
+    for k in range(3):
+        obj = read_obj(seq / f"frame_{k:04d}.obj")
+        pts = np.asarray(mesh.GetPointsAttr().Get(1.0 + k))
+        np.testing.assert_array_equal(pts, obj.vertices.astype(np.float32))
+        ext = np.asarray(mesh.GetExtentAttr().Get(1.0 + k))
+        np.testing.assert_array_equal(ext, [pts.min(0), pts.max(0)])
+        np.testing.assert_array_equal(np.asarray(mesh.GetFaceVertexIndicesAttr().Get(1.0 + k)), obj.faces.ravel())
+        assert list(mesh.GetFaceVertexCountsAttr().Get(1.0 + k)) == [3] * obj.n_faces
+    # faces written where they change (frames 1 and 3), not at every frame
+    assert mesh.GetFaceVertexIndicesAttr().GetTimeSamples() == [1.0, 3.0]
+    assert mesh.GetFaceVertexCountsAttr().GetTimeSamples() == [1.0, 3.0]
+    assert not mesh.GetNormalsAttr().HasAuthoredValue()
+
+    # one subset per usemtl, bound to a UsdPreviewSurface of the colour file's colour, linear
+    subsets = {s.GetPrim().GetName(): s for s in UsdShade.MaterialBindingAPI(mesh.GetPrim()).GetMaterialBindSubsets()}
+    assert set(subsets) == {"mtl3", "mtl4"}
+    assert list(subsets["mtl3"].GetIndicesAttr().Get(1.0)) == [0]
+    assert list(subsets["mtl4"].GetIndicesAttr().Get(2.0)) == [1]
+    assert list(subsets["mtl4"].GetIndicesAttr().Get(3.0)) == [1, 2]
+    assert UsdGeom.Subset.GetFamilyType(mesh, "materialBind") == "nonOverlapping"
+    srgb_to_lin = lambda c: c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4  # noqa: E731
+    want = {"mtl3": (0.5, 0.25, 1.0), "mtl4": (1.0, 128 / 255, 0.0)}
+    for name, rgb in want.items():
+        mat, _ = UsdShade.MaterialBindingAPI(subsets[name].GetPrim()).ComputeBoundMaterial()
+        shader = mat.ComputeSurfaceSource()[0]
+        assert shader.GetIdAttr().Get() == "UsdPreviewSurface"
+        got = tuple(shader.GetInput("diffuseColor").Get())
+        assert got == pytest.approx([srgb_to_lin(c) for c in rgb], abs=1e-6)
+    assert tuple(shader.GetInput("diffuseColor").Get())[1] == pytest.approx(0.2158605, abs=1e-6)
+
+    # the static part: written once, no time samples, its faces bound to a default material
+    stem = UsdGeom.Mesh.Get(stage, "/flower/stem")
+    assert stem.GetPointsAttr().GetTimeSamples() == [] and stem.GetFaceVertexIndicesAttr().GetTimeSamples() == []
+    np.testing.assert_array_equal(np.asarray(stem.GetPointsAttr().Get(2.0)),
+                                  np.float32([[0, 0, 0], [0, -1, 0], [0.1, -1, 0]]))
+    mat, _ = UsdShade.MaterialBindingAPI(stem.GetPrim()).ComputeBoundMaterial()
+    assert mat and mat.GetPrim().GetName() == "stem_default"
+
+
+def test_constant_topology_is_written_once_and_text_output(build):
+    tmp, seq, static, colors = build
+    (seq / "frame_0002.obj").write_text(_frame_text(1).replace("0.123457", "0.25"))
+    out = tmp / "flower.usda"
+    res = _run(seq, "--normals", "--start-frame", 0, "-o", out)
+    assert res.exit_code == 0, res.output
+    assert out.read_text().startswith("#usda 1.0")
+    stage = Usd.Stage.Open(str(out))
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (0.0, 2.0)
+    assert UsdGeom.GetStageMetersPerUnit(stage) == pytest.approx(0.01)  # --units cm, the default
+    assert stage.GetTimeCodesPerSecond() == 24.0
+    mesh = UsdGeom.Mesh.Get(stage, "/flower/canopy")  # named after its folder
+    assert mesh.GetFaceVertexIndicesAttr().GetTimeSamples() == []
+    assert list(mesh.GetFaceVertexIndicesAttr().Get()) == [0, 1, 2, 0, 2, 3]
+    assert mesh.GetPointsAttr().GetTimeSamples() == [0.0, 1.0, 2.0]
+    nrm = np.asarray(mesh.GetNormalsAttr().Get(0.0))
+    np.testing.assert_allclose(nrm, [[0, 0, 1]] * 4, atol=1e-7)
+    assert mesh.GetNormalsAttr().GetTimeSamples() == [0.0, 1.0, 2.0]
+
+
+def test_deterministic_and_pc2(build):
+    tmp, seq, static, colors = build
+    (seq / "frame_0002.obj").write_text(_frame_text(1).replace("0.123457", "0.25"))
+    a, b = tmp / "a" / "x.usdc", tmp / "b" / "x.usdc"
+    assert _run(seq, "--colors", colors, "--pc2", tmp / "pc2", "-o", a).exit_code == 0
+    assert _run(seq, "--colors", colors, "-o", b).exit_code == 0
+    assert a.read_bytes() == b.read_bytes()
+    pts, start, sampling = read_pc2(tmp / "pc2" / "canopy.pc2")
+    assert (start, sampling) == (1.0, 1.0) and pts.shape == (3, 4, 3)
+    for k in range(3):
+        np.testing.assert_array_equal(pts[k], read_obj(seq / f"frame_{k:04d}.obj").vertices.astype(np.float32))
+    assert encode_pc2(pts)[:12] == b"POINTCACHE2\x00"
+
+
+def _assert_bad(res, out, *words):
+    assert res.exit_code == 2, res.output
+    line = _error_line(res)
+    assert line.startswith("canopy-export: error: ")
+    for w in words:
+        assert w in line, line
+    assert not out.exists()
+    assert no_partial_files(out.parent) if out.parent.exists() else True
+    if out.parent.exists():
+        assert not [p for p in out.parent.iterdir() if p.name.startswith(f".{out.name}")]
+
+
+def test_bad_input_exits_2_without_output(build):
+    tmp, seq, static, colors = build
+    out = tmp / "flower.usdc"
+    _assert_bad(_run(tmp / "nowhere", "-o", out), out, "nowhere", "no such file or folder")
+    # a frame with the previous frame's faces but an extra vertex
+    (seq / "frame_0001.obj").write_text(_frame_text(1) + "v 9 9 9\n")
+    _assert_bad(_run(seq, "-o", out), out, "frame_0001.obj", "expected 4 vertices", "found 5")
+    (seq / "frame_0001.obj").write_text(_frame_text(1))
+    # faces that change, where the topology is declared constant (or needed by a PC2 cache)
+    _assert_bad(_run(seq, "--constant-topology", "-o", out), out, "frame_0002.obj", "expected 4 vertices",
+                "found 5")
+    _assert_bad(_run(seq, "--pc2", tmp / "pc2", "-o", out), out, "frame_0002.obj", "PC2")
+    assert not (tmp / "pc2").exists()
+    # a bad colour file line
+    colors.write_text('3 = [0.5, 0.25, 1.0]\n4 = "blurple"\n')
+    _assert_bad(_run(seq, "--colors", colors, "-o", out), out, "colors.toml", "'4'", "blurple")
+    colors.write_text("3 = [0.5, 0.25\n4 = [0, 0, 0]\n")
+    _assert_bad(_run(seq, "--colors", colors, "-o", out), out, "colors.toml", "line 2")
+    # sequences of different lengths; a malformed OBJ line
+    short = tmp / "short"
+    short.mkdir()
+    (short / "frame_0000.obj").write_text(_frame_text(0))
+    _assert_bad(_run(seq, short, "-o", out), out, "expected 3 frames", "found 1")
+    (seq / "frame_0001.obj").write_text(_frame_text(1).replace("f 1 3 4", "f 1 3 x"))
+    _assert_bad(_run(seq, "-o", out), out, "frame_0001.obj:", "found")
+    # two parts of one name
+    (seq / "frame_0001.obj").write_text(_frame_text(1))
+    _assert_bad(_run(f"a={seq}", f"a={static}", "-o", out), out, "'a'")
+
+
+def test_usage_errors_and_help():
+    res = _run("x", "-o", "out.obj")
+    assert res.exit_code == 2 and ".usdc" in res.stderr
+    res = _run("x", "--units", "furlong", "-o", "out.usdc")
+    assert res.exit_code == 2 and "metres per unit" in res.stderr
+    res = CliRunner().invoke(export_cli.main, ["--help"])
+    assert res.exit_code == 0 and "Universal Scene Description" in res.output
+
+
+def test_helpers():
+    np.testing.assert_allclose(srgb_to_linear([0.0, 0.04045, 0.5, 1.0]), [0.0, 0.04045 / 12.92, 0.21404114, 1.0])
+    # degenerate input: a zero-area face and an unused vertex get zero normals, no NaN
+    v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [5, 5, 5]], float)
+    n = vertex_normals(v, np.array([[0, 1, 2]]))
+    assert n.dtype == np.float32 and np.all(n == 0)

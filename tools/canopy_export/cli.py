@@ -1,0 +1,82 @@
+"""``canopy-export``: OBJ sequences (+ a colour file) -> one USD file for Blender, Houdini, Maya.
+
+Usage::
+
+    canopy-export [NAME=]IN_DIR|'GLOB'|IN.obj [...] -o OUT.usdc|OUT.usda [options]
+
+Each input is a part: a folder of OBJ frames, a quoted glob, or one OBJ file (static), named
+``NAME`` or after its folder. Sequences exported together need the same number of frames;
+frame k of each (0-based, natural file order) is time code ``--start-frame + k``. One Mesh prim
+per part: points and extent time-sampled, faces written once, or sampled where they change
+(florets emerging); a GeomSubset per OBJ ``usemtl`` bound to a UsdPreviewSurface whose
+diffuseColor is the material's colour (``--colors FILE.toml``, canopy-render's colour file and
+palette) in linear RGB. ``.usdc``/``.usd`` is binary, ``.usda`` text. See formats/usd.md.
+
+Examples::
+
+    canopy-export tepals=build/lily/canopy column=build/lily/column_obj --colors pipelines/lily/colors.toml \\
+        -o build/lily/lily.usdc
+    canopy-export build/yarrow/canopy build/yarrow/branches --units mm --fps 30 -o yarrow.usda
+    canopy-export build/lily/canopy --pc2 build/lily/pc2 -o lily.usdc   # + tepals' point cache
+
+Open it in Blender: File > Import > Universal Scene Description, press play.
+"""
+from __future__ import annotations
+
+import click
+
+from inflo.tools.common.cli import inflo_command, progress
+
+from .export import UNITS, ExportOptions, export_canopy, parse_units
+from .parts import frame_count, resolve_parts
+
+__all__ = ["main"]
+
+
+def _units(ctx, param, value):
+    try:
+        return parse_units(value)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc)) from None
+
+
+def _output(ctx, param, value):
+    if not value.lower().endswith((".usdc", ".usda", ".usd")):
+        raise click.BadParameter(f"expected a name ending .usdc, .usda or .usd, found {value!r}")
+    return value
+
+
+@inflo_command("canopy-export", help="OBJ sequences + colours -> one USD growth animation (formats/usd.md).",
+               epilog="Open it in Blender: File > Import > Universal Scene Description, press play.")
+@click.argument("inputs", nargs=-1, required=True, metavar="[NAME=]IN_DIR|GLOB|IN.obj...")
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), callback=_output,
+              help="Output .usdc (binary), .usda (text) or .usd (binary).")
+@click.option("--colors", "color_file", type=click.Path(), default=None,
+              help="TOML colour file (canopy-render's): material -> colour, sRGB; written linear.")
+@click.option("--units", default="cm", show_default=True, callback=_units,
+              help=f"What one unit of the OBJ files is: {', '.join(UNITS)} or metres per unit "
+                   f"(the stage's metersPerUnit; the lily is about 15 units across).")
+@click.option("--fps", type=click.FloatRange(min=0.0, min_open=True), default=24.0, show_default=True,
+              help="Frames per second (timeCodesPerSecond).")
+@click.option("--start-frame", type=int, default=1, show_default=True,
+              help="Time code of the first frame.")
+@click.option("--normals", is_flag=True, help="Also write per-vertex normals (Blender computes its own).")
+@click.option("--constant-topology", is_flag=True,
+              help="Bad input if any frame's faces or vertex count differ from the first frame's.")
+@click.option("--pc2", "pc2_dir", type=click.Path(file_okay=False), default=None,
+              help="Also write DIR/<part>.pc2 point caches (fixed topology; Blender's Mesh Cache modifier).")
+def main(inputs, output, color_file, units, fps, start_frame, normals, constant_topology, pc2_dir, quiet, debug):
+    colors = None
+    if color_file:
+        from inflo.tools.canopy_render.colors import load_color_file
+
+        colors = load_color_file(color_file)
+    parts = resolve_parts(inputs)
+    n_frames = frame_count(parts)
+    options = ExportOptions(fps=fps, start_frame=start_frame, meters_per_unit=units, normals=normals,
+                            constant_topology=constant_topology)
+    with progress(length=n_frames, label="canopy-export", quiet=quiet, unit="frames") as bar:
+        report = export_canopy(parts, output, colors=colors, options=options, pc2_dir=pc2_dir,
+                               on_frame=lambda k: bar.update(1))
+    if not quiet:
+        click.echo(f"canopy-export: {report.summary()}", err=True)
