@@ -101,6 +101,7 @@ def test_usd_matches_the_obj_frames(build):
     assert list(subsets["mtl4"].GetIndicesAttr().Get(2.0)) == [1]
     assert list(subsets["mtl4"].GetIndicesAttr().Get(3.0)) == [1, 2]
     assert UsdGeom.Subset.GetFamilyType(mesh, "materialBind") == "nonOverlapping"
+    assert UsdGeom.Subset.ValidateFamily(mesh, UsdGeom.Tokens.face, "materialBind") == (True, "")
     srgb_to_lin = lambda c: c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4  # noqa: E731
     want = {"mtl3": (0.5, 0.25, 1.0), "mtl4": (1.0, 128 / 255, 0.0)}
     for name, rgb in want.items():
