@@ -16,6 +16,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from inflo.formats.errors import InputError
+from inflo.formats.pc2 import write_pc2
 
 from .parts import Part, frame_count, iter_frames, prim_name
 
@@ -166,8 +167,6 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
     written = []
     for name, frames in caches.items():
         target = Path(pc2_dir) / f"{name}.pc2"
-        from inflo.formats.pc2 import write_pc2
-
         write_pc2(target, np.stack(frames), start_frame=opts.start_frame)
         written.append(target)
     return ExportReport(
