@@ -14,8 +14,27 @@ from pathlib import Path
 
 from .errors import InputError
 
-__all__ = ["atomic_write", "write_text_atomic", "write_bytes_atomic", "list_sequence", "frame_name",
+__all__ = ["atomic_path", "atomic_write", "write_text_atomic", "write_bytes_atomic", "list_sequence", "frame_name",
            "remove_stale_frames"]
+
+
+@contextlib.contextmanager
+def atomic_path(path):
+    """A temporary file name beside ``path`` (hidden, ending ``.part``) for a writer that takes a
+    file name rather than a file object (e.g. a USD layer's ``Save``); on success it is renamed to
+    ``path`` (mode 0644), on error deleted. Parent folders are created."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    os.close(fd)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
 
 
 @contextlib.contextmanager
@@ -24,22 +43,13 @@ def atomic_write(path, mode: str = "w", encoding: str | None = "utf-8"):
 
     ``mode`` is ``"w"`` (text, ``\\n`` line ends) or ``"wb"``. Parent folders are created.
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    try:
+    with atomic_path(path) as tmp:
         if "b" in mode:
-            fh = os.fdopen(fd, mode)
+            fh = open(tmp, mode)
         else:
-            fh = os.fdopen(fd, mode, encoding=encoding, newline="\n")
+            fh = open(tmp, mode, encoding=encoding, newline="\n")
         with fh:
             yield fh
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
 
 
 def write_text_atomic(path, text: str) -> None:

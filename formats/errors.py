@@ -15,6 +15,7 @@ __all__ = [
     "parse_float",
     "parse_int",
     "parse_floats",
+    "read_bytes",
     "read_lines",
     "shorten",
 ]
@@ -85,6 +86,21 @@ def parse_floats(tokens: Iterable[str], path, line: int | None, what: str) -> li
     return [parse_float(t, path, line, what) for t in tokens]
 
 
+def read_bytes(path) -> bytes:
+    """The bytes of a file; :class:`InputError` (one line) when it is missing, a folder or
+    unreadable."""
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            return fh.read()
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a folder, expected a file") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+
+
 def read_lines(path) -> list[str]:
     """Read a text file as a list of lines (no line ends).
 
@@ -92,15 +108,7 @@ def read_lines(path) -> list[str]:
     when it is not UTF-8 text.
     """
     path = os.fspath(path)
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read()
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a folder, expected a file") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    data = read_bytes(path)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -12,7 +12,7 @@ import struct
 import numpy as np
 
 from .atomic import write_bytes_atomic
-from .errors import FormatError, InputError
+from .errors import FormatError, read_bytes
 
 __all__ = ["PC2_MAGIC", "encode_pc2", "write_pc2", "read_pc2"]
 
@@ -54,11 +54,7 @@ def read_pc2(path) -> tuple[np.ndarray, float, float]:
         not match its header.
     """
     path = os.fspath(path)
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read()
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
+    data = read_bytes(path)
     if len(data) < _HEADER.size or not data.startswith(PC2_MAGIC):
         raise FormatError(path, None, "a PC2 file (starting with 'POINTCACHE2')", f"{data[:12]!r}")
     _, version, n, start, sampling, frames = _HEADER.unpack_from(data)

@@ -13,15 +13,13 @@ Frame ``k`` of the sequences (0-based) is time code ``start_frame + k``.
 """
 from __future__ import annotations
 
-import contextlib
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
+from inflo.formats.atomic import atomic_path
 from inflo.formats.obj import ObjMesh
 
 __all__ = ["USD_SUFFIXES", "srgb_to_linear", "vertex_normals", "UsdBuilder"]
@@ -237,22 +235,13 @@ class UsdBuilder:
             raise ValueError(f"{path}: expected a {', '.join(USD_SUFFIXES)} file name")
         from pxr import Sdf
 
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-        os.close(fd)
-        try:
+        with atomic_path(path) as tmp:
             # the temporary name ends .part (inflo's atomic writes), so the format is given, not guessed
             layer = Sdf.Layer.New(Sdf.FileFormat.FindByExtension(suffix.lstrip(".")), tmp)
             layer.TransferContent(self.stage.GetRootLayer())
             if not layer.Save():
                 raise OSError(f"{path}: USD could not write the file")
             del layer
-            os.chmod(tmp, 0o644)
-            os.replace(tmp, path)
-        except BaseException:
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(tmp)
-            raise
 
     def to_string(self) -> str:
         """The stage as USDA text (for tests and diffs)."""

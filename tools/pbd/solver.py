@@ -490,6 +490,17 @@ def overstretched_edges(vertex_x, edge_indices, edge_rest_length, factor, floor)
     return np.nonzero(hit)[0]
 
 
+@njit(cache=True, inline="always")
+def _edge_ratio(vertex_x, edge_indices, e, rest):
+    """Length of edge ``e`` over ``rest``."""
+    i = edge_indices[e, 0]
+    j = edge_indices[e, 1]
+    dx = vertex_x[i, 0] - vertex_x[j, 0]
+    dy = vertex_x[i, 1] - vertex_x[j, 1]
+    dz = vertex_x[i, 2] - vertex_x[j, 2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz) / rest
+
+
 @njit(cache=True)
 def edge_stretch_range(vertex_x, edge_indices, edge_rest_length, floor):
     """(smallest, largest) ratio of an edge's length to its rest length over the edges whose rest
@@ -502,12 +513,7 @@ def edge_stretch_range(vertex_x, edge_indices, edge_rest_length, floor):
         r = edge_rest_length[e]
         if not r >= floor:
             continue
-        i = edge_indices[e, 0]
-        j = edge_indices[e, 1]
-        dx = vertex_x[i, 0] - vertex_x[j, 0]
-        dy = vertex_x[i, 1] - vertex_x[j, 1]
-        dz = vertex_x[i, 2] - vertex_x[j, 2]
-        q = math.sqrt(dx * dx + dy * dy + dz * dz) / r
+        q = _edge_ratio(vertex_x, edge_indices, e, r)
         if q != q:
             return q, q
         if q < lo:
@@ -526,14 +532,9 @@ def parts_out_of_bounds(vertex_x, edge_indices, edge_rest_length, vertex_part, n
         r = edge_rest_length[e]
         if not r >= floor:
             continue
-        i = edge_indices[e, 0]
-        j = edge_indices[e, 1]
-        dx = vertex_x[i, 0] - vertex_x[j, 0]
-        dy = vertex_x[i, 1] - vertex_x[j, 1]
-        dz = vertex_x[i, 2] - vertex_x[j, 2]
-        q = math.sqrt(dx * dx + dy * dy + dz * dz) / r
+        q = _edge_ratio(vertex_x, edge_indices, e, r)
         if not (q >= lo and q <= hi):
-            out[vertex_part[i]] = True
+            out[vertex_part[edge_indices[e, 0]]] = True
     return out
 
 
