@@ -201,7 +201,7 @@ def test_midrib_reflexes_early_then_lamina_flattens(tepal_obj):
 
 
 def test_weight_file_fixes_the_claws(tepal_obj):
-    from inflo.tools.fccompose.model import read_weight_file
+    from inflo.formats.weights import read_weight_file
 
     _, paths = tepal_obj
     n = len(read_obj(paths[0]).vertices)

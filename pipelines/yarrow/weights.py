@@ -1,4 +1,4 @@
-"""Weight files (fixed vertices, formats/fcc.md) of the yarrow pipeline's fccompose runs.
+"""Weight files (fixed vertices, formats/weights.md) of the yarrow pipeline's fccompose runs.
 
     python weights.py base FRAME.obj OUT.weights
         the vertices of a floret OBJ (polygonize output, local frame) on its base row: those at the
@@ -19,7 +19,7 @@ import numpy as np
 from inflo.formats.atomic import write_text_atomic
 from inflo.formats.obj import read_obj
 from inflo.formats.scn import read_scn
-from inflo.tools.fccompose.model import read_weight_file
+from inflo.formats.weights import read_weight_file
 
 
 def base_ids(obj_path) -> np.ndarray:

@@ -39,7 +39,6 @@ commas or line breaks; ``#`` starts a comment.
 from __future__ import annotations
 
 import math
-import re
 import functools
 from dataclasses import dataclass
 from pathlib import Path
@@ -47,12 +46,13 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from inflo.formats.errors import FormatError, InputError, read_lines, shorten
+from inflo.formats.errors import FormatError, InputError
 from inflo.formats.fcc import CanopyParams
 from inflo.formats.obj import read_obj, read_obj_sequence
 from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import read_scn
+from inflo.formats.weights import read_weight_file
 from inflo.tools.pbd.constraints import signed_dihedral_angle, wrap_angle
 from inflo.tools.pbd.solver import mesh_edges, mesh_hinges
 
@@ -121,30 +121,6 @@ class Floret:
     birth_frame: int = 0  # first RBA frame listing an rba: placement (its emergence); 0 otherwise
     rba_source: np.ndarray | None = None  # per RBA frame: the frame whose row places it (nearest present)
     rba_row: np.ndarray | None = None  # per RBA frame: its row in that frame
-
-
-def read_weight_file(path, n_vertices: int) -> np.ndarray:
-    """Fixed vertex ids of a ``weight`` file (0-based OBJ vertex order), sorted and unique.
-
-    Raises
-    ------
-    FormatError
-        A token that is not a non-negative integer below ``n_vertices``.
-    """
-    ids = []
-    for lineno, line in enumerate(read_lines(path), 1):
-        text = line.split("#", 1)[0]
-        for tok in re.split(r"[\s,]+", text.strip()):
-            if not tok:
-                continue
-            try:
-                v = int(tok)
-            except ValueError:
-                raise FormatError(path, lineno, "a vertex id (integer)", shorten(tok)) from None
-            if not 0 <= v < n_vertices:
-                raise FormatError(path, lineno, f"a vertex id in 0..{n_vertices - 1}", shorten(tok))
-            ids.append(v)
-    return np.unique(np.array(ids, dtype=np.int32))
 
 
 def _load_template(params: CanopyParams, entry) -> Template:
