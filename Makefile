@@ -34,10 +34,10 @@ bench: $(STAMP)
 # golden stage outputs (tests/golden/README.md): rebuild every species at draft quality and take
 # its outputs as the new goldens after an intended change; golden-check only reports differences
 golden: $(STAMP)
-	$(PY) -m inflo.tools.common.golden refresh all
+	$(PY) -m inflo.tools.golden refresh all
 
 golden-check: $(STAMP)
-	$(PY) -m inflo.tools.common.golden check all --rebuild
+	$(PY) -m inflo.tools.golden check all --rebuild
 
 lily: $(STAMP)
 	@if [ -f pipelines/lily/Makefile ]; then \

@@ -1,10 +1,10 @@
 """Golden stage outputs (issue 8): every species with ``tests/golden/<species>/manifest.toml`` is
 built at draft quality (``make -C pipelines/<species> QUALITY=draft <targets>``, once per session,
 incremental) and each golden file is compared with the build by the tolerance-aware diff of
-``inflo.tools.common.golden`` (structure exact, coordinates within 1e-5 x scene size, timings
+``inflo.tools.golden`` (structure exact, coordinates within 1e-5 x scene size, timings
 ignored; tests/golden/README.md). A failure prints the diff's report; after an intended change:
 
-    .venv/bin/python -m inflo.tools.common.golden refresh SPECIES
+    .venv/bin/python -m inflo.tools.golden refresh SPECIES
 
 ``INFLO_GOLDEN_REBUILD=1`` makes the session build use ``make -B`` (make does not see changes of
 the tools' code), ``INFLO_GOLDEN_NO_BUILD=1`` compares build/<species> as it is.
@@ -28,7 +28,7 @@ import pytest
 from inflo.formats.floret import read_floret, write_floret
 from inflo.formats.rba import RbaFrame, write_rba
 from inflo.formats.scn import Placement, Scene, write_scn
-from inflo.tools.common import golden as G
+from inflo.tools import golden as G
 
 from conftest import REPO
 
@@ -424,7 +424,7 @@ def test_manifest_errors_are_one_line(tmp_path):
 
 def test_cli_diff_check_and_refresh(tmp_path):
     repo = _fake_repo(tmp_path)
-    py = [sys.executable, "-m", "inflo.tools.common.golden"]
+    py = [sys.executable, "-m", "inflo.tools.golden"]
     run = lambda *a: subprocess.run([*py, *map(str, a)], capture_output=True, text=True, timeout=120)  # noqa: E731
     r = run("refresh", "fake", "--no-build", "--repo", repo)
     assert r.returncode == 0 and "golden fake: 4 files" in r.stdout, r.stdout + r.stderr
@@ -510,7 +510,7 @@ def test_golden(species, kind, name, species_build):
     if kind == "manifest":
         pytest.fail(name, pytrace=False)
     spec = species_build(species)
-    hint = f"\n(if the change is intended: .venv/bin/python -m inflo.tools.common.golden refresh {species})"
+    hint = f"\n(if the change is intended: .venv/bin/python -m inflo.tools.golden refresh {species})"
     if kind == "not refreshed":
         pytest.fail(f"tests/golden/{species} has a manifest but no goldens yet{hint}", pytrace=False)
     listing = spec.golden_listing()
@@ -528,7 +528,7 @@ def test_golden(species, kind, name, species_build):
 def test_lily_goldens_are_small_and_complete():
     spec = G.load_species("lily", REPO)
     listing = spec.golden_listing()
-    assert listing is not None, "run: python -m inflo.tools.common.golden refresh lily"
+    assert listing is not None, "run: python -m inflo.tools.golden refresh lily"
     names = [n for n, _ in spec.selection(listing)]
     assert all((spec.golden / n).is_file() for n in names)
     assert sum((spec.golden / n).stat().st_size for n in names) < 5 * 2**20
@@ -540,7 +540,7 @@ def test_lily_goldens_are_small_and_complete():
 def test_yarrow_goldens_are_small_and_complete():
     spec = G.load_species("yarrow", REPO)
     listing = spec.golden_listing()
-    assert listing is not None, "run: python -m inflo.tools.common.golden refresh yarrow"
+    assert listing is not None, "run: python -m inflo.tools.golden refresh yarrow"
     names = [n for n, _ in spec.selection(listing)]
     paths = [spec.golden_path(n) for n in names]
     assert all(p.is_file() for p in paths)

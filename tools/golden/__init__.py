@@ -1,0 +1,69 @@
+"""Golden stage outputs (issue 8): the golden files of each species' draft build and a
+tolerance-aware diff of inflo's stage formats. Doc (tolerances, manifest, refresh):
+``tests/golden/README.md``.
+
+- :mod:`~inflo.tools.golden.compare`: how two files are compared (structure exactly, numbers
+  within a :class:`Tolerance`, timing columns ignored) and the report of the differences;
+- :mod:`~inflo.tools.golden.species`: the species that have goldens (``tests/golden/<species>/
+  manifest.toml``: pipeline, make targets, golden files, gzipped ones, tolerances), their builds,
+  check and refresh;
+- :mod:`~inflo.tools.golden.cli`: the command line::
+
+    python -m inflo.tools.golden check [SPECIES|all] [--rebuild]   # make (incremental) + diff + report
+    python -m inflo.tools.golden refresh [SPECIES|all]             # make -B + copy the goldens in
+    python -m inflo.tools.golden diff A B                          # two files or two folders
+
+  Exit codes: 0 no difference, 1 differences (or a failed build), 2 bad input.
+
+This is test tooling (``tests/test_golden.py``, ``make golden``, ``make golden-check``), not a
+pipeline stage.
+"""
+from .compare import (
+    DEFAULT,
+    MAX_DETAILS,
+    MAX_FINDINGS,
+    TIMING_COLUMNS,
+    FileDiff,
+    Finding,
+    Tolerance,
+    diff_files,
+    diff_trees,
+    format_report,
+)
+from .species import (
+    Entry,
+    Species,
+    build_species,
+    check_listing,
+    check_species,
+    find_repo,
+    load_species,
+    make_command,
+    make_env,
+    refresh_species,
+    species_with_manifest,
+)
+
+__all__ = [
+    "Tolerance",
+    "DEFAULT",
+    "Finding",
+    "FileDiff",
+    "MAX_DETAILS",
+    "MAX_FINDINGS",
+    "TIMING_COLUMNS",
+    "diff_files",
+    "diff_trees",
+    "format_report",
+    "Entry",
+    "Species",
+    "find_repo",
+    "load_species",
+    "species_with_manifest",
+    "check_listing",
+    "check_species",
+    "refresh_species",
+    "build_species",
+    "make_command",
+    "make_env",
+]
