@@ -1,13 +1,20 @@
 """Regenerate the documentation pictures of phyllotaxis and dimorph (top views, florets as discs).
 
-    python -m inflo.tools.phyllotaxis.figures docs/
+Run from the repository root with the project's environment (it imports the installed ``inflo``)::
 
-writes ``phyllotaxis_static.png`` (Ridley's model on four surfaces, sec. 5.2),
+    .venv/bin/python docs/figures/phyllotaxis_figures.py          # into docs/
+    .venv/bin/python docs/figures/phyllotaxis_figures.py OUT_DIR  # elsewhere
+
+It writes ``phyllotaxis_static.png`` (Ridley's model on four surfaces, sec. 5.2),
 ``phyllotaxis_dynamics.png`` (fig. 5.2: centripetal, divergent, segregation; earlier and later
 stages; green = young, red = old), ``phyllotaxis_yarrow.png`` (fig. 5.3: recursive segregation
 at three times), ``phyllotaxis_compound.png`` (fig. 5.4), ``dimorph_sweep_n.png`` / ``dimorph_sweep_alpha.png`` (figs. 6.2, 6.3) and
 ``dimorph_heads.png`` (fig. 6.4a-c on a compound inflorescence, and a typed simple head) and
 ``dimorph_render.png`` (canopy-render views of real placements: discs with a petal along ``right``).
+
+It lives here, next to the pictures it makes, not in ``tools/phyllotaxis``: it draws on phyllotaxis,
+dimorph and canopy-render alike (dimorph builds on phyllotaxis, so inside phyllotaxis it made the
+two import each other).
 """
 from __future__ import annotations
 
@@ -21,11 +28,14 @@ import numpy as np
 
 from inflo.formats.scn import Group, Placement, Scene
 
-from .dynamics import frame_state, simulate
-from .hierarchy import grow_hierarchy, hierarchy_state
-from .plot import plot_panels
-from .ridley import AreaFunction, diameter_of_area, pattern_scene, static_pattern
-from .surface import builtin_curve
+from inflo.tools.phyllotaxis.dynamics import frame_state, simulate
+from inflo.tools.phyllotaxis.hierarchy import grow_hierarchy, hierarchy_state
+from inflo.tools.phyllotaxis.plot import plot_panels
+from inflo.tools.phyllotaxis.ridley import AreaFunction, diameter_of_area, pattern_scene, static_pattern
+from inflo.tools.phyllotaxis.surface import builtin_curve
+
+DOCS = Path(__file__).resolve().parents[1]
+"""The default output folder: ``docs/``, the folder above this script."""
 
 TYPE_COLOURS = {"ray": "#d62728", "small_ray": "#ff9896", "disk": "#f2c94c"}
 
@@ -104,7 +114,7 @@ def yarrow_figure(path) -> None:
 
 
 def compound_figure(path) -> None:
-    from .compound import compound_pattern
+    from inflo.tools.phyllotaxis.compound import compound_pattern
 
     prof = builtin_curve("sphere_cap", radius=3.0, angle=50)
     c = compound_pattern(prof, AreaFunction(0.5, prof.length), head_curve="cone", head_height=0.6,
@@ -172,8 +182,8 @@ def render_figure(path) -> None:
     from inflo.tools.canopy_render.render import render_meshes
     from inflo.tools.dimorph.dimorph import DimorphOptions, dimorph_scene
 
-    from .compound import compound_pattern, compound_scene
-    from .plot import discs_mesh
+    from inflo.tools.phyllotaxis.compound import compound_pattern, compound_scene
+    from inflo.tools.phyllotaxis.plot import discs_mesh
 
     prof = builtin_curve("sphere_cap", radius=4.0, angle=30)
     comp = compound_scene(compound_pattern(prof, AreaFunction(0.5, prof.length), head_curve="disk", head_fill=0.8,
@@ -195,7 +205,7 @@ def render_figure(path) -> None:
 
 def main(argv=None) -> None:
     argv = sys.argv[1:] if argv is None else argv
-    folder = Path(argv[0] if argv else "docs")
+    folder = Path(argv[0]) if argv else DOCS
     folder.mkdir(parents=True, exist_ok=True)
     static_figure(folder / "phyllotaxis_static.png")
     dynamics_figure(folder / "phyllotaxis_dynamics.png")
