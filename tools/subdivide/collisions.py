@@ -10,15 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from inflo.tools.collide import resolve_collisions
+from inflo.tools.pbd.solver import mesh_edges  # re-exported: unique edges (i < j), sorted, (e, 2) int32
 
 __all__ = ["mesh_edges", "collision_resolver", "default_spacing"]
-
-
-def mesh_edges(faces: np.ndarray) -> np.ndarray:
-    """Unique edges of a triangle mesh as sorted pairs, (e, 2) int32."""
-    F = np.asarray(faces, dtype=np.int64)
-    e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    return np.unique(e, axis=0).astype(np.int32)
 
 
 def default_spacing(vertices: np.ndarray) -> float:
