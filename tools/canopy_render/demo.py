@@ -12,7 +12,7 @@ import numpy as np
 
 from inflo.formats.obj import ObjMesh
 
-__all__ = ["grid_faces", "petal", "flower", "canopy", "merge"]
+__all__ = ["grid_faces", "midrib_directions", "petal_patch", "petal", "flower", "canopy", "merge"]
 
 GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
 
@@ -30,6 +30,37 @@ def grid_faces(nu: int, nv: int, offset: int = 0) -> np.ndarray:
     return np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]).astype(np.int32)
 
 
+def midrib_directions(phi: float, u: np.ndarray, rise: float, bend: float) -> np.ndarray:
+    """Unit directions of a petal's midrib at its parameters ``u`` in [0, 1] (base to tip): in the
+    vertical plane at azimuth ``phi`` (radians), ``rise`` degrees above the horizontal at the base,
+    turning outwards by ``bend`` degrees towards the tip. Returns (len(u), 3) float64."""
+    radial = np.array([math.sin(phi), 0.0, math.cos(phi)])
+    up = np.array([0.0, 1.0, 0.0])
+    ang = np.radians(rise - bend * u)
+    return np.cos(ang)[:, None] * radial + np.sin(ang)[:, None] * up
+
+
+def petal_patch(phi: float, spine: np.ndarray, d_spine: np.ndarray, half_width: np.ndarray, *, cup: float,
+                nv: int, base=(0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+    """The open patch around a petal's midrib: at each midrib point ``base + spine[i]`` (direction
+    ``d_spine[i]``, :func:`midrib_directions`) ``nv`` points across, ``half_width[i]`` to either side
+    along the horizontal tangent of azimuth ``phi`` and cupped by ``cup`` (fraction of the half-width)
+    towards the normal in the midrib's plane.
+
+    Returns
+    -------
+    vertices : (nu nv, 3) float64, ``nu = len(spine)``, row-major (u along the midrib slow)
+    faces : (2 (nu - 1)(nv - 1), 3) int32 (:func:`grid_faces`)
+    """
+    v = np.linspace(-1.0, 1.0, nv)
+    tangent = np.array([math.cos(phi), 0.0, -math.sin(phi)])
+    normal = np.cross(tangent, d_spine)  # in the plane of radial and up, perpendicular to the midrib
+    vv, hw = v[None, :, None], half_width[:, None, None]
+    pts = (np.asarray(base, float) + spine[:, None, :] + vv * hw * tangent
+           + cup * vv ** 2 * hw * normal[:, None, :])
+    return pts.reshape(-1, 3), grid_faces(len(spine), nv)
+
+
 def petal(phi: float, *, length: float = 1.0, width: float = 0.35, rise: float = 70.0, bend: float = 80.0,
           cup: float = 0.25, nu: int = 12, nv: int = 7, base=(0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
     """One curved petal: an open patch leaving ``base`` at azimuth ``phi`` (radians).
@@ -43,20 +74,11 @@ def petal(phi: float, *, length: float = 1.0, width: float = 0.35, rise: float =
     faces : (2 (nu - 1)(nv - 1), 3) int32
     """
     u = np.linspace(0.0, 1.0, nu)
-    v = np.linspace(-1.0, 1.0, nv)
-    radial = np.array([math.sin(phi), 0.0, math.cos(phi)])
-    tangent = np.array([math.cos(phi), 0.0, -math.sin(phi)])
-    up = np.array([0.0, 1.0, 0.0])
-    ang = np.radians(rise - bend * u)
+    d_spine = midrib_directions(phi, u, rise, bend)
     step = np.gradient(u) * length
-    d_spine = np.cos(ang)[:, None] * radial + np.sin(ang)[:, None] * up
     spine = np.cumsum(d_spine * step[:, None], axis=0) - d_spine[0] * step[0]
-    normal = np.cross(tangent, d_spine)  # in the plane of radial and up, perpendicular to the midrib
     half_w = width * np.sin(np.pi * np.clip(u, 0.0, 1.0)) ** 0.7 + 0.02 * width
-    vv, hw = v[None, :, None], half_w[:, None, None]
-    pts = (np.asarray(base, float) + spine[:, None, :] + vv * hw * tangent
-           + cup * vv ** 2 * hw * normal[:, None, :])
-    return pts.reshape(-1, 3), grid_faces(nu, nv)
+    return petal_patch(phi, spine, d_spine, half_w, cup=cup, nv=nv, base=base)
 
 
 def merge(parts: list[tuple[np.ndarray, np.ndarray, int]], material_names: list[str]) -> ObjMesh:

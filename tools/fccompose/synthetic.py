@@ -16,7 +16,7 @@ import numpy as np
 from inflo.formats.atomic import write_text_atomic
 from inflo.formats.obj import ObjMesh, write_obj_sequence
 from inflo.formats.scn import Placement, Scene, write_scn
-from inflo.tools.canopy_render.demo import grid_faces
+from inflo.tools.canopy_render.demo import midrib_directions, petal_patch
 
 __all__ = ["petal_strip", "opening_floret", "write_floret_animation", "write_scene", "write_fcc_text",
            "two_floret_scene", "grid_canopy_scene"]
@@ -24,26 +24,19 @@ __all__ = ["petal_strip", "opening_floret", "write_floret_animation", "write_sce
 
 def petal_strip(phi: float, *, length: float, width: float, rise: float, bend: float, cup: float, nu: int,
                 nv: int, base) -> tuple[np.ndarray, np.ndarray]:
-    """One curved petal leaving ``base`` at azimuth ``phi`` (after ``canopy_render.demo.petal``, with a
-    base as wide as half the petal so that the two fixed base rows hold its orientation).
+    """One curved petal leaving ``base`` at azimuth ``phi``: the midrib and cross-section of
+    ``canopy_render.demo.petal`` (:func:`~inflo.tools.canopy_render.demo.petal_patch`), with a base
+    as wide as half the petal so that the two fixed base rows hold its orientation, and the midrib
+    stepped from the base point itself.
 
     Returns ``(nu nv, 3)`` vertices (row-major, u along the midrib slow) and the grid's triangles.
     """
     u = np.linspace(0.0, 1.0, nu)
-    v = np.linspace(-1.0, 1.0, nv)
-    radial = np.array([math.sin(phi), 0.0, math.cos(phi)])
-    tangent = np.array([math.cos(phi), 0.0, -math.sin(phi)])
-    up = np.array([0.0, 1.0, 0.0])
-    ang = np.radians(rise - bend * u)
+    d_spine = midrib_directions(phi, u, rise, bend)
     step = np.full(nu, length / (nu - 1))
-    d_spine = np.cos(ang)[:, None] * radial + np.sin(ang)[:, None] * up
     spine = np.concatenate([[np.zeros(3)], np.cumsum(d_spine[:-1] * step[:-1, None], axis=0)])
-    normal = np.cross(tangent, d_spine)
     half_w = width * (0.45 + 0.55 * np.sin(np.pi * np.clip(0.5 + 0.5 * u, 0.0, 1.0)) ** 0.5 * (1.0 - 0.6 * u ** 2))
-    vv, hw = v[None, :, None], half_w[:, None, None]
-    pts = (np.asarray(base, float) + spine[:, None, :] + vv * hw * tangent
-           + cup * vv ** 2 * hw * normal[:, None, :])
-    return pts.reshape(-1, 3), grid_faces(nu, nv)
+    return petal_patch(phi, spine, d_spine, half_w, cup=cup, nv=nv, base=base)
 
 
 def opening_floret(n_frames: int = 10, *, n_petals: int = 5, length: float = 1.0, width: float = 0.16,
