@@ -7,13 +7,8 @@ tolerance-aware diff of inflo's stage formats. Doc (tolerances, manifest, refres
 - :mod:`~inflo.tools.golden.species`: the species that have goldens (``tests/golden/<species>/
   manifest.toml``: pipeline, make targets, golden files, gzipped ones, tolerances), their builds,
   check and refresh;
-- :mod:`~inflo.tools.golden.cli`: the command line::
-
-    python -m inflo.tools.golden check [SPECIES|all] [--rebuild]   # make (incremental) + diff + report
-    python -m inflo.tools.golden refresh [SPECIES|all]             # make -B + copy the goldens in
-    python -m inflo.tools.golden diff A B                          # two files or two folders
-
-  Exit codes: 0 no difference, 1 differences (or a failed build), 2 bad input.
+- :mod:`~inflo.tools.golden.cli`: the command line, ``python -m inflo.tools.golden check|refresh|diff``
+  (usage and exit codes in its docstring).
 
 This is test tooling (``tests/test_golden.py``, ``make golden``, ``make golden-check``), not a
 pipeline stage.

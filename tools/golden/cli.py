@@ -46,14 +46,19 @@ def _species_args(names, repo) -> list[str]:
 
 
 def _load(species, repo_option) -> tuple[Path, list[Species]]:
-    """The repository and the named species (all by default); bad names exit with code 2."""
+    """The repository and the named species (all by default); bad names exit with code 2, no
+    species with goldens at all with code 0."""
     repo = repo_option.resolve() if repo_option else find_repo()
     try:
         names = _species_args(list(species), repo)
-        return repo, [load_species(n, repo) for n in names]
+        specs = [load_species(n, repo) for n in names]
     except ValueError as exc:
         click.echo(f"golden: error: {exc}", err=True)
         sys.exit(2)
+    if not specs:
+        click.echo(f"golden: no species has tests/golden/<species>/{MANIFEST}")
+        sys.exit(0)
+    return repo, specs
 
 
 def _build_or_report(spec: Species, rebuild: bool, verbose: bool) -> bool:
@@ -98,9 +103,6 @@ def check(species, no_build, verbose, repo, rebuild, build_dir) -> None:
     SPECIES: species with tests/golden/<species>/manifest.toml, or all (the default).
     """
     repo, specs = _load(species, repo)
-    if not specs:
-        click.echo(f"golden: no species has tests/golden/<species>/{MANIFEST}")
-        sys.exit(0)
     build_dir = build_dir.resolve() if build_dir else None
     status = 0
     for spec in specs:
@@ -126,9 +128,6 @@ def refresh(species, no_build, verbose, repo, incremental) -> None:
     SPECIES: species with tests/golden/<species>/manifest.toml, or all (the default).
     """
     repo, specs = _load(species, repo)
-    if not specs:
-        click.echo(f"golden: no species has tests/golden/<species>/{MANIFEST}")
-        sys.exit(0)
     status = 0
     for spec in specs:
         if not no_build and not _build_or_report(spec, not incremental, verbose):
