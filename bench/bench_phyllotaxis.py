@@ -2,7 +2,8 @@
 
 - a dynamic head of 10,000 florets (centripetal fractionation, thesis sec. 5.3) simulated and
   written as 200 RBA frames plus scene.scn; goal under 2 s. Anchor: the same frames written
-  with the reference writer ``inflo.formats.rba.write_rba`` (Python ``%.6f`` per number), same run.
+  with the reference writer ``inflo.formats.rba.write_rba(..., fast=False)`` (Python ``%.6f`` per
+  number), same run.
 - dimorph (eq. 6.1-6.2) on 100,000 florets with a distance threshold; goal under 2 s. Anchor: the
   same d_min by the brute-force reference on a 2,000-floret subset, scaled by (n / 2000)^2 (the
   O(n^2) cost the spatial index avoids).
@@ -47,7 +48,8 @@ def dynamic_head_10k(ctx: BenchContext) -> list[Result]:
     def reference():
         for f in range(frames):
             st = frame_state(pat, f)
-            write_rba(ref_dir / f"{f:04d}.rba", RbaFrame(st["ids"], st["pos"], st["scale"], st["up"], st["right"]))
+            write_rba(ref_dir / f"{f:04d}.rba", RbaFrame(st["ids"], st["pos"], st["scale"], st["up"], st["right"]),
+                      fast=False)
 
     t_ref, _ = ctx.timed(reference, repeat=1)
     assert (ref_dir / f"{frames - 1:04d}.rba").read_bytes() == (out / "rba" / f"{frames - 1:04d}.rba").read_bytes()

@@ -7,8 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from inflo.formats.errors import FormatError
-from inflo.formats.placement import frame_axes, placement_matrix
-from inflo.formats.rba import RbaFrame, read_rba, read_rba_sequence, write_rba, write_rba_sequence
+from inflo.formats.placement import format_preamble, frame_axes, placement_matrix
+from inflo.formats.rba import RbaFrame, rba_bytes, read_rba, read_rba_sequence, write_rba, write_rba_sequence
 from inflo.formats.scn import Group, Placement, Scene, read_scn, write_scn
 
 from conftest import no_partial_files
@@ -212,6 +212,41 @@ def test_rba_round_trip(tmp_path_factory, rows, data):
     back = read_rba(path, scene_with(["rba"] * len(rows)))
     for name in ("ids", "pos", "scale", "up", "right"):
         np.testing.assert_array_equal(getattr(fr, name), getattr(back, name))
+
+
+def test_rba_fast_path_is_byte_identical_to_python(tmp_path):
+    """write_rba's numba path (phyllotaxis's million-row frames) writes the Python path's bytes."""
+    rng = np.random.default_rng(3)
+    n = 400
+    vals = rng.normal(size=(n, 12)) * rng.choice([1e-7, 1e-3, 1.0, 1e3, 1e6], size=(n, 12))
+    vals[::5, 2] = rng.integers(-500, 500, size=len(vals[::5])) / 128.0  # exact ties of %.6f
+    vals[::7, 4] = -0.0
+    vals[::9, 5] = -4e-7
+    vals[0, 0] = 3e13  # beyond the kernel's range: formatted by Python
+    fr = RbaFrame(np.arange(n), vals[:, 0:3], vals[:, 3:6] + 10, vals[:, 6:9], vals[:, 9:12])
+    write_rba(tmp_path / "ref.rba", fr, fast=False)
+    got = rba_bytes(fr.ids, fr.pos, fr.scale, fr.up, fr.right).decode("ascii")
+    assert got == (tmp_path / "ref.rba").read_text()
+    assert got.splitlines()[1] == format_preamble(1, fr.pos[1], fr.scale[1], fr.up[1], fr.right[1])
+    write_rba(tmp_path / "fast.rba", fr, header="two\nlines", fast=True)
+    write_rba(tmp_path / "slow.rba", fr, header="two\nlines", fast=False)
+    assert (tmp_path / "fast.rba").read_bytes() == (tmp_path / "slow.rba").read_bytes()
+    # rows the kernel does not take (NaN, inf, a negative id) go to Python, the rest stay its own
+    odd = RbaFrame([5, -1, 7], [[np.nan, 0, 1], [0, 0, 0], [np.inf, -np.inf, 2]], np.ones((3, 3)),
+                   [[0, 1, 0]] * 3, [[1, 0, 0]] * 3)
+    write_rba(tmp_path / "odd_slow.rba", odd, fast=False)
+    write_rba(tmp_path / "odd_fast.rba", odd, fast=True)
+    assert (tmp_path / "odd_fast.rba").read_bytes() == (tmp_path / "odd_slow.rba").read_bytes()
+    big = RbaFrame(np.arange(1000), rng.normal(size=(1000, 3)), np.ones((1000, 3)), [[0, 1, 0]] * 1000,
+                   [[1, 0, 0]] * 1000)
+    write_rba(tmp_path / "big_auto.rba", big)  # 1000 rows: the fast path by default
+    write_rba(tmp_path / "big_slow.rba", big, fast=False)
+    assert (tmp_path / "big_auto.rba").read_bytes() == (tmp_path / "big_slow.rba").read_bytes()
+    with pytest.raises(ValueError, match="fast RBA path"):
+        write_rba(tmp_path / "x.rba", fr, fmt="%.3f", fast=True)
+    with pytest.raises(ValueError, match="repeated ids"):
+        write_rba(tmp_path / "x.rba", RbaFrame([1, 1], np.zeros((2, 3)), np.ones((2, 3)), [[0, 1, 0]] * 2,
+                                               [[1, 0, 0]] * 2), fast=True)
 
 
 def test_rba_sequence_and_lookup(tmp_path):

@@ -10,14 +10,12 @@ from scipy.spatial import cKDTree
 
 from inflo.formats.contour import Contour, write_con
 from inflo.formats.func import Function, write_func
-from inflo.formats.placement import format_preamble
-from inflo.formats.rba import RbaFrame, read_rba_sequence, write_rba
+from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import read_scn
 from inflo.formats.errors import FormatError, InputError
 from inflo.tools.phyllotaxis.dynamics import frame_state, simulate
 from inflo.tools.phyllotaxis.hierarchy import grow_hierarchy, hierarchy_state
 from inflo.tools.phyllotaxis.params import parse_params
-from inflo.tools.phyllotaxis.rbatext import rba_text
 from inflo.tools.phyllotaxis.ridley import AreaFunction, area_function, ridley_positions, static_pattern
 from inflo.tools.phyllotaxis.surface import builtin_curve, load_curve, profile_from_points
 
@@ -227,21 +225,6 @@ def test_dynamic_cli_writes_rba_frames_with_every_emerged_floret(tmp_path, write
     assert res2.returncode == 0
     assert (tmp_path / "again/scene.scn").read_bytes() == (out / "scene.scn").read_bytes()
     assert (tmp_path / "again/rba/0011.rba").read_bytes() == (out / "rba/0011.rba").read_bytes()
-
-
-def test_fast_rba_text_is_byte_identical_to_write_rba(tmp_path):
-    rng = np.random.default_rng(3)
-    n = 400
-    vals = rng.normal(size=(n, 12)) * rng.choice([1e-7, 1e-3, 1.0, 1e3, 1e6], size=(n, 12))
-    vals[::5, 2] = rng.integers(-500, 500, size=len(vals[::5])) / 128.0  # exact ties of %.6f
-    vals[::7, 4] = -0.0
-    vals[::9, 5] = -4e-7
-    vals[0, 0] = 3e13  # beyond the kernel's range: formatted by Python
-    fr = RbaFrame(np.arange(n), vals[:, 0:3], vals[:, 3:6] + 10, vals[:, 6:9], vals[:, 9:12])
-    write_rba(tmp_path / "ref.rba", fr)
-    got = rba_text(fr.ids, fr.pos, fr.scale, fr.up, fr.right)
-    assert got == (tmp_path / "ref.rba").read_text()
-    assert got.splitlines()[1] == format_preamble(1, fr.pos[1], fr.scale[1], fr.up[1], fr.right[1])
 
 
 # ---------------------------------------------------------------- hierarchy (5.4)

@@ -31,10 +31,10 @@ from numba import njit
 
 from inflo.formats.atomic import frame_name
 from inflo.formats.errors import InputError
+from inflo.formats.rba import RbaFrame, write_rba
 from inflo.formats.scn import Group, Placement, Scene
 
 from .development import age_window
-from .rbatext import write_rba_fast
 from .surface import Profile, blend_profiles
 
 __all__ = ["MODE_CODES", "simulate_regions", "DynamicPattern", "simulate", "frame_state",
@@ -317,8 +317,8 @@ def write_frames(pattern: DynamicPattern, folder, *, size_factor: float = 1.0, b
     state = None
     for f in range(pattern.frames):
         state = frame_state(pattern, f, size_factor=size_factor)
-        write_rba_fast(folder / frame_name(f, "", ".rba", 4), state["ids"], state["pos"], state["scale"],
-                       state["up"], state["right"])
+        write_rba(folder / frame_name(f, "", ".rba", 4),
+                  RbaFrame(state["ids"], state["pos"], state["scale"], state["up"], state["right"]), fast=True)
         if bar is not None:
             bar.update(1)
     return state

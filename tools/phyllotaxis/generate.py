@@ -20,13 +20,13 @@ import numpy as np
 
 from inflo.formats.atomic import frame_name
 from inflo.formats.func import read_func
+from inflo.formats.rba import RbaFrame, write_rba
 from inflo.formats.scn import write_scn
 
 from .compound import compound_pattern, compound_scene
 from .development import apply_development_order
 from .dynamics import dynamic_scene, simulate, write_frames
 from .hierarchy import grow_hierarchy, hierarchy_scene, hierarchy_state
-from .rbatext import write_rba_fast
 from .ridley import area_function, pattern_scene, static_pattern
 from .surface import load_curve
 
@@ -162,8 +162,8 @@ def _hierarchy(params, out: Path, progress, header, notes) -> Summary:
         with ctx as bar:
             for f in range(frames):
                 st = hierarchy_state(h, float(f), size_factor=pr["size_factor"])
-                write_rba_fast(rba / frame_name(f, "", ".rba", 4), st["ids"], st["pos"], st["scale"],
-                               st["up"], st["right"])
+                write_rba(rba / frame_name(f, "", ".rba", 4),
+                          RbaFrame(st["ids"], st["pos"], st["scale"], st["up"], st["right"]), fast=True)
                 bar.update(1)
     scene = hierarchy_scene(h, final, floret_id=pr["floret_id"], dynamic=h_p["dynamic"], kind=pr["placement"],
                             frame_start=pr["frame_start"], frame_end=pr["frame_end"],

@@ -1,12 +1,17 @@
-"""Fast RBA text: a numba kernel that formats placement rows exactly like ``write_rba``.
+"""The fast path of the RBA writer (:func:`inflo.formats.rba.write_rba`): a numba kernel that
+formats placement rows exactly like the Python path.
 
-:func:`inflo.formats.rba.write_rba` formats each number with Python's ``'%.6f'``; a 10,000-floret
-head over 200 frames is about a million rows, too many for per-number Python formatting. The
-kernel :func:`format_rows` writes ``id`` and twelve ``%.6f`` numbers per row into a byte buffer.
+The Python path formats each number with ``'%.6f'``; a 10,000-floret head over 200 frames
+(``phyllotaxis``) is about a million rows, too many for per-number Python formatting. The kernel
+:func:`format_rows` writes ``id`` and twelve ``%.6f`` numbers per row into a byte buffer.
 Correct rounding needs the exact decimal value of the double; the kernel rounds ``|x| * 1e6``
 and flags a row when that product lies within a few ulps of a half (a possible tie, e.g.
-``x = 1/128``) or ``|x| >= 1e12``; flagged rows are formatted again by ``format_preamble``. The
-output is byte-identical to ``write_rba`` (tested on random and tie-prone values).
+``x = 1/128``) or ``|x| >= 1e12``; flagged rows are formatted again by ``format_preamble``, as
+are rows the kernel does not take at all (a negative id, NaN or inf). The output is
+byte-identical to the Python path (tested on random and tie-prone values).
+
+Private: imported by :mod:`inflo.formats.rba` on first use, so that reading formats does not
+import numba.
 """
 from __future__ import annotations
 
@@ -15,10 +20,9 @@ import math
 import numpy as np
 from numba import njit
 
-from inflo.formats.atomic import atomic_write
-from inflo.formats.placement import format_preamble
+from .placement import format_preamble
 
-__all__ = ["format_rows", "rba_bytes", "rba_text", "write_rba_fast"]
+__all__ = ["format_rows", "rba_bytes"]
 
 
 @njit(cache=True)
@@ -97,14 +101,19 @@ def format_rows(ids, values):
 
 
 def rba_bytes(ids, pos, scale, up, right) -> bytes:
-    """The bytes ``write_rba`` would write for these rows (no header), byte for byte."""
+    """The rows ``id pos scale up right`` as ``write_rba`` writes them (no header), byte for byte."""
     ids = np.ascontiguousarray(ids, dtype=np.int64).reshape(-1)
     vals = np.ascontiguousarray(np.hstack([np.reshape(pos, (-1, 3)), np.reshape(scale, (-1, 3)),
                                            np.reshape(up, (-1, 3)), np.reshape(right, (-1, 3))]),
                                 dtype=np.float64)
     if len(ids) == 0:
         return b""
-    buf, flagged = format_rows(ids, vals)
+    odd = (ids < 0) | ~np.isfinite(vals).all(axis=1)  # rows the kernel does not take
+    if odd.any():
+        buf, flagged = format_rows(np.where(odd, 0, ids), np.where(odd[:, None], 0.0, vals))
+        flagged |= odd
+    else:
+        buf, flagged = format_rows(ids, vals)
     data = buf.tobytes()
     if flagged.any():
         lines = data.split(b"\n")
@@ -113,15 +122,3 @@ def rba_bytes(ids, pos, scale, up, right) -> bytes:
             lines[k] = format_preamble(int(ids[k]), v[0:3], v[3:6], v[6:9], v[9:12]).encode("ascii")
         data = b"\n".join(lines)
     return data
-
-
-def rba_text(ids, pos, scale, up, right) -> str:
-    """:func:`rba_bytes` as text."""
-    return rba_bytes(ids, pos, scale, up, right).decode("ascii")
-
-
-def write_rba_fast(path, ids, pos, scale, up, right) -> None:
-    """Write one RBA frame atomically; the same bytes as :func:`inflo.formats.rba.write_rba`."""
-    data = rba_bytes(ids, pos, scale, up, right)
-    with atomic_write(path, "wb") as fh:
-        fh.write(data)
