@@ -5,13 +5,15 @@ into a one-line message on stderr and exit code 2 (see ``inflo.tools.common.cli`
 """
 from __future__ import annotations
 
+import difflib
 import math
 import os
-from typing import Iterable
+from typing import Iterable, Mapping
 
 __all__ = [
     "FormatError",
     "InputError",
+    "did_you_mean",
     "parse_float",
     "parse_int",
     "parse_floats",
@@ -60,6 +62,29 @@ def shorten(text: str, limit: int = 60) -> str:
     if len(text) > limit:
         text = text[: limit - 3] + "..."
     return repr(text)
+
+
+def did_you_mean(word: str, options: Iterable[str], *, cutoff: float = 0.0,
+                 spelling: Mapping[str, str] | None = None) -> str:
+    """`` (did you mean 'closest'?)`` for an unknown key or name, or ``""`` when no option is close.
+
+    The one suggestion every reader appends to its "expected a known key" message.
+
+    Parameters
+    ----------
+    word : str
+        What the file said (already normalized the way ``options`` are, e.g. lower case).
+    options : iterable of str
+        The known keys, sections or names; the closest by :func:`difflib.get_close_matches`
+        (ratio at least ``cutoff``; 0: always the closest) is named.
+    spelling : mapping, optional
+        Option -> the text to show for it (a normalized key -> its canonical spelling).
+    """
+    best = difflib.get_close_matches(word, list(options), n=1, cutoff=cutoff)
+    if not best:
+        return ""
+    shown = best[0] if spelling is None else spelling[best[0]]
+    return f" (did you mean {shown!r}?)"
 
 
 def parse_float(token: str, path, line: int | None, what: str = "a number") -> float:

@@ -10,7 +10,6 @@ them; :func:`check_references` checks separately that every referenced file or f
 """
 from __future__ import annotations
 
-import difflib
 import glob
 import math
 import os
@@ -21,7 +20,7 @@ from types import MappingProxyType
 from typing import Mapping
 
 from .atomic import write_text_atomic
-from .errors import FormatError, InputError, parse_float, parse_int, read_lines, shorten
+from .errors import FormatError, InputError, did_you_mean, parse_float, parse_int, read_lines, shorten
 
 __all__ = [
     "AnimationEntry",
@@ -447,10 +446,8 @@ _FALSE = {"false", "0", "no", "off"}
 
 
 def _suggest(key: str) -> str:
-    close = difflib.get_close_matches(_norm(key), list(_SUGGEST), n=1, cutoff=0.6)
-    if close:
-        return f"a known key (did you mean {_SUGGEST[close[0]]!r}?)"
-    return "a known key (see formats/fcc.md)"
+    hint = did_you_mean(_norm(key), _SUGGEST, cutoff=0.6, spelling=_SUGGEST)
+    return f"a known key{hint}" if hint else "a known key (see formats/fcc.md)"
 
 
 # --------------------------------------------------------------------------------------------------

@@ -13,7 +13,6 @@ The geometric meaning of the symmetry fields is implemented once, here, in :func
 """
 from __future__ import annotations
 
-import difflib
 import math
 import os
 import re
@@ -23,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import write_text_atomic
-from .errors import FormatError, InputError, parse_float, parse_int, read_lines, shorten
+from .errors import FormatError, InputError, did_you_mean, parse_float, parse_int, read_lines, shorten
 
 __all__ = [
     "FORMAT_VERSION",
@@ -408,12 +407,6 @@ def petals(organ: Organ) -> np.ndarray:
 # --------------------------------------------------------------------------------------------------
 
 
-def _suggest(key: str, allowed) -> str:
-    close = difflib.get_close_matches(key.lower(), list(allowed), n=1, cutoff=0.6)
-    hint = f" (did you mean {close[0]!r}?)" if close else ""
-    return f"a known key{hint}"
-
-
 class _OrganBuilder:
     def __init__(self, name: str, line: int):
         self.name = name
@@ -565,8 +558,8 @@ def read_floret(path) -> Floret:
         if key not in ORGAN_KEYS:
             if not key:
                 raise err(number, "a key before ':'", shorten(body))
-            raise err(number, _suggest(key, (*FLORET_KEYS, "organ", *ORGAN_KEYS)),
-                      shorten(raw_key))
+            hint = did_you_mean(key, (*FLORET_KEYS, "organ", *ORGAN_KEYS), cutoff=0.6)
+            raise err(number, f"a known key{hint}", shorten(raw_key))
         if cur is None:
             raise err(number, f"'organ: NAME' before '{key}:' (an organ key)", shorten(body))
         if closed:

@@ -17,7 +17,6 @@ Sections (thesis ch. 7 for ``rodkaew``, Runions ch. 3 for ``sca``/``envelope``):
 """
 from __future__ import annotations
 
-import difflib
 import math
 import os
 import re
@@ -26,7 +25,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, InputError, read_lines
+from inflo.formats.errors import FormatError, InputError, did_you_mean, read_lines
 
 __all__ = [
     "Params",
@@ -195,11 +194,6 @@ class _Where:
         return FormatError(self.path, self.line(section, key), f"{expected} for '{name}'", found)
 
 
-def _closest(name: str, known) -> str:
-    best = difflib.get_close_matches(name, list(known), n=1, cutoff=0.0)
-    return f" (did you mean '{best[0]}'?)" if best else ""
-
-
 def _num(w, sec, key, v, *, integer=False, allow_inf=False):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         if allow_inf and isinstance(v, str) and v.strip().lower() in ("inf", "infinity"):
@@ -235,7 +229,7 @@ def params_from_dict(data: dict, *, path="<params>", lines=None, folder=None) ->
     for key, v in data.items():
         if key not in known_top:
             raise FormatError(path, w.line(None, key) or w.line(key, ""),
-                              "a known key or section" + _closest(key, known_top), repr(key))
+                              "a known key or section" + did_you_mean(key, known_top), repr(key))
         if key in _SECTIONS:
             if not isinstance(v, dict):
                 raise w.error(None, key, "a [section]", repr(v))
@@ -243,7 +237,7 @@ def params_from_dict(data: dict, *, path="<params>", lines=None, folder=None) ->
             fields = [f for f in obj.__dataclass_fields__ if not f.startswith("_")]
             for k, val in v.items():
                 if k not in fields:
-                    raise FormatError(path, w.line(key, k), f"a key of [{key}]" + _closest(k, fields),
+                    raise FormatError(path, w.line(key, k), f"a key of [{key}]" + did_you_mean(k, fields),
                                       repr(k))
                 setattr(obj, k, _convert(w, key, k, val, getattr(obj, k)))
         elif key == "algorithm":

@@ -15,14 +15,13 @@ Sections (thesis chapter 5):
 """
 from __future__ import annotations
 
-import difflib
 import math
 import os
 import re
 import tomllib
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, InputError, shorten
+from inflo.formats.errors import FormatError, InputError, did_you_mean, shorten
 
 __all__ = ["SCHEMA", "read_params", "parse_params", "BUILTIN_CURVES", "DYNAMIC_MODES", "DEVELOPMENT_ORDERS"]
 
@@ -119,11 +118,6 @@ def _line_of(text: str, section: str | None, key: str | None) -> int | None:
     return None
 
 
-def _closest(word: str, options) -> str:
-    best = difflib.get_close_matches(word, list(options), n=1, cutoff=0.0)
-    return f" (did you mean '{best[0]}'?)" if best else ""
-
-
 def _resolve(base: Path, value: str) -> str:
     p = Path(value)
     return str(p if p.is_absolute() else (base / p))
@@ -151,14 +145,14 @@ def parse_params(text: str, path="<params>") -> dict:
     for section, table in raw.items():
         if section not in SCHEMA:
             raise FormatError(path, _line_of(text, section, None),
-                              f"a section of {list(SCHEMA)}{_closest(section, SCHEMA)}", f"[{section}]")
+                              f"a section of {list(SCHEMA)}{did_you_mean(section, SCHEMA)}", f"[{section}]")
         if not isinstance(table, dict):
             raise FormatError(path, None, f"[{section}] as a table", shorten(repr(table)))
         schema = SCHEMA[section]
         for key in table:
             if key not in schema:
                 raise FormatError(path, _line_of(text, section, key),
-                                  f"a key of [{section}]{_closest(key, schema)}", repr(key))
+                                  f"a key of [{section}]{did_you_mean(key, schema)}", repr(key))
     for section, schema in SCHEMA.items():
         if section in _OPTIONAL and section not in raw:
             continue
@@ -186,7 +180,7 @@ def _check(value, kind, section, key, text, path, base):
 
     if isinstance(kind, tuple) and kind[0] == "choice":
         if value not in kind[1]:
-            raise bad(f"one of {list(kind[1])}{_closest(str(value), kind[1])}")
+            raise bad(f"one of {list(kind[1])}{did_you_mean(str(value), kind[1])}")
         return value
     if kind == "float":
         if isinstance(value, bool) or not isinstance(value, _NUM) or not math.isfinite(value):
