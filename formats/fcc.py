@@ -14,7 +14,7 @@ import glob
 import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping
@@ -27,6 +27,8 @@ __all__ = [
     "CameraParams",
     "CanopyParams",
     "FilePath",
+    "KEYS",
+    "KeySpec",
     "LatticeParams",
     "MissingReferenceError",
     "RigidBodyAnimationEntry",
@@ -358,56 +360,125 @@ class CanopyParams:
 # Keys
 # --------------------------------------------------------------------------------------------------
 
-#: Canonical keys in the order the writer writes them (the thesis's C.1 list order, with
-#: ``max collision retries`` from its example placed after the collision iterations).
-KNOWN_KEYS: tuple[str, ...] = (
-    "solver iterations",
-    "collision solver iterations",
-    "max collision retries",
-    "kStretch",
-    "kBend",
-    "kCollision",
-    "spacing",
-    "scene scale factor",
-    "updates per frame",
-    "run for number of frames",
-    "sanity check per frames",
-    "max substeps",
-    "edge stretch bounds",
-    "relax iterations",
-    "emergence scales",
-    "emergence growth frames",
-    "output animation frames number",
-    "output animation obj per frames",
-    "lattice size multiply",
-    "lattice make cube",
-    "origin",
-    "divisions",
-    "dimensions",
-    "lattice auto bounds",
-    "color map file location",
-    "material map file location",
-    "scene file path",
-    "animation",
-    "obj",
-    "rigid body animation",
-    "weight",
-    "bending stiffness",
-    "distance stiffness",
-    "animation output folder location",
-    "obj output file path",
-    "camera position",
-    "camera up",
-    "camera lookat",
-    "camera pan speed",
-    "camera zoom speed",
-    "camera rotate speed",
-    "near plane",
-    "far plane",
-    "camera fov",
-    "light position",
-    "shadow frustrum",
-)
+@dataclass(frozen=True)
+class KeySpec:
+    """One key of the ``.fcc`` table (``formats/fcc.md``, "Keys"): what the reader takes and where
+    it puts it.
+
+    Parameters
+    ----------
+    kind : str
+        ``"int"``, ``"float"``, ``"stiffness"`` (a float in [0, 1]), ``"bool"``, ``"path"``, or a
+        line with its own syntax (:data:`_SYNTAX`): ``"scales"``, ``"divisions"``, ``"entry"``
+        (``animation``/``obj``), ``"rba"``, ``"weight"``, ``"id stiffness"``.
+    n : int
+        How many numbers (``"float"``; 1 for ``"int"``).
+    low : float or None
+        The range: ``"int"``: at least ``low``; ``"float"``: at least ``low``, above it when
+        ``strict``; None: any finite number.
+    strict : bool
+    check : str
+        A condition on the values together, as the spec words it (:data:`_CHECKS`).
+    field : str
+        Where the value goes: a :class:`CanopyParams` field, ``"lattice.<field>"`` or
+        ``"camera.<field>"``; ``""`` for lines that add entries (the kind's reader stores them).
+    repeatable : bool
+        The key may appear on several lines.
+    """
+
+    kind: str
+    n: int = 1
+    low: float | None = None
+    strict: bool = False
+    check: str = ""
+    field: str = ""
+    repeatable: bool = False
+
+    def spec_value(self) -> str:
+        """The text of the spec table's "value" column for this key."""
+        if self.kind == "int":
+            text = f"int ≥ {self.low:g}"
+        elif self.kind == "float":
+            text = "float" if self.n == 1 else f"{self.n} floats"
+            if self.low is not None:
+                text += f" {'>' if self.strict else '≥'} {self.low:g}"
+            if self.check:
+                text += (" " if self.check.startswith("in ") else ", ") + self.check
+        elif self.kind == "stiffness":
+            text = "float in [0, 1]"
+        elif self.kind in ("bool", "path"):
+            text = self.kind
+        else:
+            text = _SYNTAX[self.kind]
+        return text + ("; *repeatable*" if self.repeatable else "")
+
+
+#: The lines with their own syntax: the spec's words for them.
+_SYNTAX = {
+    "scales": "floats in (0, 1], decreasing",
+    "divisions": "1 or 3 ints ≥ 1",
+    "entry": "`id x y z path`",
+    "rba": "`id x y z rba-folder scene-file`",
+    "weight": "`id path`",
+    "id stiffness": "`id stiffness`",
+}
+
+_COUNT0, _COUNT1 = KeySpec("int", low=0), KeySpec("int", low=1)
+
+#: Every key, in the order the writer writes them (the thesis's C.1 list order, with ``max
+#: collision retries`` from its example placed after the collision iterations).
+KEYS: Mapping[str, KeySpec] = MappingProxyType({
+    "solver iterations": replace(_COUNT0, field="solver_iterations"),
+    "collision solver iterations": replace(_COUNT0, field="collision_iterations"),
+    "max collision retries": replace(_COUNT0, field="max_collision_retries"),
+    "kStretch": KeySpec("stiffness", field="k_stretch"),
+    "kBend": KeySpec("stiffness", field="k_bend"),
+    "kCollision": KeySpec("stiffness", field="k_collision"),
+    "spacing": KeySpec("float", low=0, field="spacing"),
+    "scene scale factor": KeySpec("float", 3, low=0, strict=True, field="scene_scale"),
+    "updates per frame": replace(_COUNT1, field="updates_per_frame"),
+    "run for number of frames": replace(_COUNT0, field="run_frames"),
+    "sanity check per frames": replace(_COUNT0, field="sanity_check_every"),
+    "max substeps": replace(_COUNT0, field="max_substeps"),
+    "edge stretch bounds": KeySpec("float", 2, low=0, strict=True, check="lo ≤ 1 ≤ hi",
+                                   field="stretch_bounds"),
+    "relax iterations": replace(_COUNT0, field="relax_iterations"),
+    "emergence scales": KeySpec("scales", field="emergence_scales"),
+    "emergence growth frames": KeySpec("float", low=0, strict=True, field="emergence_growth_frames"),
+    "output animation frames number": replace(_COUNT1, field="output_frames_number"),
+    "output animation obj per frames": replace(_COUNT0, field="output_obj_skip"),
+    "lattice size multiply": KeySpec("float", 3, low=0, strict=True, field="lattice.size_multiply"),
+    "lattice make cube": KeySpec("bool", field="lattice.make_cube"),
+    "origin": KeySpec("float", 3, field="lattice.origin"),
+    "divisions": KeySpec("divisions", field="lattice.divisions"),
+    "dimensions": KeySpec("float", 3, low=0, strict=True, field="lattice.dimensions"),
+    "lattice auto bounds": KeySpec("bool", field="lattice.auto_bounds"),
+    "color map file location": KeySpec("path", field="color_map"),
+    "material map file location": KeySpec("path", field="material_map"),
+    "scene file path": KeySpec("path", field="scene_files", repeatable=True),
+    "animation": KeySpec("entry", repeatable=True),
+    "obj": KeySpec("entry", repeatable=True),
+    "rigid body animation": KeySpec("rba", repeatable=True),
+    "weight": KeySpec("weight", repeatable=True),
+    "bending stiffness": KeySpec("id stiffness", repeatable=True),
+    "distance stiffness": KeySpec("id stiffness", repeatable=True),
+    "animation output folder location": KeySpec("path", field="animation_output_folder"),
+    "obj output file path": KeySpec("path", field="obj_output_file"),
+    "camera position": KeySpec("float", 3, field="camera.position"),
+    "camera up": KeySpec("float", 3, check="not all 0", field="camera.up"),
+    "camera lookat": KeySpec("float", 3, field="camera.lookat"),
+    "camera pan speed": KeySpec("float", low=0, field="camera.pan_speed"),
+    "camera zoom speed": KeySpec("float", low=0, field="camera.zoom_speed"),
+    "camera rotate speed": KeySpec("float", low=0, field="camera.rotate_speed"),
+    "near plane": KeySpec("float", low=0, strict=True, field="camera.near"),
+    "far plane": KeySpec("float", low=0, strict=True, field="camera.far"),
+    "camera fov": KeySpec("float", check="in (0, 180)", field="camera.fov_deg"),
+    "light position": KeySpec("float", 3, field="camera.light_position"),
+    "shadow frustrum": KeySpec("float", 6, field="camera.shadow_frustum"),
+})
+
+#: Canonical keys in the order the writer writes them.
+KNOWN_KEYS: tuple[str, ...] = tuple(KEYS)
 
 #: Other spellings -> canonical key.
 ALIASES: Mapping[str, str] = MappingProxyType(
@@ -418,17 +489,7 @@ ALIASES: Mapping[str, str] = MappingProxyType(
 )
 
 #: Keys that may appear more than once.
-REPEATABLE = frozenset(
-    {
-        "scene file path",
-        "animation",
-        "obj",
-        "rigid body animation",
-        "weight",
-        "bending stiffness",
-        "distance stiffness",
-    }
-)
+REPEATABLE = frozenset(k for k, spec in KEYS.items() if spec.repeatable)
 
 
 def _norm(key: str) -> str:
@@ -466,7 +527,6 @@ class _Reader:
         self.camera: dict[str, object] = {}
         self.first_line: dict[str, int] = {}
         self.last_line: dict[str, int] = {}
-        self.scene_files: list[FilePath] = []
         self.animations: list[AnimationEntry] = []
         self.rbas: list[RigidBodyAnimationEntry] = []
         self.id_lines: dict[int, tuple[str, int]] = {}
@@ -579,148 +639,107 @@ class _Reader:
         self.last_line[key] = number
         self.handle(key, value, number)
 
-    def handle(self, key: str, value: str, n: int):  # noqa: C901 - one branch per key
-        v = self.values
-        if key == "solver iterations":
-            v["solver_iterations"] = self.count(key, value, n, 0)
-        elif key == "collision solver iterations":
-            v["collision_iterations"] = self.count(key, value, n, 0)
-        elif key == "max collision retries":
-            v["max_collision_retries"] = self.count(key, value, n, 0)
-        elif key in ("kStretch", "kBend", "kCollision"):
-            (tok,) = self.count_tokens(key, value, n, 1, "1 stiffness in [0, 1]")
-            name = {"kStretch": "k_stretch", "kBend": "k_bend", "kCollision": "k_collision"}[key]
-            v[name] = self.stiffness_value(key, tok, n)
-        elif key == "spacing":
-            (v["spacing"],) = self.floats(key, value, n, 1, nonneg=True)
-        elif key == "scene scale factor":
-            v["scene_scale"] = self.floats(key, value, n, 3, positive=True)
-        elif key == "updates per frame":
-            v["updates_per_frame"] = self.count(key, value, n, 1)
-        elif key == "run for number of frames":
-            v["run_frames"] = self.count(key, value, n, 0)
-        elif key == "sanity check per frames":
-            v["sanity_check_every"] = self.count(key, value, n, 0)
-        elif key == "max substeps":
-            v["max_substeps"] = self.count(key, value, n, 0)
-        elif key == "edge stretch bounds":
-            lo, hi = self.floats(key, value, n, 2, positive=True)
-            if not (lo <= 1.0 <= hi) or not math.isfinite(hi):
-                raise self.err(n, f"two numbers lo <= 1 <= hi for '{key}'", shorten(value.strip()))
-            v["stretch_bounds"] = (lo, hi)
-        elif key == "relax iterations":
-            v["relax_iterations"] = self.count(key, value, n, 0)
-        elif key == "emergence scales":
-            toks = self.tokens(value)
-            if not toks:
-                raise self.err(n, f"one or more numbers in (0, 1] after '{key}:'", "nothing")
-            vals = [self.number(t, n, f"a number for '{key}'") for t in toks]
-            for t, x in zip(toks, vals):
-                if not 0.0 < x <= 1.0:
-                    raise self.err(n, f"numbers in (0, 1] for '{key}'", shorten(t))
-            if any(b >= a for a, b in zip(vals, vals[1:])):
-                raise self.err(n, f"decreasing numbers for '{key}'", shorten(value.strip()))
-            v["emergence_scales"] = tuple(vals)
-        elif key == "emergence growth frames":
-            (v["emergence_growth_frames"],) = self.floats(key, value, n, 1, positive=True)
-        elif key == "output animation frames number":
-            v["output_frames_number"] = self.count(key, value, n, 1)
-        elif key == "output animation obj per frames":
-            v["output_obj_skip"] = self.count(key, value, n, 0)
-        elif key == "lattice size multiply":
-            self.lattice["size_multiply"] = self.floats(key, value, n, 3, positive=True)
-        elif key == "lattice make cube":
-            self.lattice["make_cube"] = self.boolean(key, value, n)
-        elif key == "origin":
-            self.lattice["origin"] = self.floats(key, value, n, 3)
-        elif key == "divisions":
-            toks = self.tokens(value)
-            if len(toks) not in (1, 3):
-                found = shorten(value) if value.strip() else "nothing"
-                raise self.err(
-                    n, "1 or 3 integers (>= 1) after 'divisions:'", f"{len(toks)} value(s): {found}"
-                )
-            d = tuple(self.integer(key, t, n, 1) for t in toks)
-            self.lattice["divisions"] = d * 3 if len(d) == 1 else d
-        elif key == "dimensions":
-            self.lattice["dimensions"] = self.floats(key, value, n, 3, positive=True)
-        elif key == "lattice auto bounds":
-            self.lattice["auto_bounds"] = self.boolean(key, value, n)
-        elif key == "color map file location":
-            v["color_map"] = self.filepath(key, value, n)
-        elif key == "material map file location":
-            v["material_map"] = self.filepath(key, value, n)
-        elif key == "scene file path":
-            self.scene_files.append(self.filepath(key, value, n))
-        elif key in ("animation", "obj"):
-            parts = [t for t in _SEP.split(value.strip(), maxsplit=4)]
-            if len(parts) < 5 or not parts[4].strip():
-                raise self.err(
-                    n,
-                    f"'{key}: id x y z path' (an id, 3 scales, a path)",
-                    shorten(value) if value.strip() else "nothing",
-                )
-            id_ = self.ident(key, parts[0], n)
-            scale = self.floats(key, " ".join(parts[1:4]), n, 3, positive=True)
-            path = self.filepath(key, parts[4], n)
-            self.claim_id(key, id_, parts[0], n)
-            self.animations.append(AnimationEntry(id_, scale, path, key, n))
-        elif key == "rigid body animation":
-            toks = self.tokens(value)
-            if len(toks) != 6:
-                raise self.err(
-                    n,
-                    "'rigid body animation: id x y z rba-folder scene-file' (6 values)",
-                    f"{len(toks)} value(s): {shorten(value) if value.strip() else 'nothing'}",
-                )
-            id_ = self.ident(key, toks[0], n)
-            scale = self.floats(key, " ".join(toks[1:4]), n, 3, positive=True)
-            folder = self.filepath(key, toks[4], n)
-            scene = self.filepath(key, toks[5], n)
-            self.claim_id(key, id_, toks[0], n)
-            self.rbas.append(RigidBodyAnimationEntry(id_, scale, folder, scene, n))
-        elif key == "weight":
-            parts = _SEP.split(value.strip(), maxsplit=1)
-            if len(parts) < 2 or not parts[1].strip():
-                raise self.err(
-                    n, "'weight: id path'", shorten(value) if value.strip() else "nothing"
-                )
-            id_ = self.ident(key, parts[0], n)
-            self.per_id(key, id_, parts[0], n)
-            self.weights[id_] = self.filepath(key, parts[1], n)
-        elif key in ("bending stiffness", "distance stiffness"):
-            toks = self.count_tokens(key, value, n, 2, "an id and a stiffness in [0, 1]")
-            id_ = self.ident(key, toks[0], n)
-            s = self.stiffness_value(key, toks[1], n)
-            self.per_id(key, id_, toks[0], n)
-            (self.bending if key == "bending stiffness" else self.distance)[id_] = s
-        elif key == "animation output folder location":
-            v["animation_output_folder"] = self.filepath(key, value, n)
-        elif key == "obj output file path":
-            v["obj_output_file"] = self.filepath(key, value, n)
-        elif key in ("camera position", "camera lookat", "light position"):
-            name = {"camera position": "position", "camera lookat": "lookat",
-                    "light position": "light_position"}[key]
-            self.camera[name] = self.floats(key, value, n, 3)
-        elif key == "camera up":
-            up = self.floats(key, value, n, 3)
-            if not any(up):
-                raise self.err(n, "a non-zero up vector", shorten(value))
-            self.camera["up"] = up
-        elif key in ("camera pan speed", "camera zoom speed", "camera rotate speed"):
-            name = key.split()[1] + "_speed"
-            (self.camera[name],) = self.floats(key, value, n, 1, nonneg=True)
-        elif key in ("near plane", "far plane"):
-            (self.camera[key.split()[0]],) = self.floats(key, value, n, 1, positive=True)
-        elif key == "camera fov":
-            (fov,) = self.floats(key, value, n, 1)
-            if not 0.0 < fov < 180.0:
-                raise self.err(n, "a field of view in (0, 180) degrees", shorten(value))
-            self.camera["fov_deg"] = fov
-        elif key == "shadow frustrum":
-            self.camera["shadow_frustum"] = self.floats(key, value, n, 6)
-        else:  # pragma: no cover - KNOWN_KEYS and this chain are kept in step by the tests
-            raise AssertionError(key)
+    def handle(self, key: str, value: str, n: int):
+        spec = KEYS[key]
+        got = _READ[spec.kind](self, key, spec, value, n)
+        if not spec.field:
+            return
+        group, _, name = spec.field.rpartition(".")
+        target = {"": self.values, "lattice": self.lattice, "camera": self.camera}[group]
+        if spec.repeatable:
+            target.setdefault(name, []).append(got)
+        else:
+            target[name] = got
+
+    # -- the readers of _READ: (key, spec, value, line) -> the key's value -----------------------
+
+    def read_int(self, key, spec, value, n):
+        return self.count(key, value, n, spec.low)
+
+    def read_float(self, key, spec, value, n):
+        positive = spec.low == 0 and spec.strict
+        vals = self.floats(key, value, n, spec.n, positive=positive, nonneg=spec.low == 0 and not positive)
+        if spec.check:
+            _CHECKS[spec.check](self, key, vals, value, n)
+        return vals[0] if spec.n == 1 else vals
+
+    def read_stiffness(self, key, spec, value, n):
+        (tok,) = self.count_tokens(key, value, n, 1, "1 stiffness in [0, 1]")
+        return self.stiffness_value(key, tok, n)
+
+    def read_bool(self, key, spec, value, n):
+        return self.boolean(key, value, n)
+
+    def read_path(self, key, spec, value, n):
+        return self.filepath(key, value, n)
+
+    def read_scales(self, key, spec, value, n):
+        toks = self.tokens(value)
+        if not toks:
+            raise self.err(n, f"one or more numbers in (0, 1] after '{key}:'", "nothing")
+        vals = [self.number(t, n, f"a number for '{key}'") for t in toks]
+        for t, x in zip(toks, vals):
+            if not 0.0 < x <= 1.0:
+                raise self.err(n, f"numbers in (0, 1] for '{key}'", shorten(t))
+        if any(b >= a for a, b in zip(vals, vals[1:])):
+            raise self.err(n, f"decreasing numbers for '{key}'", shorten(value.strip()))
+        return tuple(vals)
+
+    def read_divisions(self, key, spec, value, n):
+        toks = self.tokens(value)
+        if len(toks) not in (1, 3):
+            found = shorten(value) if value.strip() else "nothing"
+            raise self.err(
+                n, "1 or 3 integers (>= 1) after 'divisions:'", f"{len(toks)} value(s): {found}"
+            )
+        d = tuple(self.integer(key, t, n, 1) for t in toks)
+        return d * 3 if len(d) == 1 else d
+
+    def read_entry(self, key, spec, value, n):
+        parts = [t for t in _SEP.split(value.strip(), maxsplit=4)]
+        if len(parts) < 5 or not parts[4].strip():
+            raise self.err(
+                n,
+                f"'{key}: id x y z path' (an id, 3 scales, a path)",
+                shorten(value) if value.strip() else "nothing",
+            )
+        id_ = self.ident(key, parts[0], n)
+        scale = self.floats(key, " ".join(parts[1:4]), n, 3, positive=True)
+        path = self.filepath(key, parts[4], n)
+        self.claim_id(key, id_, parts[0], n)
+        self.animations.append(AnimationEntry(id_, scale, path, key, n))
+
+    def read_rba(self, key, spec, value, n):
+        toks = self.tokens(value)
+        if len(toks) != 6:
+            raise self.err(
+                n,
+                "'rigid body animation: id x y z rba-folder scene-file' (6 values)",
+                f"{len(toks)} value(s): {shorten(value) if value.strip() else 'nothing'}",
+            )
+        id_ = self.ident(key, toks[0], n)
+        scale = self.floats(key, " ".join(toks[1:4]), n, 3, positive=True)
+        folder = self.filepath(key, toks[4], n)
+        scene = self.filepath(key, toks[5], n)
+        self.claim_id(key, id_, toks[0], n)
+        self.rbas.append(RigidBodyAnimationEntry(id_, scale, folder, scene, n))
+
+    def read_weight(self, key, spec, value, n):
+        parts = _SEP.split(value.strip(), maxsplit=1)
+        if len(parts) < 2 or not parts[1].strip():
+            raise self.err(
+                n, "'weight: id path'", shorten(value) if value.strip() else "nothing"
+            )
+        id_ = self.ident(key, parts[0], n)
+        self.per_id(key, id_, parts[0], n)
+        self.weights[id_] = self.filepath(key, parts[1], n)
+
+    def read_id_stiffness(self, key, spec, value, n):
+        toks = self.count_tokens(key, value, n, 2, "an id and a stiffness in [0, 1]")
+        id_ = self.ident(key, toks[0], n)
+        s = self.stiffness_value(key, toks[1], n)
+        self.per_id(key, id_, toks[0], n)
+        (self.bending if key == "bending stiffness" else self.distance)[id_] = s
 
     def per_id(self, key, id_, tok, line):
         prev = self.per_id_lines.get((key, id_))
@@ -769,7 +788,6 @@ class _Reader:
         return CanopyParams(
             **v,
             lattice=LatticeParams(**self.lattice),
-            scene_files=tuple(self.scene_files),
             animations=tuple(self.animations),
             rigid_body_animations=tuple(self.rbas),
             weights=self.weights,
@@ -779,6 +797,45 @@ class _Reader:
             source=Path(os.path.abspath(self.path)),
             lines=self.last_line,
         )
+
+
+_READ = {
+    "int": _Reader.read_int,
+    "float": _Reader.read_float,
+    "stiffness": _Reader.read_stiffness,
+    "bool": _Reader.read_bool,
+    "path": _Reader.read_path,
+    "scales": _Reader.read_scales,
+    "divisions": _Reader.read_divisions,
+    "entry": _Reader.read_entry,
+    "rba": _Reader.read_rba,
+    "weight": _Reader.read_weight,
+    "id stiffness": _Reader.read_id_stiffness,
+}
+
+
+def _stretch_bounds(r: _Reader, key, vals, value, n):
+    lo, hi = vals
+    if not (lo <= 1.0 <= hi) or not math.isfinite(hi):
+        raise r.err(n, f"two numbers lo <= 1 <= hi for '{key}'", shorten(value.strip()))
+
+
+def _not_all_zero(r: _Reader, key, vals, value, n):
+    if not any(vals):
+        raise r.err(n, "a non-zero up vector", shorten(value))
+
+
+def _field_of_view(r: _Reader, key, vals, value, n):
+    if not 0.0 < vals[0] < 180.0:
+        raise r.err(n, "a field of view in (0, 180) degrees", shorten(value))
+
+
+#: KeySpec.check -> the test of the values together.
+_CHECKS = {
+    "lo ≤ 1 ≤ hi": _stretch_bounds,
+    "not all 0": _not_all_zero,
+    "in (0, 180)": _field_of_view,
+}
 
 
 def read_fcc(path) -> CanopyParams:

@@ -18,6 +18,8 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
+from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 
@@ -47,19 +49,6 @@ _NAME_RULE = "a name of letters, digits, '_', '.', '+', '-'"
 _TRUE = {"on", "true", "yes", "1"}
 _FALSE = {"off", "false", "no", "0"}
 
-FLORET_KEYS = ("name", "time")
-ORGAN_KEYS = (
-    "material",
-    "degree",
-    "grid",
-    "symmetry",
-    "bilateral",
-    "fused",
-    "tilt",
-    "lambda",
-    "eta",
-    "points",
-)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -407,15 +396,170 @@ def petals(organ: Organ) -> np.ndarray:
 # --------------------------------------------------------------------------------------------------
 
 
+class _At(NamedTuple):
+    """Where a key's value is being read: for the parsers' messages."""
+
+    path: str
+    line: int
+    key: str
+    body: str  # the line without its comment
+    base: str  # the file's folder (relative .func paths)
+    grid: tuple[int, int] | None = None  # the organ's grid, when given before this key
+
+    def err(self, expected: str, found: str) -> FormatError:
+        return FormatError(self.path, self.line, expected, found)
+
+
+class KeySpec(NamedTuple):
+    """One key of the ``.floret`` table (``formats/floret.md``, "Fields").
+
+    counts : (int, int) or None
+        Fewest and most values after the colon (blank-separated); None: the rest of the line is one
+        value (a name, a number or ``.func`` path, nothing).
+    what : str
+        The values in words, for the wrong-count message (``expected 2 integers (...) after 'grid:'``).
+    parse : callable
+        ``parse(tokens, value, at)`` -> the key's value; checks its range (:class:`FormatError`).
+    default
+        The value when the key is absent; :data:`REQUIRED` when it may not be, None when absent
+        means "not given".
+    """
+
+    counts: tuple[int, int] | None
+    what: str
+    parse: Callable
+    default: object = None
+
+
+REQUIRED = "required"  # KeySpec.default of a key a file (floret) or organ must give
+
+
+def _ints(what: str, *, low: int | None = None, high: int | None = None, out_of_range: str = "",
+          one: bool = False):
+    """Integers (all parsed, then each checked against ``low..high``); ``one``: the single value."""
+    def parse(toks, value, at):
+        vals = tuple(parse_int(t, at.path, at.line, what) for t in toks)
+        for t, v in zip(toks, vals):
+            if (low is not None and v < low) or (high is not None and v > high):
+                raise at.err(out_of_range, shorten(t))
+        return vals[0] if one else vals
+    return parse
+
+
+def _float(what: str):
+    def parse(toks, value, at):
+        return parse_float(toks[0], at.path, at.line, what)
+    return parse
+
+
+def _name(what: str):
+    def parse(toks, value, at):
+        if not _NAME.match(value):
+            raise at.err(f"{what} of letters, digits, '_', '.', '+', '-'", shorten(value) if value else "nothing")
+        return value
+    return parse
+
+
+def _time(toks, value, at):
+    if len(toks) != 1:  # the floret keys word a wrong count without the organ keys' "N values:"
+        raise at.err("1 number after 'time:'", shorten(value) if value else "nothing")
+    return parse_float(toks[0], at.path, at.line, "a key time")
+
+
+def _grid(toks, value, at):
+    nu, nv = (parse_int(t, at.path, at.line, "an integer grid size") for t in toks)
+    if nu < 1 or nv < 2:
+        raise at.err("nu >= 1 and nv >= 2", shorten(value))
+    return (nu, nv)
+
+
+def _symmetry(toks, value, at):
+    n = parse_int(toks[0], at.path, at.line, "an integer n")
+    if n < 1:
+        raise at.err("n >= 1 (n-fold radial symmetry)", shorten(toks[0]))
+    phase = parse_float(toks[1], at.path, at.line, "a phase angle") if len(toks) == 2 else 0.0
+    return (n, phase)
+
+
+def _on_off(toks, value, at):
+    low = toks[0].lower()
+    if low not in _TRUE | _FALSE:
+        raise at.err(f"on or off after '{at.key}:'", shorten(toks[0]))
+    return low in _TRUE
+
+
+def _sampling(low: float, *, strict: bool):
+    """``lambda``/``eta``: a number (> low when ``strict``, else >= low) or a ``.func`` path."""
+    def parse(toks, value, at):
+        key = at.key
+        if not value:
+            raise at.err(f"a number or a .func file after '{key}:'", "nothing")
+        if _NUMBER.match(value):
+            x = parse_float(value, at.path, at.line, f"a number for '{key}'")
+            if (x <= low) if strict else (x < low):
+                raise at.err(f"{key} {'>' if strict else '>='} {low:g}", shorten(value))
+            return x
+        if value.lower().endswith(".func"):
+            return Path(os.path.abspath(os.path.join(at.base, value)))
+        raise at.err(f"a number or a .func file after '{key}:'", shorten(value))
+    return parse
+
+
+def _points(toks, value, at):
+    if value:
+        raise at.err("nothing after 'points:' (the rows follow on their own lines)", shorten(value))
+    if at.grid is None:
+        raise at.err("'grid: nu nv' before 'points:'", shorten(at.body))
+    return at.line  # the line of 'points:'; the rows that follow are read by read_floret
+
+
+_ORGAN_NAME = _name("an organ name")
+
+#: The keys before the first ``organ:`` (spec table "Floret").
+FLORET_TABLE: Mapping[str, KeySpec] = MappingProxyType({
+    "name": KeySpec(None, "", _name("a floret name"), REQUIRED),
+    "time": KeySpec((1, 1), "1 number", _time),
+})
+
+#: The keys of an organ, after its ``organ: NAME`` line (spec table "Organ"), in the writer's order.
+ORGAN_TABLE: Mapping[str, KeySpec] = MappingProxyType({
+    "material": KeySpec((1, 1), "1 integer id", _ints("an integer material id", one=True), 0),
+    "degree": KeySpec((2, 2), "2 integers (degree in u, degree in v)",
+                      _ints("an integer degree", low=1, high=MAX_DEGREE,
+                            out_of_range=f"degrees in 1..{MAX_DEGREE}"), (3, 3)),
+    "grid": KeySpec((2, 2), "2 integers (nu across, nv base to tip)", _grid, REQUIRED),
+    "symmetry": KeySpec((1, 2), "n [phase-degrees]", _symmetry, (1, 0.0)),
+    "bilateral": KeySpec((1, 1), "on or off", _on_off, False),
+    "fused": KeySpec((1, 1), "1 integer", _ints("an integer fused count", low=0, out_of_range="fused >= 0",
+                                                 one=True), 0),
+    "tilt": KeySpec((1, 1), "1 angle in degrees", _float("a tilt angle"), 0.0),
+    "lambda": KeySpec(None, "", _sampling(0.0, strict=True)),
+    "eta": KeySpec(None, "", _sampling(1.0, strict=False)),
+    "points": KeySpec(None, "", _points, REQUIRED),
+})
+
+FLORET_KEYS = tuple(FLORET_TABLE)
+ORGAN_KEYS = tuple(ORGAN_TABLE)
+
+
 class _OrganBuilder:
     def __init__(self, name: str, line: int):
         self.name = name
         self.line = line
         self.key_lines: dict[str, int] = {}
         self.values: dict[str, object] = {}
-        self.grid: tuple[int, int] | None = None
         self.rows: list[list[float]] = []
-        self.points_line: int | None = None
+
+    @property
+    def grid(self) -> tuple[int, int] | None:
+        return self.values.get("grid")
+
+    @property
+    def points_line(self) -> int | None:
+        return self.values.get("points")
+
+    def get(self, key: str):
+        return self.values.get(key, ORGAN_TABLE[key].default)
 
 
 def read_floret(path) -> Floret:
@@ -460,9 +604,8 @@ def read_floret(path) -> Floret:
         if b.points_line is None:
             raise err(b.line, f"a 'points:' block for organ {b.name!r}", "none before the next "
                       "organ or the end of the file")
-        v = b.values
-        du, dv = v.get("degree", (3, 3))
-        n, phase = v.get("symmetry", (1, 0.0))
+        du, dv = b.get("degree")
+        n, phase = b.get("symmetry")
         cp = np.array(b.rows, dtype=np.float64).reshape(b.grid[1], b.grid[0], 3)
         fields = dict(
             name=b.name,
@@ -471,12 +614,12 @@ def read_floret(path) -> Floret:
             control_points=cp,
             symmetry_n=n,
             symmetry_phase_deg=phase,
-            bilateral=v.get("bilateral", False),
-            fused=v.get("fused", 0),
-            tilt_deg=v.get("tilt", 0.0),
-            material=v.get("material", 0),
-            lambda_=v.get("lambda"),
-            eta=v.get("eta"),
+            bilateral=b.get("bilateral"),
+            fused=b.get("fused"),
+            tilt_deg=b.get("tilt"),
+            material=b.get("material"),
+            lambda_=b.get("lambda"),
+            eta=b.get("eta"),
         )
         try:
             organs.append(Organ(**fields))
@@ -517,24 +660,23 @@ def read_floret(path) -> Floret:
         raw_key, value = body.split(":", 1)
         key = raw_key.strip().lower()
         value = value.strip()
+        at = _At(path, number, key, body, base)
 
         if key == "organ":
             if "name" not in floret_values:
                 raise err(number, "'name: FLORET-NAME' before the first 'organ:'", shorten(body))
             if cur is not None:
                 finish_organ(cur)
-            if not _NAME.match(value):
-                raise err(number, "an organ name of letters, digits, '_', '.', '+', '-'",
-                          shorten(value) if value else "nothing")
-            if value in organ_lines:
-                raise err(number, f"a new organ name ({value!r} is already used on line "
-                          f"{organ_lines[value]})", shorten(value))
-            organ_lines[value] = number
-            cur = _OrganBuilder(value, number)
+            name = _ORGAN_NAME(None, value, at)
+            if name in organ_lines:
+                raise err(number, f"a new organ name ({name!r} is already used on line "
+                          f"{organ_lines[name]})", shorten(name))
+            organ_lines[name] = number
+            cur = _OrganBuilder(name, number)
             closed = False
             continue
 
-        if key in FLORET_KEYS:
+        if key in FLORET_TABLE:
             if cur is not None:
                 raise err(number, f"'{key}:' before the first 'organ:' (it is a floret key)",
                           shorten(body))
@@ -542,20 +684,11 @@ def read_floret(path) -> Floret:
                 raise err(number, f"'{key}:' once (already on line {floret_lines[key]})",
                           shorten(body))
             floret_lines[key] = number
-            if key == "name":
-                if not _NAME.match(value):
-                    raise err(number, "a floret name of letters, digits, '_', '.', '+', '-'",
-                              shorten(value) if value else "nothing")
-                floret_values["name"] = value
-            else:
-                toks = value.split()
-                if len(toks) != 1:
-                    raise err(number, "1 number after 'time:'", shorten(value) if value
-                              else "nothing")
-                floret_values["time"] = parse_float(toks[0], path, number, "a key time")
+            floret_values[key] = FLORET_TABLE[key].parse(value.split(), value, at)
             continue
 
-        if key not in ORGAN_KEYS:
+        spec = ORGAN_TABLE.get(key)
+        if spec is None:
             if not key:
                 raise err(number, "a key before ':'", shorten(body))
             hint = did_you_mean(key, (*FLORET_KEYS, "organ", *ORGAN_KEYS), cutoff=0.6)
@@ -570,70 +703,10 @@ def read_floret(path) -> Floret:
                       shorten(body))
         cur.key_lines[key] = number
         toks = value.split()
-
-        def need(n_min, n_max, what):
-            if not n_min <= len(toks) <= n_max:
-                raise err(number, f"{what} after '{key}:'",
-                          f"{len(toks)} values: {shorten(value)}" if value else "nothing")
-
-        if key == "material":
-            need(1, 1, "1 integer id")
-            cur.values["material"] = parse_int(toks[0], path, number, "an integer material id")
-        elif key == "degree":
-            need(2, 2, "2 integers (degree in u, degree in v)")
-            cur.values["degree"] = tuple(parse_int(t, path, number, "an integer degree")
-                                         for t in toks)
-            for t, d in zip(toks, cur.values["degree"]):
-                if not 1 <= d <= MAX_DEGREE:
-                    raise err(number, f"degrees in 1..{MAX_DEGREE}", shorten(t))
-        elif key == "grid":
-            need(2, 2, "2 integers (nu across, nv base to tip)")
-            nu, nv = (parse_int(t, path, number, "an integer grid size") for t in toks)
-            if nu < 1 or nv < 2:
-                raise err(number, "nu >= 1 and nv >= 2", shorten(value))
-            cur.grid = (nu, nv)
-        elif key == "symmetry":
-            need(1, 2, "n [phase-degrees]")
-            n = parse_int(toks[0], path, number, "an integer n")
-            if n < 1:
-                raise err(number, "n >= 1 (n-fold radial symmetry)", shorten(toks[0]))
-            phase = parse_float(toks[1], path, number, "a phase angle") if len(toks) == 2 else 0.0
-            cur.values["symmetry"] = (n, phase)
-        elif key == "bilateral":
-            need(1, 1, "on or off")
-            low = toks[0].lower()
-            if low not in _TRUE | _FALSE:
-                raise err(number, "on or off after 'bilateral:'", shorten(toks[0]))
-            cur.values["bilateral"] = low in _TRUE
-        elif key == "fused":
-            need(1, 1, "1 integer")
-            k = parse_int(toks[0], path, number, "an integer fused count")
-            if k < 0:
-                raise err(number, "fused >= 0", shorten(toks[0]))
-            cur.values["fused"] = k
-        elif key == "tilt":
-            need(1, 1, "1 angle in degrees")
-            cur.values["tilt"] = parse_float(toks[0], path, number, "a tilt angle")
-        elif key in ("lambda", "eta"):
-            if not value:
-                raise err(number, f"a number or a .func file after '{key}:'", "nothing")
-            if _NUMBER.match(value):
-                x = parse_float(value, path, number, f"a number for '{key}'")
-                if (x <= 0.0) if key == "lambda" else (x < 1.0):
-                    rel = "> 0" if key == "lambda" else ">= 1"
-                    raise err(number, f"{key} {rel}", shorten(value))
-                cur.values[key] = x
-            elif value.lower().endswith(".func"):
-                cur.values[key] = Path(os.path.abspath(os.path.join(base, value)))
-            else:
-                raise err(number, f"a number or a .func file after '{key}:'", shorten(value))
-        elif key == "points":
-            if value:
-                raise err(number, "nothing after 'points:' (the rows follow on their own lines)",
-                          shorten(value))
-            if cur.grid is None:
-                raise err(number, "'grid: nu nv' before 'points:'", shorten(body))
-            cur.points_line = number
+        if spec.counts is not None and not spec.counts[0] <= len(toks) <= spec.counts[1]:
+            raise err(number, f"{spec.what} after '{key}:'",
+                      f"{len(toks)} values: {shorten(value)}" if value else "nothing")
+        cur.values[key] = spec.parse(toks, value, at._replace(grid=cur.grid))
 
     if not version_seen:
         raise err(None, f"'floret {FORMAT_VERSION}' as the first line", "an empty file")

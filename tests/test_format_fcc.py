@@ -11,7 +11,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from inflo.formats.errors import FormatError, InputError
+from inflo.formats import fcc as fcc_module
 from inflo.formats.fcc import (
+    ALIASES,
+    KEYS,
     KNOWN_KEYS,
     AnimationEntry,
     CameraParams,
@@ -130,6 +133,31 @@ camera fov: 30
 light position: 4, 5, 6
 shadow frustrum: -2, 2, -3, 3, -4, 4
 """
+
+
+def spec_key_rows() -> dict[str, list[str]]:
+    """The rows of the key tables of formats/fcc.md ("## Keys"): key -> value, default, meaning."""
+    section = SPEC.read_text().split("\n## Keys\n", 1)[1].split("\n## ", 1)[0]
+    rows = {}
+    for line in section.splitlines():
+        m = re.match(r"^\| `([^`]+)` \|(.*)\|$", line)
+        if m:
+            assert m.group(1) not in rows, f"{m.group(1)} twice in the spec's tables"
+            rows[m.group(1)] = [c.strip() for c in m.group(2).split("|")]
+    return rows
+
+
+def test_key_table_matches_the_spec_tables():
+    """Every key of the reader's table (KEYS, formats/fcc.py) is in the spec's tables and vice
+    versa, each with the spec's "value" column (count, type, range, repeatable) and its aliases."""
+    rows = spec_key_rows()
+    assert set(rows) == set(KEYS), (sorted(set(KEYS) - set(rows)), sorted(set(rows) - set(KEYS)))
+    for key, spec in KEYS.items():
+        assert rows[key][0] == spec.spec_value(), key
+        assert spec.check == "" or spec.check in fcc_module._CHECKS, key
+        assert spec.kind in fcc_module._READ, key
+    for alias, key in ALIASES.items():
+        assert f"Alias: `{alias}`" in rows[key][2], alias
 
 
 def test_every_key_of_the_list(write, tmp_path):

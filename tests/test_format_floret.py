@@ -14,6 +14,9 @@ from hypothesis import strategies as st
 
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.floret import (
+    FLORET_TABLE,
+    ORGAN_TABLE,
+    REQUIRED,
     Floret,
     Organ,
     check_compatible,
@@ -233,6 +236,48 @@ def test_unknown_key_message_reads_well(write):
 def test_missing_file(tmp_path):
     with pytest.raises(InputError, match="no such file"):
         read_floret(tmp_path / "nope.floret")
+
+
+def spec_table(heading: str) -> dict[str, list[str]]:
+    """The rows of the table under ``### heading`` in formats/floret.md: key -> other cells."""
+    section = SPEC.read_text().split(f"### {heading}\n", 1)[1].split("\n#", 1)[0]
+    rows = {}
+    for line in section.splitlines():
+        m = re.match(r"^\| `([^`]+)` \|(.*)\|$", line)
+        if m:
+            rows[m.group(1)] = [c.strip() for c in m.group(2).split("|")]
+    return rows
+
+
+def test_key_tables_match_the_spec_tables():
+    """The reader's key tables (formats/floret.py) and the spec's field tables name the same keys,
+    with the same defaults, and the wrong-count rule of the spec matches their counts."""
+    floret_rows, organ_rows = spec_table("Floret"), spec_table("Organ")
+    del floret_rows["floret 1"]  # the format line, not a key
+    assert set(floret_rows) == set(FLORET_TABLE)
+    assert set(organ_rows) == {"organ", *ORGAN_TABLE}
+    for table, rows in ((FLORET_TABLE, floret_rows), (ORGAN_TABLE, organ_rows)):
+        for key, spec in table.items():
+            default = rows[key][1]
+            if spec.default == REQUIRED:
+                assert default == "required", key
+            elif spec.default is None:
+                assert default.startswith("("), (key, default)  # "(none)", "(polygonize default)"
+            elif isinstance(spec.default, bool):
+                assert default == ("on" if spec.default else "off"), key
+            else:
+                vals = spec.default if isinstance(spec.default, tuple) else (spec.default,)
+                assert default == " ".join(f"{v:g}" for v in vals), (key, default)
+    # "a wrong count of values (`degree` 2, `grid` 2, `symmetry` 1 or 2, others 1)"
+    rule = re.search(r"a wrong count of values \((.*?)\)", SPEC.read_text()).group(1)
+    named = {k: v for k, v in re.findall(r"`(\w+)` ([^,]+)", rule)}
+    assert re.search(r"others 1$", rule)
+    for key, spec in {**FLORET_TABLE, **ORGAN_TABLE}.items():
+        if spec.counts is None:
+            continue
+        lo, hi = spec.counts
+        assert named.get(key, "1") == (str(lo) if lo == hi else f"{lo} or {hi}"), key
+    assert set(named) <= set(ORGAN_TABLE)
 
 
 # ----------------------------------------------------------------------------------------------
