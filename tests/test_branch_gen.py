@@ -507,3 +507,20 @@ def test_branch_gen_growth_scale_functions(tmp_path, write):
     check_forest(sk.node_parent)
     with pytest.raises(FormatError, match="three .func"):
         read_params(write("q.toml", "[growth]\nmode = \"functions\"\nfuncs = [\"lin.func\"]\n"))
+
+
+def test_branch_gen_rodkaew_kernel_compiles_once():
+    """The particle kernel takes NamedTuples of arrays (issue 15): one compiled signature across
+    levels, growth of space, w_b tables, birth positions, and node arrays and hash table that grow."""
+    from inflo.tools.branch_gen import rodkaew as rk
+
+    pos = _disc(500, seed=6)
+    p = params_from_dict({"rodkaew": {"step": 0.01, "merge_distance": 0.012, "steps_per_frame": 10},
+                          "growth": {"mode": "uniform", "rate": 0.02}})
+    sk = grow_rodkaew(_input(pos, emergence=np.linspace(0, 20, 500)), p)
+    _check_supported(sk, pos)
+    assert sk.n_nodes > 4 * 500, "the node arrays grew"
+    level = Level(target=np.zeros(3), start=pos[:50], birth_frame=np.zeros(50), birth_pos=pos[:50] * 0.9,
+                  initial_dir=np.full((50, 3), np.nan))
+    grow_level(level, _params(w_b=0.5), base=np.zeros(3), end_frame=0.0, wb_table=np.linspace(0.0, 1.0, 5))
+    assert len(rk._advance.signatures) == 1

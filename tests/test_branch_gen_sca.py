@@ -373,3 +373,21 @@ def test_branch_gen_sca_points_added_during_the_run():
     assert len(res.points) == 300
     assert not res.alive.any()
     check_forest(sk.node_parent)
+
+
+def test_branch_gen_sca_kernel_compiles_once():
+    """The iteration kernel takes NamedTuples of arrays (issue 15): one compiled signature, whatever
+    the caller's scalar types, as the points are added and the node arrays grow."""
+    from inflo.tools.branch_gen import sca
+
+    rng = np.random.default_rng(2)
+    env = Envelope("sphere", (0, 0, 0), radius=1.0)
+    colonize(attraction_points(env, 150, rng), [[0.0, 0.0, 0.0]], step=0.05, kill_distance=0.1)
+    # integer D, d_k, d_I, root and tropism; points added during the first iterations
+    res = colonize(attraction_points(env, 150, rng) * 100, [[0, 0, 0]], step=2, kill_distance=4,
+                   influence_radius=60, tropism=(0, 0, 0), add_iterations=10,
+                   add_points=lambda it, existing: attraction_points(env, 100, rng) * 100)
+    assert len(res.points) == 1150
+    assert len(res.node_pos) > max(1024, 4 * 150 + 1), "the node arrays grew"
+    assert len(sca._iterate.signatures) == 1
+    assert len(sca._point_tree.signatures) == 1

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -42,6 +43,55 @@ from .skeleton import Skeleton, growth_scale
 __all__ = ["RodkaewInput", "grow_rodkaew", "grow_level", "Level", "heading"]
 
 _NO_PARENT = -1
+_NOT_LINKED = np.iinfo(np.int64).max  # link step of a node not yet linked to a parent
+
+
+# --------------------------------------------------------------------------------------------
+# what the kernels share (NamedTuples of arrays: numba passes them as one argument, its fields
+# typed separately; every field has one dtype and layout, so a kernel compiles once)
+
+
+class Nodes(NamedTuple):
+    """The nodes v of one level's trees (capacity rows; the first n_nodes are in use; 0 is the root)."""
+
+    pos: np.ndarray  # (cap, 3) float64
+    parent: np.ndarray  # (cap,) int64: the next node toward the base, -1 none (yet)
+    branch: np.ndarray  # (cap,) int64: the particle whose tree made the node, -1 for the root
+    step: np.ndarray  # (cap,) int64: simulation step of its creation
+    link_step: np.ndarray  # (cap,) int64: step at which it got its parent (_NOT_LINKED: not yet)
+
+
+class Particles(NamedTuple):
+    """The particles i of one level (one per tree)."""
+
+    head: np.ndarray  # (k,) int64: the particle's current node, -1 before birth
+    dir: np.ndarray  # (k, 3) float64: its previous direction H (unit)
+    active: np.ndarray  # (k,) bool: born and still moving
+    uf: np.ndarray  # (k,) int64: union-find over tree ids; _find(uf, i) labels particle i's tree
+
+
+class HashGrid(NamedTuple):
+    """The spatial hash of the nodes: cells of side h, chains ``head[bucket]`` -> ``next[v]`` -> ... -> -1."""
+
+    head: np.ndarray  # (mask + 1,) int64: first node of each bucket
+    next: np.ndarray  # (cap,) int64: next node in the same bucket
+    mask: int  # buckets - 1 (a power of two minus one)
+    h: float  # cell side
+    inv_h: float  # 1 / h
+
+
+class RodkaewConstants(NamedTuple):
+    """The scalars of a level's run: step length, merge distance, eq. 7.1 weights, w_b(d), the search."""
+
+    step: float  # step length per simulation step
+    merge: float  # merge distance (fig. 7.5b)
+    w_a: float  # eq. 7.1 weight of A
+    w_b: float  # eq. 7.1 weight of B (times w_b(d) from wb_table)
+    w_h: float  # eq. 7.1 weight of H
+    wb_table: np.ndarray  # (s,) float64: samples of w_b(d) over d / w_b_range in [0, 1] (fig. 7.4)
+    w_b_range: float
+    perception: float  # B is the nearest other tree within this distance (inf allowed)
+    rmax: int  # rings of cells the nearest-other-tree search may visit
 
 
 # --------------------------------------------------------------------------------------------
@@ -170,14 +220,20 @@ def _wb_of(d, w_b, wb_table, w_b_range):
 
 
 @njit(cache=True)
-def _advance(step_begin, step_end, node_pos, node_parent, node_branch, node_step, node_link_step, n_nodes,
-             part_head, part_dir, part_active, uf, target, root_node,
-             grid_head, grid_next, mask, h, inv_h, perception, rmax,
-             step_len, merge, w_a, w_b, w_h, wb_table, w_b_range):
-    """Move every active particle (in index order) for steps [step_begin, step_end).
+def _advance(step_begin, step_end, n_nodes, target, root_node, nodes, parts, grid, const):
+    """Move every active particle (in index order) for steps [step_begin, step_end) (eq. 7.1, fig. 7.5).
 
+    A particle within a step or the merge distance of ``target`` links to ``root_node``; one within
+    the merge distance of another tree grafts onto it; the others step along H' (eq. 7.1), each
+    step a new node of its tree (``nodes``, hashed into ``grid``).
     Returns (next step, node count, active count). Stops early when no particle is active.
     """
+    node_pos, node_parent, node_branch = nodes.pos, nodes.parent, nodes.branch
+    node_step, node_link_step = nodes.step, nodes.link_step
+    part_head, part_dir, part_active, uf = parts.head, parts.dir, parts.active, parts.uf
+    grid_head, grid_next, mask, h, inv_h = grid.head, grid.next, grid.mask, grid.h, grid.inv_h
+    step_len, merge, w_a, w_b, w_h = const.step, const.merge, const.w_a, const.w_b, const.w_h
+    wb_table, w_b_range, perception, rmax = const.wb_table, const.w_b_range, const.perception, const.rmax
     n_part = part_head.shape[0]
     n_active = 0
     reach = max(step_len, merge)
@@ -303,53 +359,41 @@ def grow_level(level: Level, params, *, base, end_frame: float, wb_table=None, p
         return growth_scale(gp.mode, gp.rate, gp.rates, frame, end_frame, gp._functions)
 
     cap = max(1024, 4 * k)
-    node_pos = np.zeros((cap, 3))
-    node_parent = np.full(cap, -1, np.int64)
-    node_branch = np.full(cap, -1, np.int64)
-    node_step = np.zeros(cap, np.int64)
-    node_link_step = np.full(cap, np.iinfo(np.int64).max, np.int64)
-    part_head = np.full(k, -1, np.int64)
-    part_dir = np.zeros((k, 3))
-    part_active = np.zeros(k, np.bool_)
-    uf = np.arange(k, dtype=np.int64)
+    nodes = _new_nodes(cap)
+    parts = Particles(head=np.full(k, -1, np.int64), dir=np.zeros((k, 3)), active=np.zeros(k, np.bool_),
+                      uf=np.arange(k, dtype=np.int64))
     tip_node = np.full(k, -1, np.int64)
 
     h = max(2.0 * rp.step, rp.merge_distance)
-    inv_h = 1.0 / h
     table_bits = 12
-    mask = (1 << table_bits) - 1
-    grid_head = np.full(mask + 1, -1, np.int64)
-    grid_next = np.full(cap, -1, np.int64)
+    grid = _new_grid(table_bits, np.full(cap, -1, np.int64), h)
 
     frame0 = 0.0
     target = base + (level.target - base) * scale(frame0)
-    node_pos[0] = target  # the root
+    nodes.pos[0] = target  # the root
     n_nodes = 1
     extent = float(np.max(np.ptp(np.vstack([level.start, level.target[None]]), axis=0))) if k else 1.0
     extent = max(extent, h)
 
     reach = min(rp.perception_radius, 1e6 * extent)
-    rmax = int(min(math.ceil(reach * inv_h) + 2, 2**31))
+    rmax = int(min(math.ceil(reach * grid.inv_h) + 2, 2**31))
+    const = RodkaewConstants(step=float(rp.step), merge=float(rp.merge_distance), w_a=float(rp.w_a),
+                             w_b=float(rp.w_b), w_h=float(rp.w_h), wb_table=wb_table, w_b_range=float(rp.w_b_range),
+                             perception=float(rp.perception_radius), rmax=rmax)
 
     def ensure(need):
-        nonlocal cap, node_pos, node_parent, node_branch, node_step, node_link_step, grid_next
-        nonlocal table_bits, mask, grid_head
+        nonlocal cap, nodes, table_bits, grid
         if need > cap:
             new_cap = max(need, 2 * cap)
             extra = new_cap - cap
-            node_pos = np.vstack([node_pos, np.zeros((extra, 3))])
-            node_parent = np.concatenate([node_parent, np.full(extra, -1, np.int64)])
-            node_branch = np.concatenate([node_branch, np.full(extra, -1, np.int64)])
-            node_step = np.concatenate([node_step, np.zeros(extra, np.int64)])
-            node_link_step = np.concatenate([node_link_step, np.full(extra, np.iinfo(np.int64).max, np.int64)])
-            grid_next = np.concatenate([grid_next, np.full(extra, -1, np.int64)])
+            nodes = Nodes(*(np.concatenate([a, b]) for a, b in zip(nodes, _new_nodes(extra))))
+            grid = grid._replace(next=np.concatenate([grid.next, np.full(extra, -1, np.int64)]))
             cap = new_cap
         want_bits = min(24, max(12, int(math.ceil(math.log2(max(2 * cap, 2))))))
         if want_bits > table_bits:
             table_bits = want_bits
-            mask = (1 << table_bits) - 1
-            grid_head = np.full(mask + 1, -1, np.int64)
-            _grid_rebuild(n_nodes, node_branch, node_pos, inv_h, grid_head, grid_next, mask)
+            grid = _new_grid(table_bits, grid.next, h)
+            _rehash(n_nodes, nodes, grid)
 
     step = 0
     born = 0
@@ -367,20 +411,20 @@ def grow_level(level: Level, params, *, base, end_frame: float, wb_table=None, p
                 pos = base + (level.start[i] - base) * scale(frame)
             v = n_nodes
             n_nodes += 1
-            node_pos[v] = pos
-            node_branch[v] = i
-            node_step[v] = step
+            nodes.pos[v] = pos
+            nodes.branch[v] = i
+            nodes.step[v] = step
             tip_node[i] = v
-            part_head[i] = v
+            parts.head[i] = v
             d0 = level.initial_dir[i]
             if not np.all(np.isfinite(d0)):
                 d0 = target - pos
                 nn = np.linalg.norm(d0)
                 d0 = d0 / nn if nn > 0 else np.array([0.0, -1.0, 0.0])
-            part_dir[i] = d0
-            part_active[i] = True
+            parts.dir[i] = d0
+            parts.active[i] = True
             n_active += 1
-            _grid_insert(v, node_pos, inv_h, grid_head, grid_next, mask)
+            _grid_insert(v, nodes.pos, grid.inv_h, grid.head, grid.next, grid.mask)
             born += 1
         next_birth = int(birth_step[order[born]]) if born < k else np.iinfo(np.int64).max
         if (born == k and n_active == 0) or step >= rp.max_steps:
@@ -388,12 +432,8 @@ def grow_level(level: Level, params, *, base, end_frame: float, wb_table=None, p
         stop = max(min(frame_end_step, next_birth, rp.max_steps), step + 1)
         if n_active:
             ensure(n_nodes + n_active * (stop - step) + 1)
-            step, n_nodes, _ = _advance(step, stop, node_pos, node_parent, node_branch, node_step,
-                                        node_link_step, n_nodes, part_head, part_dir, part_active, uf, target,
-                                        0, grid_head, grid_next, mask, h, inv_h, float(rp.perception_radius),
-                                        rmax, float(rp.step), float(rp.merge_distance), float(rp.w_a),
-                                        float(rp.w_b), float(rp.w_h), wb_table, float(rp.w_b_range))
-            now = int(part_active.sum())
+            step, n_nodes, _ = _advance(step, stop, n_nodes, target, 0, nodes, parts, grid, const)
+            now = int(parts.active.sum())
             if progress is not None and now < n_active:
                 progress(n_active - now)
             n_active = now
@@ -402,33 +442,51 @@ def grow_level(level: Level, params, *, base, end_frame: float, wb_table=None, p
         if step == frame_end_step and gp.mode != "none" and frame + 1 <= end_frame:
             # growth of space at the frame boundary: nodes, particles and target alike
             k_scale = scale(frame + 1) / scale(frame)
-            node_pos[:n_nodes] = base + (node_pos[:n_nodes] - base) * k_scale
+            nodes.pos[:n_nodes] = base + (nodes.pos[:n_nodes] - base) * k_scale
             target = base + (level.target - base) * scale(frame + 1)
             frame0 = frame + 1
-            _grid_rebuild(n_nodes, node_branch, node_pos, inv_h, grid_head, grid_next, mask)
+            _rehash(n_nodes, nodes, grid)
     if n_active:
         warnings.warn(f"rodkaew.max_steps = {rp.max_steps} reached with {n_active} particles still moving; "
                       "they are joined to their base by straight segments", UserWarning, stacklevel=2)
-        for i in np.nonzero(part_active)[0]:
-            node_parent[part_head[i]] = 0
-            node_link_step[part_head[i]] = step
+        for i in np.nonzero(parts.active)[0]:
+            nodes.parent[parts.head[i]] = 0
+            nodes.link_step[parts.head[i]] = step
     # bring every node to its final place (growth after the simulation ended) and snap the tips
+    node_pos = nodes.pos
     if gp.mode != "none":
         k_scale = scale(end_frame) / scale(frame0)
         node_pos[:n_nodes] = base + (node_pos[:n_nodes] - base) * k_scale
     node_pos[0] = level.target
     node_pos[tip_node] = level.start
     n = n_nodes
-    link = node_link_step[:n].astype(np.float64)
-    link[node_parent[:n] < 0] = np.inf
+    link = nodes.link_step[:n].astype(np.float64)
+    link[nodes.parent[:n] < 0] = np.inf
     return LevelResult(
         node_pos=node_pos[:n].copy(),
-        node_parent=node_parent[:n].copy(),
-        node_branch=node_branch[:n].copy(),
-        node_frame=node_step[:n] / spf,
+        node_parent=nodes.parent[:n].copy(),
+        node_branch=nodes.branch[:n].copy(),
+        node_frame=nodes.step[:n] / spf,
         node_link_frame=link / spf,
         tip_node=tip_node,
     )
+
+
+def _new_nodes(cap: int) -> Nodes:
+    """Room for ``cap`` nodes (no parent, no particle, not linked)."""
+    return Nodes(pos=np.zeros((cap, 3)), parent=np.full(cap, -1, np.int64), branch=np.full(cap, -1, np.int64),
+                 step=np.zeros(cap, np.int64), link_step=np.full(cap, _NOT_LINKED, np.int64))
+
+
+def _new_grid(table_bits: int, next_: np.ndarray, h: float) -> HashGrid:
+    """An empty spatial hash of 2^table_bits buckets, cells of side ``h``, over the chain array ``next_``."""
+    mask = (1 << table_bits) - 1
+    return HashGrid(head=np.full(mask + 1, -1, np.int64), next=next_, mask=mask, h=float(h), inv_h=1.0 / h)
+
+
+def _rehash(n_nodes: int, nodes: Nodes, grid: HashGrid) -> None:
+    """Every tree node of the first ``n_nodes`` into ``grid`` anew (after the nodes moved or the table grew)."""
+    _grid_rebuild(n_nodes, nodes.branch, nodes.pos, grid.inv_h, grid.head, grid.next, grid.mask)
 
 
 # --------------------------------------------------------------------------------------------

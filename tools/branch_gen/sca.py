@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -41,6 +42,82 @@ from .rodkaew import _cell, _hash
 from .skeleton import Skeleton
 
 __all__ = ["attraction_points", "colonize", "ScaResult", "grow_sca"]
+
+
+# --------------------------------------------------------------------------------------------
+# what the kernels share (NamedTuples of arrays: numba passes them as one argument, its fields
+# typed separately; every field has one dtype and layout, so a kernel compiles once)
+
+
+class Points(NamedTuple):
+    """The attraction points s and their nearest node (the incrementally kept association)."""
+
+    pos: np.ndarray  # (N, 3) float64
+    alive: np.ndarray  # (N,) bool: not killed
+    near: np.ndarray  # (N,) int64: nearest node (-1 before any)
+    near_d2: np.ndarray  # (N,) float64: squared distance d(s)^2 to it (inf before any)
+    live: np.ndarray  # (N,) int64: live[:n_live] the live points in increasing order (compacted)
+
+
+class Nodes(NamedTuple):
+    """The tree nodes v (capacity rows; the first n_nodes are in use)."""
+
+    pos: np.ndarray  # (cap, 3) float64
+    parent: np.ndarray  # (cap,) int64, -1 for the initial nodes
+    iteration: np.ndarray  # (cap,) int64: iteration that created the node, -1 initial
+    last_dir: np.ndarray  # (cap, 3) float64: direction n~ of the node's last growth
+    acc: np.ndarray  # (cap, 3) float64: sum of (s - v) / |s - v| over S(v) (eq. 3.1), zeroed after use
+    cnt: np.ndarray  # (cap,) int64: |S(v)| this iteration
+    closest: np.ndarray  # (cap,) int64: the closest point of S(v) (lowest index among equals)
+
+
+class KdTree(NamedTuple):
+    """A kd-tree over rows of a position array (:func:`_build_kd`).
+
+    Node ``t`` covers the rows ``perm[start[t]:start[t] + size[t]]`` in the box [lo[t], hi[t]];
+    a bucket has ``cnt[t]`` = ``size[t]``, an inner node ``cnt[t]`` = -1 and children ``left[t]``
+    and ``left[t] + 1``, both numbered after it.
+    """
+
+    perm: np.ndarray  # (n,) int64
+    lo: np.ndarray  # (T, 3) float64
+    hi: np.ndarray  # (T, 3) float64
+    start: np.ndarray  # (T,) int64
+    cnt: np.ndarray  # (T,) int64
+    left: np.ndarray  # (T,) int64
+    size: np.ndarray  # (T,) int64
+
+
+class PointTree(NamedTuple):
+    """The kd-tree of the live points with what the nearest-node update keeps per bucket.
+
+    Slot ``i`` holds point ``perm[i]``, its position ``slot_pos[i]`` and ``slot_d2[i]`` = its
+    ``near_d2`` (copies in bucket order); a bucket's live points fill the front of its slots
+    (``cnt`` counts them); ``maxd2[t]`` bounds ``near_d2`` over the live points below ``t`` (-1
+    when none); point s sits in slot ``slot_of[s]`` of bucket ``leaf_of[s]``. ``perm``, ``lo``,
+    ``hi``, ``start``, ``cnt`` and ``left`` as in :class:`KdTree`.
+    """
+
+    perm: np.ndarray  # (n,) int64
+    lo: np.ndarray  # (T, 3) float64
+    hi: np.ndarray  # (T, 3) float64
+    start: np.ndarray  # (T,) int64
+    cnt: np.ndarray  # (T,) int64
+    left: np.ndarray  # (T,) int64
+    maxd2: np.ndarray  # (T,) float64
+    slot_pos: np.ndarray  # (n, 3) float64
+    slot_d2: np.ndarray  # (n,) float64
+    slot_of: np.ndarray  # (N,) int64
+    leaf_of: np.ndarray  # (N,) int64
+
+
+class ScaConstants(NamedTuple):
+    """The scalars of a run (eq. 3.1, 3.3): squared d_I and d_k, the step D, the tropism g."""
+
+    d_i2: float  # d_I^2 (inf allowed)
+    d_k2: float  # d_k^2
+    step: float  # D
+    g: np.ndarray  # (3,) float64
 
 
 @njit(cache=True)
@@ -149,12 +226,7 @@ NODE_CLUSTER = 32  # new nodes per cluster (subtree of the node kd-tree) walking
 
 @njit(cache=True)
 def _build_kd(pos, idx, leaf_size):
-    """kd-tree over the rows ``idx`` of ``pos``: median splits on the widest axis, tight boxes.
-
-    Returns (perm, t_lo, t_hi, t_start, t_cnt, t_left, t_size): node ``t`` covers the rows
-    ``perm[t_start[t]:t_start[t] + t_size[t]]``; a bucket has ``t_cnt[t]`` = ``t_size[t]``, an inner
-    node ``t_cnt[t]`` = -1 and children ``t_left[t]`` and ``t_left[t] + 1``, both numbered after it.
-    """
+    """kd-tree over the rows ``idx`` of ``pos``: median splits on the widest axis, tight boxes (a :class:`KdTree`)."""
     n = idx.shape[0]
     cap = 2 * (n // max(1, leaf_size // 2)) + 3
     perm = idx.copy()
@@ -200,29 +272,23 @@ def _build_kd(pos, idx, leaf_size):
         stack[sp + 1] = n_t + 1
         sp += 2
         n_t += 2
-    return (perm, t_lo[:n_t].copy(), t_hi[:n_t].copy(), t_start[:n_t].copy(), t_cnt[:n_t].copy(),
-            t_left[:n_t].copy(), t_end[:n_t] - t_start[:n_t])
+    return KdTree(perm, t_lo[:n_t].copy(), t_hi[:n_t].copy(), t_start[:n_t].copy(), t_cnt[:n_t].copy(),
+                  t_left[:n_t].copy(), t_end[:n_t] - t_start[:n_t])
 
 
 @njit(cache=True)
-def _point_tree(points, live, near_d2, leaf_size):
-    """The kd-tree of the points ``live`` with what the nearest-node update keeps per bucket.
-
-    Returns (perm, t_lo, t_hi, t_start, t_cnt, t_left, t_maxd2, slot_pos, slot_d2, slot_of, leaf_of):
-    slot ``i`` holds point ``perm[i]``, its position ``slot_pos[i]`` and ``slot_d2[i]`` = its
-    ``near_d2`` (copies in bucket order); a bucket's live points fill the front of its slots;
-    ``t_maxd2[t]`` bounds ``near_d2`` over the live points below ``t`` (-1 when none); point s
-    sits in slot ``slot_of[s]`` of bucket ``leaf_of[s]``.
-    """
-    perm, t_lo, t_hi, t_start, t_cnt, t_left, _ = _build_kd(points, live, leaf_size)
+def _point_tree(points, leaf_size):
+    """The :class:`PointTree` (buckets of ``leaf_size``) of ``points.live``, every entry a live point."""
+    near_d2 = points.near_d2
+    perm, t_lo, t_hi, t_start, t_cnt, t_left, _ = _build_kd(points.pos, points.live, leaf_size)
     n = perm.shape[0]
     slot_pos = np.empty((n, 3))
     slot_d2 = np.empty(n)
-    slot_of = np.full(points.shape[0], -1, np.int64)
-    leaf_of = np.full(points.shape[0], -1, np.int64)
+    slot_of = np.full(points.pos.shape[0], -1, np.int64)
+    leaf_of = np.full(points.pos.shape[0], -1, np.int64)
     for i in range(n):
         s = perm[i]
-        slot_pos[i] = points[s]
+        slot_pos[i] = points.pos[s]
         slot_d2[i] = near_d2[s]
         slot_of[s] = i
     t_maxd2 = np.full(t_cnt.shape[0], -1.0)
@@ -231,7 +297,7 @@ def _point_tree(points, live, near_d2, leaf_size):
             t_maxd2[t] = max(t_maxd2[t], slot_d2[i])
             leaf_of[perm[i]] = t
     _refit(t_maxd2, t_cnt, t_left)
-    return perm, t_lo, t_hi, t_start, t_cnt, t_left, t_maxd2, slot_pos, slot_d2, slot_of, leaf_of
+    return PointTree(perm, t_lo, t_hi, t_start, t_cnt, t_left, t_maxd2, slot_pos, slot_d2, slot_of, leaf_of)
 
 
 @njit(cache=True)
@@ -258,9 +324,8 @@ def _gap2(lo_a, hi_a, lo_b, hi_b):
 
 
 @njit(cache=True)
-def _update_nearest_tree(near, near_d2, node_pos, n_from, n_to, perm, t_lo, t_hi, t_start, t_cnt, t_left,
-                         t_maxd2, slot_pos, slot_d2, stack, work):
-    """Nearest node of every live point among its old one and the nodes ``n_from:n_to``.
+def _update_nearest_tree(points, node_pos, n_from, n_to, tree, stack, work):
+    """Nearest node of every live point (``points``, in ``tree``) among its old one and the nodes ``n_from:n_to``.
 
     The result of comparing every live point with the new nodes in index order (strict ``<``):
     the least distance, the lowest node index among equals (old nodes all precede the new ones).
@@ -269,10 +334,13 @@ def _update_nearest_tree(near, near_d2, node_pos, n_from, n_to, perm, t_lo, t_hi
     gap to its box does not exceed their bound on ``near_d2``; in a point bucket, a point is
     compared with the nodes of the cluster's buckets that are no farther from it (by box) than
     its nearest node. ``work[0]`` counts point-node distance evaluations, ``work[1]`` point-tree
-    nodes entered.
+    nodes entered (``stack``: room for a path through the point tree).
     """
     if n_to <= n_from:
         return
+    near, near_d2 = points.near, points.near_d2
+    perm, t_lo, t_hi, t_start, t_cnt, t_left = tree.perm, tree.lo, tree.hi, tree.start, tree.cnt, tree.left
+    t_maxd2, slot_pos, slot_d2 = tree.maxd2, tree.slot_pos, tree.slot_d2
     order, c_lo, c_hi, c_start, c_cnt, c_left, c_size = _build_kd(node_pos, np.arange(n_from, n_to), NODE_LEAF)
     n_eval = 0
     n_visit = 0
@@ -376,9 +444,11 @@ def _update_nearest_tree(near, near_d2, node_pos, n_from, n_to, perm, t_lo, t_hi
 
 
 @njit(cache=True)
-def _kill(s, perm, t_start, t_cnt, t_maxd2, slot_pos, slot_d2, slot_of, leaf):
-    """Swap-remove point ``s`` from bucket ``leaf`` (its slot moves past the bucket's live ones)."""
-    last = t_start[leaf] + t_cnt[leaf] - 1
+def _kill(s, tree):
+    """Swap-remove point ``s`` from its bucket of ``tree`` (its slot moves past the bucket's live ones)."""
+    perm, slot_of, slot_pos, slot_d2, cnt = tree.perm, tree.slot_of, tree.slot_pos, tree.slot_d2, tree.cnt
+    leaf = tree.leaf_of[s]
+    last = tree.start[leaf] + cnt[leaf] - 1
     i = slot_of[s]
     o = perm[last]
     perm[i], perm[last] = o, s
@@ -386,9 +456,9 @@ def _kill(s, perm, t_start, t_cnt, t_maxd2, slot_pos, slot_d2, slot_of, leaf):
     for k in range(3):
         slot_pos[i, k], slot_pos[last, k] = slot_pos[last, k], slot_pos[i, k]
     slot_d2[i], slot_d2[last] = slot_d2[last], slot_d2[i]
-    t_cnt[leaf] -= 1
-    if t_cnt[leaf] == 0:
-        t_maxd2[leaf] = -1.0
+    cnt[leaf] -= 1
+    if cnt[leaf] == 0:
+        tree.maxd2[leaf] = -1.0
 
 
 @njit(cache=True)
@@ -407,35 +477,38 @@ def _biased(nx, ny, nz, g, out):
 
 
 @njit(cache=True)
-def _iterate(max_iter, it0, points, alive, near, near_d2, node_pos, node_parent, node_iter, n_nodes, n_new_from,
-             last_dir, d_i2, d_k2, step, g, acc, cnt, closest, live, n_live, perm, t_lo, t_hi, t_start, t_cnt,
-             t_left, t_maxd2, slot_pos, slot_d2, slot_of, leaf_of, work):
-    """Space colonization iterations until no node grows, ``max_iter``, or capacity runs short.
+def _iterate(max_iter, it0, n_nodes, n_new_from, n_live, points, nodes, tree, const, work):
+    """Space colonization iterations (eq. 3.1, 3.3) until no node grows, ``max_iter``, or capacity runs short.
 
-    ``live[:n_live]`` are the live points in increasing order (compacted as points die), all in
-    the point kd-tree (``_point_tree``).
+    ``points.live[:n_live]`` are the live points in increasing order (compacted as points die),
+    all in the point kd-tree ``tree`` (``_point_tree``); ``nodes`` has ``n_nodes`` nodes in use,
+    the last batch from ``n_new_from``; ``const`` holds d_I^2, d_k^2, D and g; ``work`` counts
+    as in ``_update_nearest_tree``.
     Returns (iterations done, node count, first node of the last batch, live count, status) with
     status 0 = finished (no growth), 1 = max_iter reached, 2 = needs more node capacity.
     """
+    pts, alive, near, near_d2, live = points.pos, points.alive, points.near, points.near_d2, points.live
+    node_pos, node_parent, node_iter, last_dir = nodes.pos, nodes.parent, nodes.iteration, nodes.last_dir
+    acc, cnt, closest = nodes.acc, nodes.cnt, nodes.closest
+    d_i2, d_k2, step, g = const.d_i2, const.d_k2, const.step, const.g
     cap = node_pos.shape[0]
     it = it0
-    touched = np.empty(points.shape[0], np.int64)
-    stack = np.empty(t_maxd2.shape[0] + 2, np.int64)
+    touched = np.empty(pts.shape[0], np.int64)
+    stack = np.empty(tree.maxd2.shape[0] + 2, np.int64)
     u = np.empty(3)
     while it < max_iter:
-        _update_nearest_tree(near, near_d2, node_pos, n_new_from, n_nodes, perm, t_lo, t_hi, t_start, t_cnt,
-                             t_left, t_maxd2, slot_pos, slot_d2, stack, work)
+        _update_nearest_tree(points, node_pos, n_new_from, n_nodes, tree, stack, work)
         n_alive = 0
         for j in range(n_live):
             s = live[j]
             if near_d2[s] < d_k2:
                 alive[s] = False
-                _kill(s, perm, t_start, t_cnt, t_maxd2, slot_pos, slot_d2, slot_of, leaf_of[s])
+                _kill(s, tree)
             else:
                 live[n_alive] = s
                 n_alive += 1
         n_live = n_alive
-        _refit(t_maxd2, t_cnt, t_left)
+        _refit(tree.maxd2, tree.cnt, tree.left)
         if n_nodes + n_alive > cap:
             return it, n_nodes, n_new_from, n_live, 2
         n_new_from = n_nodes
@@ -456,7 +529,7 @@ def _iterate(max_iter, it0, points, alive, near, near_d2, node_pos, node_parent,
                 closest[v] = s
             cnt[v] += 1
             for k in range(3):
-                acc[v, k] += (points[s, k] - node_pos[v, k]) / d
+                acc[v, k] += (pts[s, k] - node_pos[v, k]) / d
         grown = 0
         for j in range(nt):
             v = touched[j]
@@ -468,7 +541,7 @@ def _iterate(max_iter, it0, points, alive, near, near_d2, node_pos, node_parent,
             # which breaks the symmetry deterministically
             if u[0] * last_dir[v, 0] + u[1] * last_dir[v, 1] + u[2] * last_dir[v, 2] > 1.0 - 1e-12:
                 c = closest[v]
-                dx, dy, dz = points[c, 0] - node_pos[v, 0], points[c, 1] - node_pos[v, 1], points[c, 2] - node_pos[v, 2]
+                dx, dy, dz = pts[c, 0] - node_pos[v, 0], pts[c, 1] - node_pos[v, 1], pts[c, 2] - node_pos[v, 2]
                 _biased(dx, dy, dz, g, u)
                 if u[0] * last_dir[v, 0] + u[1] * last_dir[v, 1] + u[2] * last_dir[v, 2] > 1.0 - 1e-12:
                     continue
@@ -486,6 +559,13 @@ def _iterate(max_iter, it0, points, alive, near, near_d2, node_pos, node_parent,
         if grown == 0:
             return it, n_nodes, n_new_from, n_live, 0
     return it, n_nodes, n_new_from, n_live, 1
+
+
+def _new_nodes(cap: int) -> Nodes:
+    """Room for ``cap`` tree nodes (no parent, initial iteration, nothing accumulated)."""
+    return Nodes(pos=np.zeros((cap, 3)), parent=np.full(cap, -1, np.int64), iteration=np.full(cap, -1, np.int64),
+                 last_dir=np.zeros((cap, 3)), acc=np.zeros((cap, 3)), cnt=np.zeros(cap, np.int64),
+                 closest=np.zeros(cap, np.int64))
 
 
 @dataclass
@@ -545,68 +625,56 @@ def colonize(points, roots, *, step: float, kill_distance: float, influence_radi
     pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
     roots = np.asarray(roots, dtype=np.float64).reshape(-1, 3)
     cap = max(1024, 4 * len(pts) + len(roots))
-    node_pos = np.zeros((cap, 3))
-    node_parent = np.full(cap, -1, np.int64)
-    node_iter = np.full(cap, -1, np.int64)
-    last_dir = np.zeros((cap, 3))
-    acc = np.zeros((cap, 3))
-    cnt = np.zeros(cap, np.int64)
-    closest = np.zeros(cap, np.int64)
+    nodes = _new_nodes(cap)
     n_nodes = len(roots)
-    node_pos[:n_nodes] = roots
-    alive = np.ones(len(pts), np.bool_)
-    near = np.full(len(pts), -1, np.int64)
-    near_d2 = np.full(len(pts), np.inf)
-    g = np.asarray(tropism, dtype=np.float64)
-    d_i2 = influence_radius ** 2 if math.isfinite(influence_radius) else np.inf
+    nodes.pos[:n_nodes] = roots
+    points = Points(pos=pts, alive=np.ones(len(pts), np.bool_), near=np.full(len(pts), -1, np.int64),
+                    near_d2=np.full(len(pts), np.inf), live=np.arange(len(pts), dtype=np.int64))
+    d_i2 = influence_radius ** 2 if math.isfinite(influence_radius) else math.inf
+    const = ScaConstants(d_i2=float(d_i2), d_k2=float(kill_distance ** 2), step=float(step),
+                         g=np.ascontiguousarray(tropism, dtype=np.float64))
     it, new_from = 0, 0
+    n_live = len(pts)
     killed_before = 0
     work = np.zeros(2, np.int64)
-    live = np.arange(len(pts), dtype=np.int64)
-    tree = _point_tree(pts, live, near_d2, POINT_LEAF)
+    tree = _point_tree(points, POINT_LEAF)
     while True:
         limit = min(max_iterations, it + 1) if (add_points is not None and it < add_iterations) else max_iterations
-        it, n_nodes, new_from, n_live, status = _iterate(
-            limit, it, pts, alive, near, near_d2, node_pos, node_parent, node_iter, n_nodes, new_from, last_dir,
-            d_i2, kill_distance ** 2, step, g, acc, cnt, closest, live, len(live), *tree, work)
-        live = live[:n_live]
+        it, n_nodes, new_from, n_live, status = _iterate(limit, it, n_nodes, new_from, n_live, points, nodes, tree,
+                                                         const, work)
         if progress is not None:
-            killed = int((~alive).sum())
+            killed = int((~points.alive).sum())
             progress(killed - killed_before)
             killed_before = killed
         if status == 2:
-            extra = cap
-            node_pos = np.vstack([node_pos, np.zeros((extra, 3))])
-            node_parent = np.concatenate([node_parent, np.full(extra, -1, np.int64)])
-            node_iter = np.concatenate([node_iter, np.full(extra, -1, np.int64)])
-            last_dir = np.vstack([last_dir, np.zeros((extra, 3))])
-            acc = np.vstack([acc, np.zeros((extra, 3))])
-            cnt = np.concatenate([cnt, np.zeros(extra, np.int64)])
-            closest = np.concatenate([closest, np.zeros(extra, np.int64)])
-            cap += extra
+            nodes = Nodes(*(np.concatenate([a, b]) for a, b in zip(nodes, _new_nodes(cap))))
+            cap *= 2
             continue
         if add_points is not None and it <= add_iterations and it < max_iterations:
-            new = np.asarray(add_points(it, pts[alive]), dtype=np.float64).reshape(-1, 3)
+            new = np.asarray(add_points(it, points.pos[points.alive]), dtype=np.float64).reshape(-1, 3)
             if len(new):
-                pts = np.vstack([pts, new])
-                alive = np.concatenate([alive, np.ones(len(new), np.bool_)])
-                near = np.concatenate([near, np.full(len(new), -1, np.int64)])
-                near_d2 = np.concatenate([near_d2, np.full(len(new), np.inf)])
+                m = len(new)
+                pos = np.vstack([points.pos, new])
+                alive = np.concatenate([points.alive, np.ones(m, np.bool_)])
+                near = np.concatenate([points.near, np.full(m, -1, np.int64)])
+                near_d2 = np.concatenate([points.near_d2, np.full(m, np.inf)])
                 # the new points see every node, not only the newest (a scan: added points are few)
-                sub_alive = np.zeros(len(pts), np.bool_)
-                sub_alive[-len(new):] = True
-                _update_nearest(pts, sub_alive, near, near_d2, node_pos, 0, new_from)
-                work[0] += len(new) * new_from
+                sub_alive = np.zeros(len(pos), np.bool_)
+                sub_alive[-m:] = True
+                _update_nearest(pos, sub_alive, near, near_d2, nodes.pos, 0, new_from)
+                work[0] += m * new_from
                 live = np.flatnonzero(alive).astype(np.int64)
-                tree = _point_tree(pts, live, near_d2, POINT_LEAF)
+                points = Points(pos=pos, alive=alive, near=near, near_d2=near_d2, live=live)
+                n_live = len(live)
+                tree = _point_tree(points, POINT_LEAF)
             if it < add_iterations:
                 continue
             if status == 0 and not len(new):
                 break
             continue
         break
-    return ScaResult(node_pos[:n_nodes].copy(), node_parent[:n_nodes].copy(), node_iter[:n_nodes].copy(), pts,
-                     alive, np.sqrt(near_d2), it, int(work[0]), int(work[1]))
+    return ScaResult(nodes.pos[:n_nodes].copy(), nodes.parent[:n_nodes].copy(), nodes.iteration[:n_nodes].copy(),
+                     points.pos, points.alive, np.sqrt(points.near_d2), it, int(work[0]), int(work[1]))
 
 
 def grow_sca(params, envelope, *, progress=None) -> tuple[Skeleton, ScaResult]:
