@@ -363,3 +363,29 @@ def test_edge_stretch_range_and_parts_out_of_bounds():
     x[5, 0] = np.nan
     assert parts_out_of_bounds(x, edges, rest, vp, 2, 0.0, 1e9, 1e-9)[1]
     assert math.isnan(edge_stretch_range(x, edges, rest, 1e-9)[1])
+
+
+def test_bending_at_rest_does_not_move_a_vertex_with_a_vanishing_gradient():
+    """A hinge at its rest angle up to round-off (1e-14 rad) whose only movable vertex is an edge
+    vertex with a (nearly) vanishing gradient: both wings fixed and projecting onto the other end
+    of the edge, as in a one-segment cylinder standing on a fixed base ring (the sunflower's
+    pistil). The undamped step C / |grad_1| moved p1 by the floret's size; the damped step
+    (constraints.BENDING_DAMPING) leaves it in place, in the pure kernel and in the sweep."""
+    d = 1e-15
+    p = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0 - d, 1.0, 0.0], [1.0 - d, -0.6, -0.8]])
+    w = np.array([1.0, 0.0, 0.0, 0.0])
+    rest = init_bending_constraint(*p) + 1e-14
+    c = [np.zeros(3) for _ in range(4)]
+    solve_bending_constraint(p[0], w[0], p[1], w[1], p[2], w[2], p[3], w[3], rest, 1.0, *c)
+    assert np.linalg.norm(c[0]) < 1e-12
+    x = p.copy()
+    project_bending_constraints(x, w, np.array([[0, 1, 2, 3]]), np.array([rest]), np.array([1.0]))
+    assert np.linalg.norm(x - p) < 1e-12
+    # a real angle error on a well-shaped hinge is still corrected as before (damping ~1e-12)
+    q = hinge(40.0)
+    wq = np.ones(4)
+    rest = math.radians(50.0)
+    y = q.copy()
+    for _ in range(50):
+        project_bending_constraints(y, wq, np.array([[0, 1, 2, 3]]), np.array([rest]), np.array([1.0]))
+    assert signed_dihedral_angle(*y) == pytest.approx(rest, abs=1e-9)

@@ -31,6 +31,7 @@ __all__ = [
     "solve_bending_constraint",
     "bounded_bending_scale",
     "BENDING_STEP_BOUND",
+    "BENDING_DAMPING",
     "solve_attachment_constraint",
 ]
 
@@ -201,6 +202,22 @@ a well-shaped hinge turns a wing by at most pi, i.e. moves a vertex by at most p
 the bound only trims those runaway steps."""
 
 
+BENDING_DAMPING = 1e-12
+"""The bending projection's denominator ``sum_i w_i |grad_i|^2`` gets ``BENDING_DAMPING x
+max_i |grad_i|^2`` (over all four vertices, movable or not) added: a damped (Levenberg-Marquardt)
+step. It changes the step of a hinge whose movable vertices carry a fair share of the gradient by
+about 1e-12 (nothing), and it stops the one case the linearized step cannot take: a hinge whose
+only movable vertices are edge vertices with a (nearly) vanishing gradient, e.g. the wing vertices
+fixed and projecting onto the ends of the shared edge (a one-segment cylinder standing on a fixed
+base ring). There ``C / |grad C|^2`` turns a round-off angle error of 1e-14 at rest into a move the
+size of the floret."""
+
+
+@njit(cache=True, inline="always")
+def _sq(g):
+    return g[0] * g[0] + g[1] * g[1] + g[2] * g[2]
+
+
 @njit(cache=True, inline="always")
 def bounded_bending_scale(s, m, le2, q1, q2):
     """The bending step scale ``s = -k C / sum_i w_i |grad_i|^2`` reduced so that no vertex moves
@@ -269,7 +286,8 @@ def solve_bending_constraint(p1, w1, p2, w2, p3, w3, p4, w4, rest_angle, stiffne
             corr3[i] = 0.0
             corr4[i] = 0.0
         return False
-    s = -stiffness * c / denom
+    g_max = max(max(_sq(corr1), _sq(corr2)), max(_sq(corr3), _sq(corr4)))
+    s = -stiffness * c / (denom + BENDING_DAMPING * g_max)
     e = p2 - p1
     le2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
     # |n_i|^2 = le2 / |grad_i|^2 for the wing vertices (|grad_3| = |e| / |n1|)

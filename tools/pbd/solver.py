@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .constraints import bounded_bending_scale, signed_dihedral_angle, wrap_angle
+from .constraints import BENDING_DAMPING, bounded_bending_scale, signed_dihedral_angle, wrap_angle
 
 __all__ = [
     "mesh_edges",
@@ -290,14 +290,19 @@ def _bending_one(x, w, i1, i2, i3, i4, rest, k):
     wb = w[i2]
     wc = w[i3]
     wd = w[i4]
-    d1 = wa * (g1x * g1x + g1y * g1y + g1z * g1z)
-    d2 = wb * (g2x * g2x + g2y * g2y + g2z * g2z)
-    d3 = wc * (g3x * g3x + g3y * g3y + g3z * g3z)
-    d4 = wd * (g4x * g4x + g4y * g4y + g4z * g4z)
+    u1 = g1x * g1x + g1y * g1y + g1z * g1z
+    u2 = g2x * g2x + g2y * g2y + g2z * g2z
+    u3 = g3x * g3x + g3y * g3y + g3z * g3z
+    u4 = g4x * g4x + g4y * g4y + g4z * g4z
+    d1 = wa * u1
+    d2 = wb * u2
+    d3 = wc * u3
+    d4 = wd * u4
     denom = d1 + d2 + d3 + d4
     if denom <= 1e-300:
         return 0.0
-    sc = -k * c / denom
+    # damped where the movable vertices barely change the angle (constraints.BENDING_DAMPING)
+    sc = -k * c / (denom + BENDING_DAMPING * max(max(u1, u2), max(u3, u4)))
     # no vertex moves by more than BENDING_STEP_BOUND x the hinge's size (constraints.py)
     sc = bounded_bending_scale(sc, max(wa * d1, wb * d2, wc * d3, wd * d4), le2, q1, q2)
     t = sc * wa
