@@ -611,3 +611,34 @@ def test_dense_growing_head_stays_in_shape_collision_free_and_whole(tmp_path):
     tpl = read_obj(tmp_path / "obj" / "frame_0000.obj")
     assert len(mesh.faces) == n * len(tpl.faces)
     assert len(intersecting_pairs(mesh.vertices, mesh.faces)) == 0
+
+
+def test_frames_option_overrides_the_run_length(inputs, tmp_path):
+    out = tmp_path / "short"
+    res = run_cli("fccompose", inputs["dir"] / "single.fcc", "-o", out, "-q", "--frames", "3")
+    assert res.returncode == 0, res.stderr
+    assert sorted(p.name for p in out.glob("frame_*.obj")) == [f"frame_{k:04d}.obj" for k in range(4)]
+    res = run_cli("fccompose", inputs["dir"] / "single.fcc", "-o", tmp_path / "bad", "-q", "--frames", "-1")
+    assert res.returncode == 2 and not (tmp_path / "bad").exists()
+
+
+def test_rba_matrices_of_all_florets_at_once_equal_the_one_by_one_placement(inputs, tmp_path):
+    """Model.schedule places every rba: floret with one vectorized evaluation; it must give each
+    floret's placement (:func:`_rba_matrix`: rows interpolated between RBA frames, the nearest
+    present row before emergence, SCN and entry scales, Gram-Schmidt frame) to round-off."""
+    from inflo.formats.fcc import read_fcc
+    from inflo.tools.fccompose.model import build_model
+
+    rng = np.random.default_rng(3)
+    frames = []
+    for f in range(5):
+        ids = [0, 1] if f >= 2 else [0]
+        up = rng.normal(size=(len(ids), 3))
+        right = rng.normal(size=(len(ids), 3))
+        frames.append(RbaFrame(ids, rng.normal(size=(len(ids), 3)), rng.uniform(0.5, 2.0, (len(ids), 3)), up, right))
+    m = build_model(read_fcc(_rba_case(inputs, tmp_path, frames)))
+    for frame in (0.0, 0.5, 1.0, 2.75, 4.0, 9.0):
+        ids, mats = m._rba_matrices(frame)
+        assert sorted(ids.tolist()) == [0, 1]
+        for k, mat in zip(ids, mats):
+            np.testing.assert_allclose(mat, m.matrix(m.florets[k], frame)[:3], rtol=0, atol=1e-13)

@@ -1,6 +1,8 @@
 """Command-line front end of ``fccompose`` (issue 5): parse the ``.fcc``, compose, report."""
 from __future__ import annotations
 
+import dataclasses
+
 import click
 
 from inflo.formats.fcc import read_fcc
@@ -19,8 +21,13 @@ from .compose import compose_canopy
                                              "or the sanity check finds intersections.")
 @click.option("--allow-initial-intersections", is_flag=True,
               help="Go on even when the first frame is not collision-free.")
-def main(params, output, resume, strict, allow_initial_intersections, quiet, debug):
+@click.option("--frames", "frames", type=click.IntRange(min=0), default=None, metavar="N",
+              help="Frames to simulate; overrides the file's 'run for number of frames' (a pipeline's "
+                   "draft and final builds share one .fcc).")
+def main(params, output, resume, strict, allow_initial_intersections, frames, quiet, debug):
     p = read_fcc(params)
+    if frames is not None:
+        p = dataclasses.replace(p, run_frames=int(frames))
     warn = (lambda msg: None) if quiet else (lambda msg: click.echo(f"fccompose: warning: {msg}", err=True))
     res = compose_canopy(
         p, output, resume=resume, strict=strict, allow_initial_intersections=allow_initial_intersections,

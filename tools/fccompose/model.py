@@ -282,6 +282,9 @@ class Model:
         base_b = np.empty(nf, np.int64)
         alpha = np.empty(nf)
         mats = np.empty((nf, 3, 4))
+        rba_ids, rba_mats = self._rba_matrices(frame)
+        carried = np.zeros(nf, bool)
+        carried[rba_ids] = True
         for k, fl in enumerate(self.florets):
             tpl = fl.template
             nfr = tpl.frames.shape[0]
@@ -292,8 +295,56 @@ class Model:
             base_a[k] = off + a * tpl.n_vertices
             base_b[k] = off + b * tpl.n_vertices
             alpha[k] = pos - a if b != a else 0.0
-            mats[k] = self.matrix(fl, frame)[:3]
+            if not carried[k]:
+                mats[k] = self.matrix(fl, frame)[:3]
+        mats[rba_ids] = rba_mats
         return base_a, base_b, alpha, mats
+
+    @functools.cached_property
+    def _rba_tables(self) -> list:
+        """Per RBA sequence: (floret indices, (n, F, 12) rows pos|scale|up|right of each floret at
+        each frame (its nearest present row), (n, 3) scale factors: the entry's and the SCN's)."""
+        groups: dict = {}
+        for fl in self.florets:
+            if fl.placement.kind == "rba":
+                groups.setdefault(id(fl.rba[1]), []).append(fl)
+        out = []
+        for members in groups.values():
+            frames = members[0].rba[1]
+            table = np.empty((len(members), len(frames), 12))
+            for i, fl in enumerate(members):
+                for f, (src, row) in enumerate(zip(fl.rba_source, fl.rba_row)):
+                    fr = frames[src]
+                    table[i, f] = np.concatenate([fr.pos[row], fr.scale[row], fr.up[row], fr.right[row]])
+            factor = np.array([fl.rba_scale * np.asarray(fl.placement.scale, float) for fl in members])
+            out.append((np.array([fl.index for fl in members], np.int64), table, factor))
+        return out
+
+    def _rba_matrices(self, frame: float):
+        """Local-to-scene (n, 3, 4) matrices of every ``rba:`` floret at ``frame`` (scene scale
+        included) and their indices: :func:`_rba_matrix` for all of them at once."""
+        ids, mats = [np.zeros(0, np.int64)], [np.zeros((0, 3, 4))]
+        for idx, table, factor in self._rba_tables:
+            nfr = table.shape[1]
+            f = min(max(frame, 0.0), nfr - 1.0)
+            a = int(math.floor(f))
+            b = min(a + 1, nfr - 1)
+            s = f - a
+            row = (1 - s) * table[:, a] + s * table[:, b]
+            u = row[:, 6:9] / np.sqrt((row[:, 6:9] ** 2).sum(axis=1))[:, None]
+            r = row[:, 9:12] - (row[:, 9:12] * u).sum(axis=1)[:, None] * u
+            r = r / np.sqrt((r ** 2).sum(axis=1))[:, None]
+            z = np.cross(r, u)
+            scale = row[:, 3:6] * factor
+            m = np.empty((len(idx), 3, 4))
+            m[:, :, 0] = r * scale[:, 0:1]
+            m[:, :, 1] = u * scale[:, 1:2]
+            m[:, :, 2] = z * scale[:, 2:3]
+            m[:, :, 3] = row[:, 0:3]
+            m *= np.asarray(self.params.scene_scale, float)[None, :, None]
+            ids.append(idx)
+            mats.append(m)
+        return np.concatenate(ids), np.concatenate(mats)
 
 
 @dataclass
