@@ -41,28 +41,37 @@ from .sweep import write_sweep
               help="Ray and small ray florets: frameEnd = frameStart + N (applied before --ray-lead).")
 @click.option("--disk-development-frames", type=int, default=None, metavar="N",
               help="Disk florets: frameEnd = frameStart + N.")
+@click.option("--bracts", type=int, default=0, show_default=True, metavar="N",
+              help="The N outermost placements of each head are involucral bracts (type 'bract', "
+                   "--bract-id), left out of the other florets' cone tests.")
+@click.option("--bract-id", type=int, default=2, show_default=True, help="Type id of involucral bracts.")
+@click.option("--bract-scale", type=float, default=1.0, show_default=True, help="Scale factor of bracts.")
 def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, disk_scale, centre,
-        half_angle, ray_lead, ray_development_frames, disk_development_frames, quiet, debug):
+        half_angle, ray_lead, ray_development_frames, disk_development_frames, bracts, bract_id, bract_scale,
+        quiet, debug):
     from inflo.formats.errors import InputError
 
     if len(thresholds) > 2:
         raise InputError(f"--threshold given {len(thresholds)} times; expected at most 2")
-    for name, v in (("--ray-id", ray_id), ("--disk-id", disk_id), ("--small-ray-id", small_ray_id)):
+    for name, v in (("--ray-id", ray_id), ("--disk-id", disk_id), ("--small-ray-id", small_ray_id),
+                    ("--bracts", bracts), ("--bract-id", bract_id)):
         if v is not None and v < 0:
             raise InputError(f"{name} must be >= 0, found {v}")
-    for name, v in (("--ray-scale", ray_scale), ("--disk-scale", disk_scale)):
+    for name, v in (("--ray-scale", ray_scale), ("--disk-scale", disk_scale), ("--bract-scale", bract_scale)):
         if not v > 0:
             raise InputError(f"{name} must be > 0, found {v}")
     opts = DimorphOptions(alpha, tuple(thresholds), ray_id, disk_id, small_ray_id, ray_scale, disk_scale,
-                          centre, half_angle, ray_lead, ray_development_frames, disk_development_frames)
+                          centre, half_angle, ray_lead, ray_development_frames, disk_development_frames,
+                          bracts, bract_id, bract_scale)
     check_window_options(opts)
     sc = read_scn(scene)
     out, counts = dimorph_scene(sc, opts)
     write_scn(output, out)
     if not quiet:
         windows = f", {counts['windows']} developmental windows set" if counts["windows"] else ""
+        bract_note = f", {counts['bract']} bracts" if counts["bract"] else ""
         click.echo(f"dimorph: {counts['ray']} ray, {counts['small_ray']} small ray, {counts['disk']} disk florets"
-                   f"{windows} -> {output}", err=True)
+                   f"{bract_note}{windows} -> {output}", err=True)
 
 
 @inflo_command("sweep", help="Ray floret counts vs head size (fig. 6.2) and vs cone angle (fig. 6.3): CSV + PNG.",

@@ -15,6 +15,7 @@ from .cones import FATE_DISK, FATE_RAY, FATE_SMALL_RAY, d_min, fates
 __all__ = ["DimorphOptions", "group_centres", "dimorph_scene"]
 
 TYPE_LABELS = {FATE_DISK: "disk", FATE_RAY: "ray", FATE_SMALL_RAY: "small_ray"}
+FATE_BRACT = -1
 
 
 @dataclass
@@ -33,6 +34,12 @@ class DimorphOptions:
         whole frames, ``frameStart`` kept >= 0 and ``frameEnd`` >= ``frameStart + 1``
     ray_development_frames, disk_development_frames : None, or N > 0: ``frameEnd = frameStart + N``
         for ray and small ray (resp. disk) florets, before the lead is applied
+    bracts : the ``bracts`` outermost placements of each head (by distance from its centre O; ties by
+        placement order) are involucral bracts: type ``bract``, id ``bract_id``, scale factor
+        ``bract_scale``, their windows left as they are. They are leaves, not florets: the cone
+        test (eq. 6.1) of the other placements ignores them, so the florets just inside the
+        involucre are the ones whose cones can be empty (the bracts of a capitulum are its first,
+        outermost primordia, formed in the same phyllotactic sequence as the florets)
     Windows are changed only on placements that have one (``ca``, ``ta``, ``ra``, ``rba``).
     """
 
@@ -48,6 +55,9 @@ class DimorphOptions:
     ray_lead: float = 0.0
     ray_development_frames: int | None = None
     disk_development_frames: int | None = None
+    bracts: int = 0
+    bract_id: int = 2
+    bract_scale: float = 1.0
 
 
 def group_centres(scene: Scene, how: str = "group") -> np.ndarray:
@@ -93,6 +103,27 @@ def shift_window(p, development_frames: int | None, lead: float) -> bool:
     return True
 
 
+def outermost(pos: np.ndarray, centre: np.ndarray, group: np.ndarray, count: int) -> np.ndarray:
+    """(n,) bool: the ``count`` placements of each group farthest from their centre O.
+
+    Distances are compared after rounding to 1e-9 of the head's size, so that a pattern's
+    floating-point noise does not decide between florets at one distance; ties go by placement
+    order (the earlier placement is the outer one, as in a centripetal head's formation order).
+    """
+    n = len(pos)
+    out = np.zeros(n, dtype=bool)
+    if count <= 0 or n == 0:
+        return out
+    d = np.linalg.norm(np.asarray(pos, float) - np.asarray(centre, float), axis=1)
+    for g in np.unique(group):
+        rows = np.nonzero(group == g)[0]
+        scale = max(float(d[rows].max()), 1e-300)
+        key = np.round(d[rows] / scale * 1e9)
+        order = np.lexsort((rows, -key))
+        out[rows[order[:count]]] = True
+    return out
+
+
 def check_window_options(opts: DimorphOptions) -> None:
     """InputError (one line) for a non-finite lead or a development window that is not > 0."""
     if not math.isfinite(opts.ray_lead):
@@ -109,8 +140,8 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
     The scale is multiplied by the fate's factor (for ``rba:`` placements, whose SCN scale is a
     factor on every RBA row's scale, it becomes that factor). Windows: see :class:`DimorphOptions`.
     Placement order (each floret's identity) is kept. Returns the new scene and counts
-    ``{"ray": N, "small_ray": M, "disk": K}``, ``windows`` (placements whose window was set) plus
-    ``d_min`` (n,) float64.
+    ``{"ray": N, "small_ray": M, "disk": K, "bract": B}``, ``windows`` (placements whose window was
+    set) plus ``d_min`` (n,) float64 (inf for bracts).
     """
     if not 0.0 < opts.alpha < 360.0:
         raise InputError(f"--alpha {opts.alpha} outside (0, 360) degrees")
@@ -123,13 +154,22 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
     arr = scene.arrays()
     centre = group_centres(scene, opts.centre)
     radius = max(th) if th else math.inf
-    dmin = d_min(arr["pos"], centre, opts.alpha, radius=radius, half_angle=opts.half_angle)
+    bract = outermost(arr["pos"], centre, arr["group"], int(opts.bracts))
+    dmin = np.full(len(scene), np.inf)
+    if (~bract).any():
+        dmin[~bract] = d_min(arr["pos"][~bract], centre[~bract], opts.alpha, radius=radius,
+                             half_angle=opts.half_angle)
     fate = fates(dmin, th)
+    fate[bract] = FATE_BRACT
     small_id = opts.ray_id if opts.small_ray_id is None else opts.small_ray_id
     out = copy.deepcopy(scene)
     windows = 0
     for k, p in enumerate(out.placements):
         f = int(fate[k])
+        if f == FATE_BRACT:
+            p.id, p.type = opts.bract_id, "bract"
+            p.scale = p.scale * opts.bract_scale
+            continue
         if f == FATE_RAY:
             p.id, factor = opts.ray_id, opts.ray_scale
         elif f == FATE_SMALL_RAY:
@@ -145,4 +185,5 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
         if (n_frames is not None or lead) and shift_window(p, n_frames, lead):
             windows += 1
     counts = {TYPE_LABELS[c]: int(np.sum(fate == c)) for c in TYPE_LABELS}
+    counts["bract"] = int(bract.sum())
     return out, {**counts, "windows": windows, "d_min": dmin}
