@@ -310,15 +310,29 @@ def dynamic_scene(pattern: DynamicPattern, final: dict, *, floret_id: int = 0,
     return scene
 
 
-def write_frames(pattern: DynamicPattern, folder, *, size_factor: float = 1.0, bar=None) -> dict:
-    """Write ``folder/0000.rba ...`` (one file per frame, every emerged floret); returns the last state."""
+def write_frames(pattern: DynamicPattern, folder, *, size_factor: float = 1.0, bar=None,
+                 receptacle=None) -> dict:
+    """Write ``folder/0000.rba ...`` (one file per frame, every emerged floret); returns the last state.
+
+    ``receptacle``: None, or ``(options, out_folder)``: also write the frame's supporting surface
+    as ``out_folder/frame_NNNN.obj`` (:func:`.receptacle.receptacle_mesh`, same topology every frame).
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    if receptacle is not None:
+        from inflo.formats.obj import write_obj
+
+        from .receptacle import receptacle_mesh
+        rec_opts, rec_dir = receptacle[0], Path(receptacle[1])
+        rec_dir.mkdir(parents=True, exist_ok=True)
     state = None
     for f in range(pattern.frames):
         state = frame_state(pattern, f, size_factor=size_factor)
         write_rba(folder / frame_name(f, "", ".rba", 4),
                   RbaFrame(state["ids"], state["pos"], state["scale"], state["up"], state["right"]), fast=True)
+        if receptacle is not None:
+            write_obj(rec_dir / frame_name(f, "frame_", ".obj", 4), receptacle_mesh(state["profile"], rec_opts),
+                      header=f"receptacle of frame {f} (phyllotaxis [receptacle])")
         if bar is not None:
             bar.update(1)
     return state

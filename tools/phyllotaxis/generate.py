@@ -65,6 +65,9 @@ def generate(params: dict, out_dir, *, progress=None, header: str | None = None)
     notes = _unused_development_keys(params)
     curve_kw = dict(radius=s["radius"], height=s["height"], angle=s["angle"], samples=s["samples"])
     if "hierarchy" in params:
+        if "receptacle" in params:
+            notes.append("[receptacle] is written for single heads (static or dynamic); "
+                         "a hierarchy's meristems have none")
         return _hierarchy(params, out, progress, header, notes)
     profile = load_curve(s["curve"], **curve_kw)
     if "dynamics" in params:
@@ -78,13 +81,24 @@ def generate(params: dict, out_dir, *, progress=None, header: str | None = None)
                        divergence=pr["divergence"], profiles=profiles, curve_times=d["curve_times"],
                        substeps=d["substeps"], max_count=d["max_count"])
         ctx = progress(d["frames"], "phyllotaxis frames") if progress else _NoBar()
+        rec = (_receptacle_options(params), out / "receptacle") if "receptacle" in params else None
         with ctx as bar:
-            state = write_frames(pat, out / "rba", size_factor=pr["size_factor"], bar=bar)
+            state = write_frames(pat, out / "rba", size_factor=pr["size_factor"], bar=bar, receptacle=rec)
         scene = dynamic_scene(pat, state, floret_id=pr["floret_id"], development_frames=d["development_frames"])
         write_scn(out / "scene.scn", scene, header=header)
         preview = {"pos": state["pos"], "diameter": state["scale"][:, 0], "age": d["frames"] - 1 - pat.emergence}
         return Summary(f"dynamic ({d['mode']})", len(pat), d["frames"], out / "scene.scn", notes, preview)
     area = area_function(pr["area"], profile.length)
+    if "receptacle" in params and "compound" in params:
+        notes.append("[receptacle] is written for single heads (static or dynamic); "
+                     "a compound pattern's heads have none")
+    elif "receptacle" in params:
+        from inflo.formats.obj import write_obj
+
+        from .receptacle import receptacle_mesh
+        out.mkdir(parents=True, exist_ok=True)
+        write_obj(out / "receptacle.obj", receptacle_mesh(profile, _receptacle_options(params)),
+                  header="receptacle (phyllotaxis [receptacle])")
     if "compound" in params:
         c = params["compound"]
         comp = compound_pattern(profile, area, head_curve=c["head_curve"], head_height=c["head_height"],
@@ -110,6 +124,11 @@ def generate(params: dict, out_dir, *, progress=None, header: str | None = None)
     preview = {"pos": pat.pos, "diameter": pr["size_factor"] * 2 * np.sqrt(pat.area / np.pi),
                "age": np.arange(len(pat.s), dtype=np.float64)}
     return Summary("static", len(pat.s), 0, out / "scene.scn", notes, preview)
+
+
+def _receptacle_options(params: dict):
+    from .receptacle import ReceptacleOptions
+    return ReceptacleOptions(**params["receptacle"])
 
 
 def _static_development(scene, pr: dict) -> None:

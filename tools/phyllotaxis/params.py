@@ -11,7 +11,8 @@ Sections (thesis chapter 5):
 - ``[primordia]`` primordium area A(s), divergence angle, floret type and placement (eq. 5.1-5.2);
 - ``[dynamics]``  optional: fractionation / segregation over frames (sec. 5.3, fig. 5.2);
 - ``[compound]``  optional: two-level pattern of conical heads (sec. 5.4, fig. 5.4);
-- ``[hierarchy]`` optional: recursive segregation on a flat growing meristem (sec. 5.4, fig. 5.3).
+- ``[hierarchy]`` optional: recursive segregation on a flat growing meristem (sec. 5.4, fig. 5.3);
+- ``[receptacle]`` optional: also write the supporting surface as a mesh (:mod:`.receptacle`).
 """
 from __future__ import annotations
 
@@ -96,9 +97,20 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "development_frames": ("int", None),
         "max_count": ("int", 200_000),
     },
+    "receptacle": {
+        "segments": ("int", 48),
+        "rings": ("int", 12),
+        "underside_rings": ("int", 6),
+        "depth": ("float", 0.35),
+        "stem": ("float", 0.25),
+        "inset": ("float", 0.0),
+        "material": ("int", 5),
+    },
 }
 
 _OPTIONAL = ("dynamics", "compound", "hierarchy")
+# sections present in the result only when the file has them (besides the exclusive ones)
+_WHEN_GIVEN = ("receptacle",)
 
 
 def _line_of(text: str, section: str | None, key: str | None) -> int | None:
@@ -154,7 +166,7 @@ def parse_params(text: str, path="<params>") -> dict:
                 raise FormatError(path, _line_of(text, section, key),
                                   f"a key of [{section}]{did_you_mean(key, schema)}", repr(key))
     for section, schema in SCHEMA.items():
-        if section in _OPTIONAL and section not in raw:
+        if section in _OPTIONAL + _WHEN_GIVEN and section not in raw:
             continue
         table = raw.get(section, {})
         values = {}
@@ -274,6 +286,18 @@ def _check_ranges(p: dict, text: str, path) -> None:
             fail("dynamics", "substeps", ">= 0 (0: automatic)")
         if d["development_frames"] is not None and d["development_frames"] <= 0:
             fail("dynamics", "development_frames", "> 0 frames")
+    if "receptacle" in p:
+        rc = p["receptacle"]
+        for key, low, what in (("segments", 3, ">= 3"), ("rings", 1, ">= 1"), ("underside_rings", 1, ">= 1"),
+                               ("material", 0, ">= 0")):
+            if rc[key] < low:
+                fail("receptacle", key, what)
+        if rc["depth"] <= 0:
+            fail("receptacle", "depth", "> 0 (a fraction of the rim radius)")
+        if not 0 <= rc["stem"] < 1:
+            fail("receptacle", "stem", "in [0, 1) (a fraction of the rim radius)")
+        if rc["inset"] < 0:
+            fail("receptacle", "inset", ">= 0 scene units")
     if "compound" in p:
         c = p["compound"]
         if c["head_fill"] <= 0:
