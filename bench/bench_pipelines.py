@@ -10,7 +10,11 @@ virtual environment's tools first on PATH:
   (what-if the parameter file changed); goal under 10 s;
 - ``pipeline_yarrow_final``: the whole yarrow at ``QUALITY=final`` (about 350k canopy triangles);
   anchor: the thesis's 60 min for the yarrow canopy alone (table 4.1); goal under 10 min. Skipped
-  in ``--quick`` runs (draft quality instead) and while pipelines/yarrow does not exist.
+  in ``--quick`` runs (draft quality instead) and while pipelines/yarrow does not exist;
+- ``pipeline_sunflower_final``: the whole sunflower at ``QUALITY=final`` (874 florets, about 118k
+  canopy triangles, 100 frames, pictures, check and USD export); anchor: the thesis's 10 min
+  (CPU/CUDA, table 4.1) for its ~130k-triangle model; goal under 5 min (issue 16), peak memory of
+  any stage under 4 GB; ``pipeline_sunflower_final_fccompose``: its canopy stage alone.
 """
 from __future__ import annotations
 
@@ -68,4 +72,24 @@ def yarrow(ctx: BenchContext) -> list[Result]:
                    f"make -B, QUALITY={quality}: every stage; {size}")]
 
 
-BENCHMARKS = [lily, yarrow]
+def sunflower(ctx: BenchContext) -> list[Result]:
+    if not (REPO / "pipelines" / "sunflower" / "Makefile").is_file():
+        return []
+    import resource
+
+    quality = "draft" if ctx.quick else "final"
+    total = _make("-B", "-C", "pipelines/sunflower", f"QUALITY={quality}")
+    peak_gb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 2 ** 20
+    stage = _make("-C", "pipelines/sunflower", f"QUALITY={quality}", "-W", "sunflower.fcc", "canopy")
+    size = _canopy_size(REPO / "build" / "sunflower" / "canopy")
+    return [
+        Result(f"pipeline_sunflower_{quality}", total / 60, "min",
+               "thesis table 4.1: 10 min, ~130k triangles (goal under 5 min, issue 16)", 10.0,
+               f"make -B, QUALITY={quality}: every stage, pictures, check, USD; {size}; peak RSS of a "
+               f"stage {peak_gb:.2f} GB (goal under 4 GB)"),
+        Result(f"pipeline_sunflower_{quality}_fccompose", stage / 60, "min", "thesis table 4.1: 10 min", 10.0,
+               "the fccompose stage alone (fresh process)"),
+    ]
+
+
+BENCHMARKS = [lily, yarrow, sunflower]

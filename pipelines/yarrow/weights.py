@@ -4,6 +4,9 @@
         the vertices of a floret OBJ (polygonize output, local frame) on its base row: those at the
         lowest local height (every key pose keeps row 0 of each organ at y = 0), so the floret stays
         attached to the receptacle while collisions push its petals;
+    python weights.py all FRAME.obj OUT.weights
+        every vertex of an OBJ (a part that moves only as its animation says: the sunflower's
+        receptacle);
     python weights.py head SCENE.scn OUT.weights ID=FRAME.obj:IDS.weights [ID=...]
         the fixed vertices of the head canopy written by fccompose: the placements of SCENE.scn in
         order, each one the vertices of its id's OBJ, its fixed ids shifted by the vertices before it
@@ -44,6 +47,10 @@ def main(argv) -> int:
     if len(argv) >= 3 and argv[0] == "base":
         ids = base_ids(argv[1])
         write_ids(argv[2], ids, f"base row of {_rel(argv[1], argv[2])} ({len(ids)} vertices); written by weights.py")
+        return 0
+    if len(argv) >= 3 and argv[0] == "all":
+        ids = np.arange(len(read_obj(argv[1]).vertices))
+        write_ids(argv[2], ids, f"every vertex of {_rel(argv[1], argv[2])} ({len(ids)} vertices); written by weights.py")
         return 0
     if len(argv) >= 4 and argv[0] == "head":
         scene = read_scn(argv[1])

@@ -1,0 +1,204 @@
+"""Write the sunflower key poses (disk_*, ray_*, bract_* .floret) from a few numbers per pose.
+
+The .floret files under draft/ and final/ are the pipeline's inputs and are committed; this script
+documents how their control points were laid out and regenerates them after a change of the
+numbers below (``python make_keys.py`` in this folder; ``python make_keys.py OUT_DIR`` writes both
+sets under OUT_DIR, which the tests use to check that the committed files are up to date). The two
+sets differ only in their polygonization (each organ's ``lambda:`` and ``eta:``), so a draft and a
+final floret have the same shape. See README.md.
+
+Units: a floret model of unit diameter fills its primordium's disc (formats/phyllotaxis.md), so
+the numbers are in disc diameters; local +Y is the floret axis (the receptacle's normal), +X
+points away from the head centre along the receptacle's meridian.
+
+- **Disk floret** (thesis ch. 9: "five-fold dihedral symmetry, with petals fused into a tubular
+  corolla almost up to the petal tips. As the flowers open, sexual organs - stamens, then pistils -
+  raise above the level of the petals ... modeled summarily as cylinders growing along the central
+  axis"): organ ``corolla`` (five-fold, bilateral half petal 3 columns x 7 rows, the first 6 rows of
+  each lateral boundary fused: the lobes part only in the last row), organ ``anthers`` (the anther
+  tube: a five-fold cylinder fused along its whole height, dark) and organ ``pistil`` (a thin
+  cylinder inside it). Three key poses: ``bud`` (a closed barrel, its lobes converging over the
+  organs inside), ``open`` (the corolla opened into a tube with five short spreading lobes, the
+  anther tube risen above them) and ``late`` (the pistil risen above the anthers).
+- **Ray floret** (ch. 9: "Three large fused petals point outward, giving the appearance of a
+  single large petal. The remaining two petals are highly reduced. We have only included the
+  conspicuous large petals"): organ ``ligule``, symmetry 1, bilateral half of 5 columns x 8 rows,
+  quadratic across, the tip row cut into three shallow teeth. ``bud``: short, erect, cupped around
+  the axis; ``mid``: half grown, leaning out; ``open``: five disc diameters long, spread almost
+  level with a gentle droop at the tip, a shallow channel along the midrib.
+- **Involucral bract** (phyllary; ch. 9 on gaillardia: "specialized leaves that surround the head
+  and protect it in its early development"): organ ``bract``, symmetry 1, bilateral half of
+  4 columns x 6 rows, an ovate blade with a long acuminate tip. The bracts are the first, outermost
+  primordia of the head (dimorph --bracts), at the receptacle's rim: ``bud`` erect, clasping the
+  young head; ``open`` reflexed outward over the rim and down, under the ray florets.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+
+# polygonization per quality: (lambda, eta) of each organ; a .func name is written as is (relative
+# to the key pose's folder). The corolla's eta falls to 1 vertex at the lobe tips (lobe_eta_*.func):
+# with as many vertices on the tip row as on the tube's rows, the tips' rim edges are a few percent
+# of a median edge between needle triangles, and crowded florets stretch them several times over
+# (formats/fcc.md, "Mesh quality matters")
+RES = {
+    "draft": {"corolla": ("0.34", "../lobe_eta_draft.func"), "anthers": ("0.5", "3"), "pistil": ("1.0", "3"),
+              "ligule": ("0.2", "5"), "bract": ("0.34", "3")},
+    "final": {"corolla": ("0.34", "../lobe_eta_final.func"), "anthers": ("1.0", "3"), "pistil": ("1.0", "3"),
+              "ligule": ("0.1", "9"), "bract": ("0.2", "5")},
+}
+
+# ---- disk floret ----------------------------------------------------------------------------------
+DISK_NU, DISK_NV, DISK_FUSED = 3, 7, 6
+DISK = {
+    # corolla: radius, height and half angle (degrees; 36 = the symmetry plane) per row;
+    # anthers / pistil: (radius, bottom, top) of the cylinder
+    "bud": dict(time=0.0,
+                r=[0.16, 0.24, 0.31, 0.33, 0.30, 0.20, 0.05],
+                y=[0.00, 0.14, 0.30, 0.46, 0.60, 0.72, 0.78],
+                half=[36, 36, 36, 36, 36, 34, 12],
+                anthers=(0.10, 0.0, 0.40), pistil=(0.035, 0.0, 0.34)),
+    "open": dict(time=0.55,
+                 r=[0.15, 0.20, 0.28, 0.36, 0.42, 0.46, 0.56],
+                 y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.86, 0.90],
+                 half=[36, 36, 36, 36, 36, 34, 8],
+                 anthers=(0.10, 0.0, 1.12), pistil=(0.035, 0.0, 0.96)),
+    "late": dict(time=1.0,
+                 r=[0.15, 0.20, 0.28, 0.36, 0.42, 0.47, 0.58],
+                 y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.85, 0.86],
+                 half=[36, 36, 36, 36, 36, 34, 8],
+                 anthers=(0.10, 0.0, 1.16), pistil=(0.035, 0.0, 1.50)),
+}
+
+# ---- ray floret: the ligule's midrib (x outward, y up), half width per row, cup ----------------------
+RAY_NU, RAY_NV = 5, 8
+U_RAY = np.linspace(0.0, 1.0, RAY_NU)
+# how far each column of the tip row falls short of the midline's tip, as a fraction of the tip
+# row's half width: the middle tooth (u = 0), a notch (0.25), a lateral tooth (0.5), the edge
+TIP_RECESS = np.array([0.0, 0.10, 0.02, 0.30, 0.70])
+BASE_R = 0.12
+RAY = {
+    "bud": dict(time=0.0,
+                mid=[(0.06, 0.00), (0.08, 0.14), (0.09, 0.30), (0.09, 0.46), (0.08, 0.62), (0.06, 0.76),
+                     (0.03, 0.88), (0.00, 0.96)],
+                half=[0.05, 0.08, 0.11, 0.13, 0.14, 0.13, 0.11, 0.08],
+                cup=0.9),
+    "mid": dict(time=0.45,
+                mid=[(0.06, 0.00), (0.14, 0.28), (0.34, 0.62), (0.66, 0.92), (1.05, 1.14), (1.46, 1.28),
+                     (1.86, 1.36), (2.20, 1.38)],
+                half=[0.06, 0.12, 0.21, 0.29, 0.33, 0.34, 0.31, 0.24],
+                cup=0.35),
+    "open": dict(time=1.0,
+                 mid=[(0.06, 0.00), (0.22, 0.30), (0.60, 0.56), (1.30, 0.70), (2.10, 0.74), (2.95, 0.70),
+                      (3.80, 0.58), (4.50, 0.42)],
+                 half=[0.07, 0.18, 0.36, 0.48, 0.52, 0.50, 0.43, 0.30],
+                 cup=0.10),
+}
+
+# ---- involucral bract -------------------------------------------------------------------------------
+BRACT_NU, BRACT_NV = 4, 6
+U_BRACT = np.linspace(0.0, 1.0, BRACT_NU)
+BRACT = {
+    # midrib (x outward, y up off the receptacle): erect and clasping the young head in bud,
+    # reflexed outward over the rim and down when open, under the ray florets
+    "bud": dict(time=0.0,
+                mid=[(0.00, 0.00), (0.02, 0.26), (0.00, 0.52), (-0.05, 0.78), (-0.12, 1.02), (-0.20, 1.22)],
+                half=[0.10, 0.22, 0.26, 0.21, 0.11, 0.02],
+                cup=0.6),
+    "open": dict(time=1.0,
+                 mid=[(0.00, 0.00), (0.16, 0.14), (0.44, 0.20), (0.76, 0.12), (1.04, -0.06), (1.26, -0.28)],
+                 half=[0.12, 0.30, 0.34, 0.26, 0.12, 0.02],
+                 cup=0.25),
+}
+
+
+def fmt_rows(pts):
+    return "\n".join("  " + "   ".join(f"{x:.4f} {y:.4f} {z:.4f}" for x, y, z in row) for row in pts)
+
+
+def ring_net(r, y, half):
+    """Half petal of a five-fold whorl: row j is an arc of radius r[j] at height y[j]."""
+    nv = len(r)
+    pts = np.zeros((nv, DISK_NU, 3))
+    for j in range(nv):
+        a = np.radians(np.linspace(0.0, half[j], DISK_NU))
+        pts[j, :, 0] = r[j] * np.cos(a)
+        pts[j, :, 1] = y[j]
+        pts[j, :, 2] = r[j] * np.sin(a)
+    return pts
+
+
+def cylinder_net(radius, bottom, top):
+    """Half petal of a five-fold closed cylinder (fused along its whole height), 2 x 3 points."""
+    a = np.radians([0.0, 36.0])
+    pts = np.zeros((3, 2, 3))
+    for j, y in enumerate(np.linspace(bottom, top, 3)):
+        pts[j, :, 0] = radius * np.cos(a)
+        pts[j, :, 1] = y
+        pts[j, :, 2] = radius * np.sin(a)
+    return pts
+
+
+def blade_net(p, nu, nv, u, recess=None, base_r=None):
+    """Half blade along a midrib in the x-y plane: column i at u_i of the row's half width, cupped."""
+    mid = np.array(p["mid"], float)
+    pts = np.zeros((nv, nu, 3))
+    for j in range(nv):
+        a = mid[min(j + 1, nv - 1)] - mid[max(j - 1, 0)]
+        t = a / np.linalg.norm(a)
+        n = np.array([-t[1], t[0]])
+        w = p["half"][j]
+        if j == 0 and base_r is not None:
+            th = u * w / base_r
+            pts[0, :, 0] = mid[0, 0] - base_r * (1.0 - np.cos(th))
+            pts[0, :, 1] = mid[0, 1]
+            pts[0, :, 2] = base_r * np.sin(th)
+            continue
+        for i, ui in enumerate(u):
+            back = recess[i] * w if (recess is not None and j == nv - 1) else 0.0
+            lift = p["cup"] * w * ui * ui * 0.5
+            xy = mid[j] - back * t + lift * n
+            pts[j, i] = (xy[0], xy[1], ui * w)
+    return pts
+
+
+def organ(name, material, degree, grid, symmetry, fused, res, pts, bilateral=True):
+    lam, eta = res
+    return (f"organ: {name}\nmaterial: {material}\ndegree: {degree}\ngrid: {grid}\nsymmetry: {symmetry}\n"
+            f"bilateral: {'on' if bilateral else 'off'}\nfused: {fused}\nlambda: {lam}\neta: {eta}\n"
+            f"points:\n{fmt_rows(pts)}\n")
+
+
+def write(out: Path, quality: str) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    res = RES[quality]
+    head = "# sunflower {what}, key pose '{key}' ({q}); written by make_keys.py\nfloret 1\nname: {name}\ntime: {t}\n\n"
+    for key, p in DISK.items():
+        text = head.format(what="disk floret", key=key, q=quality, name="disk", t=p["time"])
+        text += organ("corolla", 1, "3 3", f"{DISK_NU} {DISK_NV}", "5 0", DISK_FUSED, res["corolla"],
+                      ring_net(p["r"], p["y"], p["half"])) + "\n"
+        text += organ("anthers", 2, "1 2", "2 3", "5 0", 3, res["anthers"], cylinder_net(*p["anthers"])) + "\n"
+        text += organ("pistil", 3, "1 2", "2 3", "5 0", 3, res["pistil"], cylinder_net(*p["pistil"]))
+        (out / f"disk_{key}.floret").write_text(text)
+    for key, p in RAY.items():
+        text = head.format(what="ray floret", key=key, q=quality, name="ray", t=p["time"])
+        text += organ("ligule", 0, "2 3", f"{RAY_NU} {RAY_NV}", "1 0", 0, res["ligule"],
+                      blade_net(p, RAY_NU, RAY_NV, U_RAY, TIP_RECESS, BASE_R))
+        (out / f"ray_{key}.floret").write_text(text)
+    for key, p in BRACT.items():
+        text = head.format(what="involucral bract", key=key, q=quality, name="bract", t=p["time"])
+        text += organ("bract", 4, "2 3", f"{BRACT_NU} {BRACT_NV}", "1 0", 0, res["bract"],
+                      blade_net(p, BRACT_NU, BRACT_NV, U_BRACT))
+        (out / f"bract_{key}.floret").write_text(text)
+
+
+if __name__ == "__main__":
+    root = Path(sys.argv[1]) if len(sys.argv) > 1 else HERE
+    for q in RES:
+        write(root / q, q)
