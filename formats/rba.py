@@ -9,6 +9,7 @@ placements in the SCN file is the identity, fig. 8.2). ``#`` starts a comment li
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -16,7 +17,7 @@ import numpy as np
 
 from .atomic import atomic_write, frame_name, list_sequence
 from .errors import FormatError, read_lines, shorten
-from .placement import FLOAT_FMT, PREAMBLE_FIELDS, format_preamble, parse_preamble, placement_matrix
+from .placement import _PARALLEL_TOL, FLOAT_FMT, PREAMBLE_FIELDS, format_preamble, parse_preamble, placement_matrix
 
 __all__ = ["RbaFrame", "read_rba", "write_rba", "rba_bytes", "read_rba_sequence", "write_rba_sequence", "list_rba_sequence"]
 
@@ -70,8 +71,12 @@ def read_rba(path, scene=None) -> RbaFrame:
         Wrong number of values, non-numbers, NaN/inf, degenerate frames, a repeated id, or an id
         that is not an ``rba:`` placement of ``scene``.
     """
+    lines = read_lines(path)
+    fast = _read_rba_fast(lines, scene)
+    if fast is not None:
+        return fast
     ids, rows, seen = [], [], {}
-    for lineno, raw in enumerate(read_lines(path), 1):
+    for lineno, raw in enumerate(lines, 1):
         s = raw.strip()
         if not s or s[0] == "#":
             continue
@@ -95,6 +100,53 @@ def read_rba(path, scene=None) -> RbaFrame:
         rows.append(np.concatenate([pos, scale, up, right]))
     a = np.array(rows, dtype=np.float64).reshape(-1, 12)
     return RbaFrame(ids, a[:, 0:3], a[:, 3:6], a[:, 6:9], a[:, 9:12])
+
+
+_PLAIN_NUMBERS = re.compile(r"[0-9eE+\-. \t\n]*")
+
+
+def _read_rba_fast(lines, scene):
+    """The frame of well-formed ``lines`` parsed at once (numpy), or None: then the line-by-line
+    reader runs and reports the first bad line exactly. Taken only when every row has 13 plain
+    decimal numbers (ids of digits only) and every check of the line-by-line reader passes, so the
+    result is the same array for the same file."""
+    rows = [s for s in (raw.strip() for raw in lines) if s and s[0] != "#"]
+    if not rows:
+        return None
+    if any(len(r.split()) != PREAMBLE_FIELDS for r in rows):
+        return None
+    text = "\n".join(rows)
+    if not _PLAIN_NUMBERS.fullmatch(text):
+        return None
+    toks = text.split()
+    id_toks = toks[::PREAMBLE_FIELDS]
+    if not all(t.isdigit() for t in id_toks):
+        return None
+    try:
+        a = np.array(toks, dtype=np.float64).reshape(-1, PREAMBLE_FIELDS)
+    except ValueError:
+        return None
+    vals = a[:, 1:]
+    if not np.isfinite(vals).all():
+        return None
+    ids = np.array([int(t) for t in id_toks], dtype=np.int64)
+    scale, up, right = vals[:, 3:6], vals[:, 6:9], vals[:, 9:12]
+    if (scale == 0).any():
+        return None
+    nu = np.linalg.norm(up, axis=1)
+    nr = np.linalg.norm(right, axis=1)
+    if (nu == 0).any() or (nr == 0).any():
+        return None
+    if (np.linalg.norm(np.cross(up / nu[:, None], right / nr[:, None]), axis=1) < _PARALLEL_TOL).any():
+        return None
+    if len(np.unique(ids)) != len(ids):
+        return None
+    if scene is not None:
+        if ids.max() >= len(scene.placements):
+            return None
+        if any(scene.placements[int(i)].kind != "rba" for i in ids):
+            return None
+    return RbaFrame(ids.tolist(), vals[:, 0:3].copy(), scale.copy(), up.copy(), right.copy())
 
 
 _FAST_MIN_ROWS = 1000

@@ -278,3 +278,49 @@ def test_rba_malformed(write, text, line, expected, found):
         read_rba(p, scene_with(["rba", "rba", "o"]))
     e = err.value
     assert e.line == line and expected in e.expected and found in e.found, str(e)
+
+
+def test_rba_fast_reader_equals_the_line_reader(tmp_path, monkeypatch):
+    """read_rba parses well-formed frames at once (numpy) and falls back to the line-by-line reader
+    otherwise: the same frame for good files, the same one-line error for bad ones."""
+    import inflo.formats.rba as rba_mod
+    from inflo.formats.errors import FormatError
+    from inflo.formats.scn import Placement, Scene
+
+    rng = np.random.default_rng(5)
+    n = 40
+    good = [f"{k} " + " ".join(f"{v:.6f}" for v in np.concatenate([rng.normal(size=3), rng.uniform(0.1, 2, 3),
+                                                                    [0, 1, 0], [1, 0, 0]]))
+            for k in range(n)]
+    scene = Scene(placements=[Placement("rba" if k != 7 else "o", 0, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0],
+                                        frame_start=0, frame_end=1) if k != 7 else
+                              Placement("o", 0, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0]) for k in range(n)])
+    variants = {
+        "good": good, "comments": ["# header", ""] + good[:5] + ["  # c"],
+        "short": good[:3] + [" ".join(good[3].split()[:-1])], "nan": good[:2] + [good[2].replace(good[2].split()[1], "nan")],
+        "zero_scale": good[:1] + [" ".join(good[1].split()[:4] + ["0"] + good[1].split()[5:])],
+        "parallel": good[:1] + [" ".join(good[1].split()[:10] + ["0", "2", "0"])],
+        "repeat": good[:3] + [good[1]], "neg_id": ["-1" + good[0][1:]], "float_id": ["1.0" + good[1][1:]],
+        "word": good[:1] + [good[1].replace(good[1].split()[2], "abc")], "exp": [good[0].replace(" 1.000000 ", " 1e0 ", 1)],
+        "underscore": [good[0].replace(good[0].split()[1], "1_0")], "empty": [],
+    }
+    for name, rows in variants.items():
+        for sc in (None, scene):
+            p = tmp_path / f"{name}.rba"
+            p.write_text("\n".join(rows) + "\n")
+            results = []
+            for fast in (True, False):
+                if not fast:
+                    monkeypatch.setattr(rba_mod, "_read_rba_fast", lambda lines, scene: None)
+                try:
+                    results.append(read_rba(p, sc))
+                except FormatError as exc:
+                    results.append(str(exc))
+                monkeypatch.undo()
+            a, b = results
+            if isinstance(a, str) or isinstance(b, str):
+                assert a == b, (name, a, b)
+            else:
+                assert a.ids.tolist() == b.ids.tolist() and a.ids.dtype == b.ids.dtype
+                for f in ("pos", "scale", "up", "right"):
+                    np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
