@@ -1,6 +1,7 @@
 """phyllotaxis: Ridley's model (thesis 5.2, eq. 5.1-5.2), dynamics (5.3), recursion (5.4), the CLI."""
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import Counter
 
@@ -140,7 +141,7 @@ def test_bad_parameters_are_rejected(text, expected, tmp_path):
     if "disc" in text:  # not a built-in: read as a .con path that does not exist
         p = parse_params(text, tmp_path / "p.toml")
         with pytest.raises(InputError):
-            load_curve(p["surface"]["curve"])
+            load_curve(p.surface.curve)
         return
     with pytest.raises(FormatError, match=expected):
         parse_params(text, "p.toml")
@@ -148,9 +149,11 @@ def test_bad_parameters_are_rejected(text, expected, tmp_path):
 
 def test_defaults_are_filled_and_paths_resolved(tmp_path):
     p = parse_params("[primordia]\narea = 'a.func'\n", tmp_path / "p.toml")
-    assert p["primordia"]["area"] == str(tmp_path / "a.func")
-    assert p["primordia"]["divergence"] == pytest.approx(137.50776405)
-    assert "dynamics" not in p and "hierarchy" not in p
+    assert p.primordia.area == str(tmp_path / "a.func")
+    assert p.primordia.divergence == pytest.approx(137.50776405)
+    assert p.dynamics is None and p.compound is None and p.hierarchy is None and p.receptacle is None
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        p.primordia.count = 3
 
 
 # ---------------------------------------------------------------- dynamics (5.3)

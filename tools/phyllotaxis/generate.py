@@ -27,6 +27,7 @@ from .compound import compound_pattern, compound_scene
 from .development import apply_development_order
 from .dynamics import dynamic_scene, simulate, write_frames
 from .hierarchy import grow_hierarchy, hierarchy_scene, hierarchy_state
+from .params import Params, Primordia
 from .ridley import area_function, pattern_scene, static_pattern
 from .surface import load_curve
 
@@ -49,151 +50,147 @@ def _func_or_number(spec):
     return read_func(spec) if isinstance(spec, str) else float(spec)
 
 
-def generate(params: dict, out_dir, *, progress=None, header: str | None = None) -> Summary:
+def generate(params: Params, out_dir, *, progress=None, header: str | None = None) -> Summary:
     """Run the model the parameters describe and write ``out_dir/scene.scn`` (+ ``out_dir/rba/``).
 
     Parameters
     ----------
-    params : dict
+    params : Params
         As returned by :func:`inflo.tools.phyllotaxis.params.read_params`.
     progress : callable, optional
         ``progress(length, label)`` returning a context manager whose object has ``update(n)``
         (e.g. :func:`inflo.tools.common.cli.progress`); used for the RBA frames.
     """
     out = Path(out_dir)
-    s, pr = params["surface"], params["primordia"]
+    s, pr = params.surface, params.primordia
     notes = _unused_development_keys(params)
-    curve_kw = dict(radius=s["radius"], height=s["height"], angle=s["angle"], samples=s["samples"])
-    if "hierarchy" in params:
-        if "receptacle" in params:
+    curve_kw = dict(radius=s.radius, height=s.height, angle=s.angle, samples=s.samples)
+    if params.hierarchy is not None:
+        if params.receptacle is not None:
             notes.append("[receptacle] is written for single heads (static or dynamic); "
                          "a hierarchy's meristems have none")
         return _hierarchy(params, out, progress, header, notes)
-    profile = load_curve(s["curve"], **curve_kw)
-    if "dynamics" in params:
-        d = params["dynamics"]
-        profiles = [load_curve(c, **curve_kw) for c in d["curves"]] or [profile]
-        pat = simulate(mode=d["mode"], frames=d["frames"], interval=d["interval"],
-                       primordium_area=d["primordium_area"], inner_area=d["inner_area"],
-                       outer_area=d["outer_area"], inner_growth=_func_or_number(d["inner_growth"]),
-                       outer_growth=_func_or_number(d["outer_growth"]),
-                       primordium_growth=_func_or_number(d["primordium_growth"]), threshold=d["threshold"],
-                       divergence=pr["divergence"], profiles=profiles, curve_times=d["curve_times"],
-                       substeps=d["substeps"], max_count=d["max_count"])
-        ctx = progress(d["frames"], "phyllotaxis frames") if progress else _NoBar()
-        rec = (_receptacle_options(params), out / "receptacle") if "receptacle" in params else None
+    profile = load_curve(s.curve, **curve_kw)
+    if params.dynamics is not None:
+        d = params.dynamics
+        profiles = [load_curve(c, **curve_kw) for c in d.curves] or [profile]
+        pat = simulate(mode=d.mode, frames=d.frames, interval=d.interval,
+                       primordium_area=d.primordium_area, inner_area=d.inner_area,
+                       outer_area=d.outer_area, inner_growth=_func_or_number(d.inner_growth),
+                       outer_growth=_func_or_number(d.outer_growth),
+                       primordium_growth=_func_or_number(d.primordium_growth), threshold=d.threshold,
+                       divergence=pr.divergence, profiles=profiles, curve_times=d.curve_times,
+                       substeps=d.substeps, max_count=d.max_count)
+        ctx = progress(d.frames, "phyllotaxis frames") if progress else _NoBar()
+        rec = (params.receptacle, out / "receptacle") if params.receptacle is not None else None
         with ctx as bar:
-            state = write_frames(pat, out / "rba", size_factor=pr["size_factor"], bar=bar, receptacle=rec)
-        scene = dynamic_scene(pat, state, floret_id=pr["floret_id"], development_frames=d["development_frames"])
+            state = write_frames(pat, out / "rba", size_factor=pr.size_factor, bar=bar, receptacle=rec)
+        scene = dynamic_scene(pat, state, floret_id=pr.floret_id, development_frames=d.development_frames)
         write_scn(out / "scene.scn", scene, header=header)
-        preview = {"pos": state["pos"], "diameter": state["scale"][:, 0], "age": d["frames"] - 1 - pat.emergence}
-        return Summary(f"dynamic ({d['mode']})", len(pat), d["frames"], out / "scene.scn", notes, preview)
-    area = area_function(pr["area"], profile.length)
-    if "receptacle" in params and "compound" in params:
+        preview = {"pos": state["pos"], "diameter": state["scale"][:, 0], "age": d.frames - 1 - pat.emergence}
+        return Summary(f"dynamic ({d.mode})", len(pat), d.frames, out / "scene.scn", notes, preview)
+    area = area_function(pr.area, profile.length)
+    if params.receptacle is not None and params.compound is not None:
         notes.append("[receptacle] is written for single heads (static or dynamic); "
                      "a compound pattern's heads have none")
-    elif "receptacle" in params:
+    elif params.receptacle is not None:
         from inflo.formats.obj import write_obj
 
         from .receptacle import receptacle_mesh
         out.mkdir(parents=True, exist_ok=True)
-        write_obj(out / "receptacle.obj", receptacle_mesh(profile, _receptacle_options(params)),
+        write_obj(out / "receptacle.obj", receptacle_mesh(profile, params.receptacle),
                   header="receptacle (phyllotaxis [receptacle])")
-    if "compound" in params:
-        c = params["compound"]
-        comp = compound_pattern(profile, area, head_curve=c["head_curve"], head_height=c["head_height"],
-                                head_fill=c["head_fill"], floret_fraction=c["floret_fraction"],
-                                divergence=pr["divergence"], start=pr["start"], count=pr["count"],
-                                max_count=pr["max_count"])
-        scene = compound_scene(comp, floret_id=pr["floret_id"], size_factor=pr["size_factor"],
-                               kind=pr["placement"], frame_start=pr["frame_start"], frame_end=pr["frame_end"])
+    if params.compound is not None:
+        c = params.compound
+        comp = compound_pattern(profile, area, head_curve=c.head_curve, head_height=c.head_height,
+                                head_fill=c.head_fill, floret_fraction=c.floret_fraction,
+                                divergence=pr.divergence, start=pr.start, count=pr.count,
+                                max_count=pr.max_count)
+        scene = compound_scene(comp, floret_id=pr.floret_id, size_factor=pr.size_factor,
+                               kind=pr.placement, frame_start=pr.frame_start, frame_end=pr.frame_end)
         _static_development(scene, pr)
         out.mkdir(parents=True, exist_ok=True)
         write_scn(out / "scene.scn", scene, header=header)
-        preview = {"pos": comp.floret_pos, "diameter": pr["size_factor"] * 2 * np.sqrt(comp.floret_area / np.pi),
+        preview = {"pos": comp.floret_pos, "diameter": pr.size_factor * 2 * np.sqrt(comp.floret_area / np.pi),
                    "age": comp.floret_head.astype(np.float64)}
         return Summary(f"compound ({len(comp.head_pos)} heads)", len(comp.floret_pos), 0, out / "scene.scn", notes,
                        preview)
-    pat = static_pattern(profile, area, divergence=pr["divergence"], start=pr["start"], count=pr["count"],
-                         max_count=pr["max_count"])
-    scene = pattern_scene(pat, floret_id=pr["floret_id"], size_factor=pr["size_factor"], kind=pr["placement"],
-                          frame_start=pr["frame_start"], frame_end=pr["frame_end"])
+    pat = static_pattern(profile, area, divergence=pr.divergence, start=pr.start, count=pr.count,
+                         max_count=pr.max_count)
+    scene = pattern_scene(pat, floret_id=pr.floret_id, size_factor=pr.size_factor, kind=pr.placement,
+                          frame_start=pr.frame_start, frame_end=pr.frame_end)
     _static_development(scene, pr)
     out.mkdir(parents=True, exist_ok=True)
     write_scn(out / "scene.scn", scene, header=header)
-    preview = {"pos": pat.pos, "diameter": pr["size_factor"] * 2 * np.sqrt(pat.area / np.pi),
+    preview = {"pos": pat.pos, "diameter": pr.size_factor * 2 * np.sqrt(pat.area / np.pi),
                "age": np.arange(len(pat.s), dtype=np.float64)}
     return Summary("static", len(pat.s), 0, out / "scene.scn", notes, preview)
 
 
-def _receptacle_options(params: dict):
-    from .receptacle import ReceptacleOptions
-    return ReceptacleOptions(**params["receptacle"])
-
-
-def _static_development(scene, pr: dict) -> None:
+def _static_development(scene, pr: Primordia) -> None:
     """The developmental windows of a static scene (``[primordia] development_*``), in place.
 
     ``development_order`` other than ``none``: every placement becomes ``ca:`` with its window
     by rank (:func:`.development.apply_development_order`); ``none`` with ``development_frames``
     and ``placement = "ca"``: ``frameEnd = frame_start + development_frames``.
     """
-    n = pr["development_frames"]
-    if pr["development_order"] != "none":
-        frames = n if n is not None else pr["frame_end"] - pr["frame_start"]
-        apply_development_order(scene, order=pr["development_order"], offset=pr["development_offset"],
-                                frame_start=pr["frame_start"], frames=frames)
+    n = pr.development_frames
+    if pr.development_order != "none":
+        frames = n if n is not None else pr.frame_end - pr.frame_start
+        apply_development_order(scene, order=pr.development_order, offset=pr.development_offset,
+                                frame_start=pr.frame_start, frames=frames)
     elif n is not None:
         for p in scene.placements:
             if p.kind == "ca":
                 p.frame_end = p.frame_start + n
 
 
-def _unused_development_keys(params: dict) -> list:
+def _unused_development_keys(params: Params) -> list:
     """Warnings for ``[primordia] development_order``/``development_frames`` that the model ignores."""
-    pr = params["primordia"]
-    given = [k for k, unset in (("development_order", "none"), ("development_frames", None)) if pr[k] != unset]
-    dynamic = "dynamics" in params or ("hierarchy" in params and params["hierarchy"]["dynamic"])
+    pr = params.primordia
+    given = [k for k, unset in (("development_order", "none"), ("development_frames", None))
+             if getattr(pr, k) != unset]
+    dynamic = params.dynamics is not None or (params.hierarchy is not None and params.hierarchy.dynamic)
     if dynamic and given:
-        where = "[dynamics]" if "dynamics" in params else "[hierarchy]"
+        where = "[dynamics]" if params.dynamics is not None else "[hierarchy]"
         return [f"[primordia] {' and '.join(given)} apply to static patterns only and are ignored here "
                 f"(a dynamic pattern develops by age: {where} development_frames)"]
-    if not dynamic and given == ["development_frames"] and pr["placement"] != "ca":
+    if not dynamic and given == ["development_frames"] and pr.placement != "ca":
         return ["[primordia] development_frames has no effect on o: placements without a development_order "
                 "(or placement = \"ca\")"]
     return []
 
 
-def _hierarchy(params, out: Path, progress, header, notes) -> Summary:
-    h_p, pr = params["hierarchy"], params["primordia"]
-    h = grow_hierarchy(levels=h_p["levels"], frames=h_p["frames"], growth_rate=h_p["growth_rate"],
-                       initial_area=h_p["initial_area"], element_area=h_p["element_area"],
-                       production_threshold=h_p["production_threshold"],
-                       meristem_threshold=h_p["meristem_threshold"], divergence=h_p["divergence"],
-                       max_count=h_p["max_count"])
-    final = hierarchy_state(h, h_p["frames"], size_factor=pr["size_factor"])
+def _hierarchy(params: Params, out: Path, progress, header, notes) -> Summary:
+    h_p, pr = params.hierarchy, params.primordia
+    h = grow_hierarchy(levels=h_p.levels, frames=h_p.frames, growth_rate=h_p.growth_rate,
+                       initial_area=h_p.initial_area, element_area=h_p.element_area,
+                       production_threshold=h_p.production_threshold,
+                       meristem_threshold=h_p.meristem_threshold, divergence=h_p.divergence,
+                       max_count=h_p.max_count)
+    final = hierarchy_state(h, h_p.frames, size_factor=pr.size_factor)
     frames = 0
-    if h_p["dynamic"]:
-        frames = int(math.floor(h_p["frames"])) + 1
+    if h_p.dynamic:
+        frames = int(math.floor(h_p.frames)) + 1
         rba = out / "rba"
         rba.mkdir(parents=True, exist_ok=True)
         ctx = progress(frames, "phyllotaxis frames") if progress else _NoBar()
         with ctx as bar:
             for f in range(frames):
-                st = hierarchy_state(h, float(f), size_factor=pr["size_factor"])
+                st = hierarchy_state(h, float(f), size_factor=pr.size_factor)
                 write_rba(rba / frame_name(f, "", ".rba", 4),
                           RbaFrame(st["ids"], st["pos"], st["scale"], st["up"], st["right"]), fast=True)
                 bar.update(1)
-    scene = hierarchy_scene(h, final, floret_id=pr["floret_id"], dynamic=h_p["dynamic"], kind=pr["placement"],
-                            frame_start=pr["frame_start"], frame_end=pr["frame_end"],
-                            development_frames=h_p["development_frames"])
-    if not h_p["dynamic"]:
+    scene = hierarchy_scene(h, final, floret_id=pr.floret_id, dynamic=h_p.dynamic, kind=pr.placement,
+                            frame_start=pr.frame_start, frame_end=pr.frame_end,
+                            development_frames=h_p.development_frames)
+    if not h_p.dynamic:
         _static_development(scene, pr)
     out.mkdir(parents=True, exist_ok=True)
     write_scn(out / "scene.scn", scene, header=header)
     birth = h.element_birth[h.florets[final["ids"]]]
-    preview = {"pos": final["pos"], "diameter": final["scale"][:, 0], "age": h_p["frames"] - birth}
-    return Summary(f"hierarchy ({h_p['levels']} levels)", len(final["ids"]), frames, out / "scene.scn",
+    preview = {"pos": final["pos"], "diameter": final["scale"][:, 0], "age": h_p.frames - birth}
+    return Summary(f"hierarchy ({h_p.levels} levels)", len(final["ids"]), frames, out / "scene.scn",
                    notes + list(h.messages), preview)
 
 

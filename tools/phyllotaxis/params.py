@@ -2,8 +2,9 @@
 
 Reads a ``.toml`` file with the stdlib :mod:`tomllib`, checks every key against :data:`SCHEMA`
 (unknown keys are rejected naming the closest known one, with ``file:line``), fills defaults and
-returns a plain nested dict ``{section: {key: value}}``. Paths to ``.con``/``.func`` files are
-resolved relative to the parameter file.
+returns :class:`Params`, one frozen dataclass per section (typed like branch-gen's ``Params``).
+The dataclasses are the schema: each field's kind and default; :data:`SCHEMA` is derived from
+them. Paths to ``.con``/``.func`` files are resolved relative to the parameter file.
 
 Sections (thesis chapter 5):
 
@@ -20,11 +21,15 @@ import math
 import os
 import re
 import tomllib
+from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 
 from inflo.formats.errors import FormatError, InputError, did_you_mean, shorten
 
-__all__ = ["SCHEMA", "read_params", "parse_params", "BUILTIN_CURVES", "DYNAMIC_MODES", "DEVELOPMENT_ORDERS"]
+from .receptacle import ReceptacleOptions
+
+__all__ = ["SCHEMA", "Params", "Surface", "Primordia", "Dynamics", "Compound", "Hierarchy", "read_params",
+           "parse_params", "BUILTIN_CURVES", "DYNAMIC_MODES", "DEVELOPMENT_ORDERS"]
 
 BUILTIN_CURVES = ("disk", "cone", "sphere_cap", "paraboloid")
 DYNAMIC_MODES = ("centripetal", "divergent", "segregation")
@@ -35,78 +40,126 @@ _NUM = (int, float)
 _FUNC = "number-or-func"  # a number or the path of a .func file
 _CURVE = "curve"  # a built-in name or the path of a .con file
 
-# section -> key -> (kind, default); kind: "float", "int", "str", "bool", _FUNC, _CURVE,
-# "curves" (list of curve names), "floats" (list of numbers), ("choice", options); a default of
-# None: the key is optional and stays None when absent
-SCHEMA: dict[str, dict[str, tuple]] = {
-    "surface": {
-        "curve": (_CURVE, "disk"),
-        "radius": ("float", 1.0),
-        "height": ("float", 0.0),
-        "angle": ("float", 90.0),
-        "samples": ("int", 2048),
-    },
-    "primordia": {
-        "area": (_FUNC, 0.01),
-        "count": ("int", 0),
-        "start": ("float", 0.0),
-        "divergence": ("float", GOLDEN_ANGLE),
-        "floret_id": ("int", 0),
-        "size_factor": ("float", 1.0),
-        "placement": (("choice", ("o", "ca")), "o"),
-        "frame_start": ("int", 0),
-        "frame_end": ("int", 100),
-        "development_order": (("choice", DEVELOPMENT_ORDERS), "none"),
-        "development_offset": ("float", 1.0),
-        "development_frames": ("int", None),
-        "max_count": ("int", 1_000_000),
-    },
-    "dynamics": {
-        "mode": (("choice", DYNAMIC_MODES), "centripetal"),
-        "frames": ("int", 100),
-        "interval": ("float", 1.0),
-        "primordium_area": ("float", 0.01),
-        "primordium_growth": (_FUNC, 0.0),
-        "inner_area": ("float", 1.0),
-        "outer_area": ("float", 0.0),
-        "inner_growth": (_FUNC, 0.0),
-        "outer_growth": (_FUNC, 0.0),
-        "threshold": ("float", 0.0),
-        "curves": ("curves", []),
-        "curve_times": ("floats", []),
-        "substeps": ("int", 0),
-        "development_frames": ("int", None),
-        "max_count": ("int", 1_000_000),
-    },
-    "compound": {
-        "head_curve": (_CURVE, "cone"),
-        "head_height": ("float", 0.5),
-        "head_fill": ("float", 1.0),
-        "floret_fraction": ("float", 0.03),
-    },
-    "hierarchy": {
-        "levels": ("int", 2),
-        "frames": ("float", 100.0),
-        "growth_rate": ("float", 0.05),
-        "initial_area": ("float", 1.0),
-        "element_area": ("floats", [1.0]),
-        "production_threshold": ("floats", [1.5]),
-        "meristem_threshold": ("floats", [8.0]),
-        "divergence": ("float", GOLDEN_ANGLE),
-        "dynamic": ("bool", False),
-        "development_frames": ("int", None),
-        "max_count": ("int", 200_000),
-    },
-    "receptacle": {
-        "segments": ("int", 48),
-        "rings": ("int", 12),
-        "underside_rings": ("int", 6),
-        "depth": ("float", 0.35),
-        "stem": ("float", 0.25),
-        "inset": ("float", 0.0),
-        "material": ("int", 5),
-    },
-}
+def _key(kind, default):
+    """A parameter of a section: its kind (how :func:`parse_params` checks it) and default.
+
+    Kinds: ``"float"``, ``"int"``, ``"str"``, ``"bool"``, ``_FUNC`` (a number or a ``.func`` path),
+    ``_CURVE`` (a built-in curve name or a ``.con`` path), ``"curves"`` (a list of those),
+    ``"floats"`` (a number or a list of numbers), ``("choice", options)``. A default of None: the
+    key is optional and stays None when absent.
+    """
+    if isinstance(default, list):
+        return field(default_factory=lambda: list(default), metadata={"kind": kind})
+    return field(default=default, metadata={"kind": kind})
+
+
+@dataclass(frozen=True)
+class Surface:
+    """``[surface]``: the generating curve C of the supporting surface (sec. 5.2, fig. 5.1)."""
+
+    curve: str = _key(_CURVE, "disk")
+    radius: float = _key("float", 1.0)
+    height: float = _key("float", 0.0)
+    angle: float = _key("float", 90.0)
+    samples: int = _key("int", 2048)
+
+
+@dataclass(frozen=True)
+class Primordia:
+    """``[primordia]``: primordium area A(s), divergence, floret type and placement (eq. 5.1-5.2)."""
+
+    area: float | str = _key(_FUNC, 0.01)
+    count: int = _key("int", 0)
+    start: float = _key("float", 0.0)
+    divergence: float = _key("float", GOLDEN_ANGLE)
+    floret_id: int = _key("int", 0)
+    size_factor: float = _key("float", 1.0)
+    placement: str = _key(("choice", ("o", "ca")), "o")
+    frame_start: int = _key("int", 0)
+    frame_end: int = _key("int", 100)
+    development_order: str = _key(("choice", DEVELOPMENT_ORDERS), "none")
+    development_offset: float = _key("float", 1.0)
+    development_frames: int | None = _key("int", None)
+    max_count: int = _key("int", 1_000_000)
+
+
+@dataclass(frozen=True)
+class Dynamics:
+    """``[dynamics]``: fractionation / segregation over frames (sec. 5.3, fig. 5.2)."""
+
+    mode: str = _key(("choice", DYNAMIC_MODES), "centripetal")
+    frames: int = _key("int", 100)
+    interval: float = _key("float", 1.0)
+    primordium_area: float = _key("float", 0.01)
+    primordium_growth: float | str = _key(_FUNC, 0.0)
+    inner_area: float = _key("float", 1.0)
+    outer_area: float = _key("float", 0.0)
+    inner_growth: float | str = _key(_FUNC, 0.0)
+    outer_growth: float | str = _key(_FUNC, 0.0)
+    threshold: float = _key("float", 0.0)
+    curves: list = _key("curves", [])
+    curve_times: list = _key("floats", [])
+    substeps: int = _key("int", 0)
+    development_frames: int | None = _key("int", None)
+    max_count: int = _key("int", 1_000_000)
+
+
+@dataclass(frozen=True)
+class Compound:
+    """``[compound]``: a two-level pattern of conical heads (sec. 5.4, fig. 5.4)."""
+
+    head_curve: str = _key(_CURVE, "cone")
+    head_height: float = _key("float", 0.5)
+    head_fill: float = _key("float", 1.0)
+    floret_fraction: float = _key("float", 0.03)
+
+
+@dataclass(frozen=True)
+class Hierarchy:
+    """``[hierarchy]``: recursive segregation on a flat growing meristem (sec. 5.4, fig. 5.3)."""
+
+    levels: int = _key("int", 2)
+    frames: float = _key("float", 100.0)
+    growth_rate: float = _key("float", 0.05)
+    initial_area: float = _key("float", 1.0)
+    element_area: list = _key("floats", [1.0])
+    production_threshold: list = _key("floats", [1.5])
+    meristem_threshold: list = _key("floats", [8.0])
+    divergence: float = _key("float", GOLDEN_ANGLE)
+    dynamic: bool = _key("bool", False)
+    development_frames: int | None = _key("int", None)
+    max_count: int = _key("int", 200_000)
+
+
+@dataclass(frozen=True)
+class Params:
+    """A checked phyllotaxis parameter file: one frozen dataclass per section, None for an optional
+    section the file does not have (at most one of ``dynamics``, ``compound``, ``hierarchy``)."""
+
+    surface: Surface = field(default_factory=Surface)
+    primordia: Primordia = field(default_factory=Primordia)
+    dynamics: Dynamics | None = None
+    compound: Compound | None = None
+    hierarchy: Hierarchy | None = None
+    receptacle: ReceptacleOptions | None = None
+
+
+_SECTIONS = {"surface": Surface, "primordia": Primordia, "dynamics": Dynamics, "compound": Compound,
+             "hierarchy": Hierarchy, "receptacle": ReceptacleOptions}
+
+
+def _schema(cls) -> dict[str, tuple]:
+    """key -> (kind, default) of a section's dataclass; a field without a kind (the receptacle's
+    options) is checked as its default's type."""
+    out = {}
+    for f in fields(cls):
+        default = f.default_factory() if f.default is MISSING else f.default
+        out[f.name] = (f.metadata.get("kind") or type(default).__name__, default)
+    return out
+
+
+#: section -> key -> (kind, default), from the dataclasses (the order of the checks and messages).
+SCHEMA: dict[str, dict[str, tuple]] = {name: _schema(cls) for name, cls in _SECTIONS.items()}
 
 _OPTIONAL = ("dynamics", "compound", "hierarchy")
 # sections present in the result only when the file has them (besides the exclusive ones)
@@ -135,11 +188,12 @@ def _resolve(base: Path, value: str) -> str:
     return str(p if p.is_absolute() else (base / p))
 
 
-def parse_params(text: str, path="<params>") -> dict:
-    """Parse and check TOML ``text``; returns ``{section: {key: value}}`` with defaults filled.
+def parse_params(text: str, path="<params>") -> Params:
+    """Parse and check TOML ``text``; returns :class:`Params` with defaults filled.
 
-    Sections ``dynamics`` and ``hierarchy`` are present in the result only when the file has
-    them. Relative ``.con``/``.func`` paths are resolved against the folder of ``path``.
+    The optional sections (``dynamics``, ``compound``, ``hierarchy``, ``receptacle``) are None
+    unless the file has them. Relative ``.con``/``.func`` paths are resolved against the folder of
+    ``path``. Every check runs on the values as read, before the dataclasses are built.
 
     Raises
     ------
@@ -181,7 +235,7 @@ def parse_params(text: str, path="<params>") -> dict:
         raise FormatError(path, _line_of(text, present[1], None),
                           "at most one of [dynamics], [compound], [hierarchy]", f"[{present[0]}] and [{present[1]}]")
     _check_ranges(out, text, path)
-    return out
+    return Params(**{section: _SECTIONS[section](**values) for section, values in out.items()})
 
 
 def _check(value, kind, section, key, text, path, base):
@@ -338,7 +392,7 @@ def per_level(values: list, levels: int) -> list:
     return _per_level(values, levels)
 
 
-def read_params(path) -> dict:
+def read_params(path) -> Params:
     """Read and check a phyllotaxis parameter file (see :func:`parse_params`)."""
     path = os.fspath(path)
     try:
