@@ -60,6 +60,8 @@ def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_sca
     for name, v in (("--ray-scale", ray_scale), ("--disk-scale", disk_scale), ("--bract-scale", bract_scale)):
         if not v > 0:
             raise InputError(f"{name} must be > 0, found {v}")
+        if not 1e-6 <= v <= 1e6:
+            raise InputError(f"{name} must be in [1e-06, 1e+06], found {v:g}")
     opts = DimorphOptions(alpha, tuple(thresholds), ray_id, disk_id, small_ray_id, ray_scale, disk_scale,
                           centre, half_angle, ray_lead, ray_development_frames, disk_development_frames,
                           bracts, bract_id, bract_scale)
@@ -94,8 +96,9 @@ def sweep(output, alpha, n_min, n_max, n_fixed, alpha_min, alpha_max, alpha_step
         raise InputError(f"expected 2 <= --n-min <= --n-max, found {n_min}, {n_max}")
     if n_fixed < 2:
         raise InputError(f"--n must be >= 2, found {n_fixed}")
-    if not (0 < alpha_min <= alpha_max < 360 and 0 < alpha < 360 and alpha_step > 0):
-        raise InputError("cone angles must lie in (0, 360) degrees with --alpha-min <= --alpha-max and --alpha-step > 0")
+    top = 90 if half_angle else 180
+    if not (0 < alpha_min <= alpha_max <= top and 0 < alpha <= top and alpha_step > 0):
+        raise InputError(f"cone angles must lie in (0, {top}] degrees with --alpha-min <= --alpha-max and --alpha-step > 0")
     if not 0 < divergence < 360:
         raise InputError(f"--divergence {divergence} outside (0, 360) degrees")
     res = write_sweep(output, alpha=alpha, n_range=(n_min, n_max), n_fixed=n_fixed,

@@ -143,8 +143,15 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
     ``{"ray": N, "small_ray": M, "disk": K, "bract": B}``, ``windows`` (placements whose window was
     set) plus ``d_min`` (n,) float64 (inf for bracts).
     """
-    if not 0.0 < opts.alpha < 360.0:
-        raise InputError(f"--alpha {opts.alpha} outside (0, 360) degrees")
+    top = 90.0 if opts.half_angle else 180.0
+    if not 0.0 < opts.alpha <= top:
+        what = "half-angle" if opts.half_angle else "opening angle"
+        raise InputError(f"--alpha {opts.alpha} outside (0, {top:g}] degrees (the cone's {what}; a wider "
+                         "'cone' would hold the directions towards the head's centre)")
+    for name, v in (("--ray-scale", opts.ray_scale), ("--disk-scale", opts.disk_scale),
+                    ("--bract-scale", opts.bract_scale)):
+        if not 1e-6 <= v <= 1e6:
+            raise InputError(f"{name} must be in [1e-06, 1e+06], found {v:g}")
     check_window_options(opts)
     th = tuple(sorted(float(t) for t in opts.thresholds))
     if any(t < 0 or not math.isfinite(t) for t in th) or len(th) > 2:

@@ -13,9 +13,15 @@ def _aspect(ctx, param, value):
         x = float(value)
     except ValueError:
         raise click.BadParameter(f"expected 'auto' or a number > 0, found {value!r}")
-    if not x > 0:
-        raise click.BadParameter(f"expected 'auto' or a number > 0, found {value!r}")
+    if not (ASPECT_RANGE[0] <= x <= ASPECT_RANGE[1]):
+        raise click.BadParameter(f"expected 'auto' or a number in [{ASPECT_RANGE[0]:g}, {ASPECT_RANGE[1]:g}], "
+                                 f"found {value!r}")
     return x
+
+
+ASPECT_RANGE = (1e-6, 1e6)
+"""--aspect scales u against v before the Delaunay triangulation: beyond a million to one either
+way every triangle is a sliver (inf and 1e-300 crashed the triangulation)."""
 
 
 @inflo_command(

@@ -87,6 +87,13 @@ def load_profile(value, name: str) -> Profile:
     return prof
 
 
+MAX_ROWS = 10_000
+"""Most rows per petal that lambda(v) may ask for (a petal of 10k x 10k samples is 10^8 vertices:
+beyond any machine this runs on; without the limit ``--lambda 1e-7`` never ends)."""
+MAX_ROW_VERTICES = 10_000
+"""Most vertices per row that eta(v) may ask for (``--eta 1e9`` exhausted memory)."""
+
+
 def _check_profile(prof: Profile) -> None:
     if prof.constant is not None:
         ys = np.array([prof.constant])
@@ -104,11 +111,20 @@ def _check_profile(prof: Profile) -> None:
             i = int(bad[0])
             raise InputError(f"{prof.source}: expected lambda(v) > 0 everywhere (row spacing, eq. "
                              f"2.1), found {ys[i]:.6g} at v = {xs[i]:.4g}")
+        rows = 1.0 / prof.constant if prof.constant is not None else float(
+            np.trapezoid(1.0 / prof(np.linspace(0.0, 1.0, _FINE)), dx=1.0 / (_FINE - 1)))
+        if rows > MAX_ROWS:
+            raise InputError(f"{prof.source}: expected lambda(v) giving at most {MAX_ROWS} rows per petal "
+                             f"(eq. 2.1), found {rows:.4g} rows (smallest lambda {ys.min():.6g})")
     elif prof.name == "eta":
         bad = np.flatnonzero(ys < 1.0)
         if len(bad):
             i = int(bad[0])
             raise InputError(f"{prof.source}: expected eta(v) >= 1 everywhere (vertices per row), "
+                             f"found {ys[i]:.6g} at v = {xs[i]:.4g}")
+        if ys.max() > MAX_ROW_VERTICES:
+            i = int(np.argmax(ys))
+            raise InputError(f"{prof.source}: expected eta(v) <= {MAX_ROW_VERTICES} (vertices per row), "
                              f"found {ys[i]:.6g} at v = {xs[i]:.4g}")
 
 

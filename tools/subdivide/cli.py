@@ -14,6 +14,7 @@ of each output frame.
 """
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 
@@ -52,12 +53,26 @@ def topology_runs(meshes) -> list[tuple[int, int]]:
 @click.option("--check", is_flag=True, help="Count intersecting triangle pairs of each output frame (exact test).")
 def main(source, levels, output, no_collisions, spacing, collision_iterations, max_collision_retries, check,
          quiet, debug):
+    from inflo.formats.errors import InputError
+
+    if spacing is not None and not math.isfinite(spacing):
+        raise InputError(f"--spacing must be a finite number > 0, found {spacing}")
     paths = list_obj_sequence(source)
     single = os.path.isfile(source)
     if single:
         meshes = [read_obj(paths[0])]
     else:  # a canopy whose florets emerge over time changes its faces between runs of frames
         paths, meshes = read_obj_sequence(source, same_topology=False)
+    for p, m in zip(paths, meshes):
+        if len(m.faces) == 0:
+            raise InputError(f"{p}: expected a mesh with triangles to subdivide, found none")
+    n0 = len(meshes[0].vertices)
+    for p, m in zip(paths, meshes):
+        # a canopy keeps every vertex in every frame (florets not yet emerged included): frames
+        # of one sequence with different vertex counts are not one animation
+        if len(m.vertices) != n0:
+            raise InputError(f"{p}: expected {n0} vertices like {paths[0].name} (frames of one sequence keep "
+                             f"their vertices), found {len(m.vertices)}")
     resolve = None
     if not no_collisions:
         from .collisions import collision_resolver, default_spacing

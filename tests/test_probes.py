@@ -1,0 +1,59 @@
+"""Bad numbers are one-line errors with exit 2 and no output (issue 14, "Every bad number is a clear
+error"): one row per probe -- the command, the message fragment expected, the output that must not
+exist afterwards. Probes that used to hang, exhaust memory, crash with exit 1 or accept garbage."""
+from __future__ import annotations
+
+import pytest
+
+from inflo.formats.obj import ObjMesh, write_obj
+from inflo.formats.scn import Placement, Scene, write_scn
+from inflo.tools.dimorph.sweep import simple_head
+
+from conftest import REPO, run_cli
+
+FLORET = REPO / "pipelines" / "sunflower" / "draft" / "ray_bud.floret"
+
+
+@pytest.fixture()
+def inputs(tmp_path):
+    import numpy as np
+
+    tri = ObjMesh(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.2]]), np.array([[0, 1, 2], [1, 3, 2]], np.int32))
+    write_obj(tmp_path / "tri.obj", tri)
+    (tmp_path / "empty.obj").write_text("# nothing\n")
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    write_obj(seq / "frame_0000.obj", tri)
+    write_obj(seq / "frame_0001.obj", ObjMesh(np.vstack([tri.vertices, [[2.0, 0, 0]]]), tri.faces))
+    scene = Scene(placements=[Placement("o", 0, p, [0.1] * 3, [0, 1, 0], [1, 0, 0]) for p in simple_head(40)])
+    write_scn(tmp_path / "head.scn", scene)
+    return tmp_path
+
+
+# (command, arguments with {d} the inputs folder, message fragment, output that must not exist)
+PROBES = [
+    ("polygonize", [FLORET, "--eta", "1e9", "-o", "{d}/p1"], "eta(v) <= 10000", "{d}/p1"),
+    ("polygonize", [FLORET, "--lambda", "1e-7", "-o", "{d}/p2"], "at most 10000 rows", "{d}/p2"),
+    ("polygonize", [FLORET, "--aspect", "inf", "-o", "{d}/p3"], "--aspect", "{d}/p3"),
+    ("polygonize", [FLORET, "--aspect", "1e-300", "-o", "{d}/p4"], "--aspect", "{d}/p4"),
+    ("subdivide", ["{d}/tri.obj", "--spacing", "nan", "-o", "{d}/s1.obj"], "--spacing must be a finite number", "{d}/s1.obj"),
+    ("subdivide", ["{d}/tri.obj", "--spacing", "inf", "-o", "{d}/s2.obj"], "--spacing must be a finite number", "{d}/s2.obj"),
+    ("subdivide", ["{d}/empty.obj", "-o", "{d}/s3.obj"], "expected a mesh with triangles", "{d}/s3.obj"),
+    ("subdivide", ["{d}/seq", "-o", "{d}/s4"], "expected 4 vertices like frame_0000.obj", "{d}/s4"),
+    ("dimorph", ["{d}/head.scn", "--alpha", "200", "-o", "{d}/t1.scn"], "outside (0, 180] degrees", "{d}/t1.scn"),
+    ("dimorph", ["{d}/head.scn", "--alpha", "100", "--half-angle", "-o", "{d}/t2.scn"], "outside (0, 90] degrees",
+     "{d}/t2.scn"),
+    ("dimorph", ["{d}/head.scn", "--alpha", "90", "--ray-scale", "1e-320", "-o", "{d}/t3.scn"],
+     "--ray-scale must be", "{d}/t3.scn"),
+]
+
+
+@pytest.mark.parametrize("cli,args,fragment,absent", PROBES, ids=[f"{p[0]}-{i}" for i, p in enumerate(PROBES)])
+def test_bad_number_is_a_one_line_error(inputs, cli, args, fragment, absent):
+    args = [str(a).format(d=inputs) for a in args]
+    r = run_cli(cli, *args)
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert fragment in r.stderr, r.stderr
+    lines = [l for l in r.stderr.splitlines() if l.strip()]
+    assert len(lines) <= 3 and "Traceback" not in r.stderr  # click's usage errors take 3 lines
+    assert not (inputs / absent.format(d=inputs).split("/")[-1]).exists()
