@@ -27,11 +27,17 @@ def inputs(tmp_path):
     write_obj(seq / "frame_0001.obj", ObjMesh(np.vstack([tri.vertices, [[2.0, 0, 0]]]), tri.faces))
     scene = Scene(placements=[Placement("o", 0, p, [0.1] * 3, [0, 1, 0], [1, 0, 0]) for p in simple_head(40)])
     write_scn(tmp_path / "head.scn", scene)
+    (tmp_path / "samples.toml").write_text("[surface]\nsamples = 1000000000000\n")
+    (tmp_path / "frames.toml").write_text("[dynamics]\nframes = 100000000\n")
+    (tmp_path / "interval.toml").write_text("[dynamics]\ninterval = 1e-9\n")
     return tmp_path
 
 
 # (command, arguments with {d} the inputs folder, message fragment, output that must not exist)
 PROBES = [
+    ("phyllotaxis", ["{d}/samples.toml", "-o", "{d}/h1"], "surface.samples in [16, 10000000]", "{d}/h1"),
+    ("phyllotaxis", ["{d}/frames.toml", "-o", "{d}/h2"], "dynamics.frames in [1, 100000]", "{d}/h2"),
+    ("phyllotaxis", ["{d}/interval.toml", "-o", "{d}/h3"], "dynamics.interval >= 0.001", "{d}/h3"),
     ("polygonize", [FLORET, "--eta", "1e9", "-o", "{d}/p1"], "eta(v) <= 10000", "{d}/p1"),
     ("polygonize", [FLORET, "--lambda", "1e-7", "-o", "{d}/p2"], "at most 10000 rows", "{d}/p2"),
     ("polygonize", [FLORET, "--aspect", "inf", "-o", "{d}/p3"], "--aspect", "{d}/p3"),

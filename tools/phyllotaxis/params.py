@@ -162,6 +162,10 @@ def _schema(cls) -> dict[str, tuple]:
 SCHEMA: dict[str, dict[str, tuple]] = {name: _schema(cls) for name, cls in _SECTIONS.items()}
 
 _OPTIONAL = ("dynamics", "compound", "hierarchy")
+# work limits (issue 14: beyond them a run hangs or exhausts memory instead of saying so)
+MAX_SAMPLES = 10_000_000
+MAX_FRAMES = 100_000
+MIN_INTERVAL = 1e-3
 # sections present in the result only when the file has them (besides the exclusive ones)
 _WHEN_GIVEN = ("receptacle",)
 
@@ -298,8 +302,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("surface", "radius", "> 0")
     if s["curve"] == "sphere_cap" and not 0 < s["angle"] <= 180:
         fail("surface", "angle", "in (0, 180] degrees")
-    if s["samples"] < 16:
-        fail("surface", "samples", ">= 16")
+    if not 16 <= s["samples"] <= MAX_SAMPLES:
+        fail("surface", "samples", f"in [16, {MAX_SAMPLES}] (arc-length samples of C)")
     if not 0 < pr["divergence"] < 360:
         fail("primordia", "divergence", "in (0, 360) degrees")
     if isinstance(pr["area"], float) and pr["area"] <= 0:
@@ -320,10 +324,11 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("primordia", "development_frames", "> 0 frames")
     if "dynamics" in p:
         d = p["dynamics"]
-        if d["frames"] < 1:
-            fail("dynamics", "frames", ">= 1")
-        if d["interval"] <= 0:
-            fail("dynamics", "interval", "> 0 frames")
+        if not 1 <= d["frames"] <= MAX_FRAMES:
+            fail("dynamics", "frames", f"in [1, {MAX_FRAMES}] (one RBA file per frame)")
+        if not d["interval"] >= MIN_INTERVAL:
+            fail("dynamics", "interval", f">= {MIN_INTERVAL:g} frames (at most {1 / MIN_INTERVAL:g} primordia per "
+                                         "frame and front)")
         if d["primordium_area"] <= 0:
             fail("dynamics", "primordium_area", "> 0")
         if d["inner_area"] < 0:
