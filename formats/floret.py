@@ -42,6 +42,9 @@ __all__ = [
 
 FORMAT_VERSION = 1
 MAX_DEGREE = 5
+MAX_COORDINATE = 1e12
+"""Largest control-point coordinate accepted: interpolating and meshing squares coordinates, so
+1e300 overflowed (exit 1) instead of being refused."""
 
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+-]*$")
 _NUMBER = re.compile(r"^[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?$")
@@ -178,6 +181,9 @@ class Organ:
             return ("grid", "control points of shape (nv, nu, 3)", f"shape {cp.shape}")
         if not np.isfinite(cp).all():
             return ("points", "finite coordinates", "NaN or inf")
+        if np.abs(cp).max() > MAX_COORDINATE:
+            return ("points", f"coordinates within +-{MAX_COORDINATE:g} (floret units)",
+                    f"{float(np.abs(cp).max()):g}")
         for key, deg in (("degree", self.degree_u), ("degree", self.degree_v)):
             if isinstance(deg, bool) or not isinstance(deg, (int, np.integer)):
                 return (key, "integer degrees", repr(deg))

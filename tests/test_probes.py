@@ -27,6 +27,11 @@ def inputs(tmp_path):
     write_obj(seq / "frame_0001.obj", ObjMesh(np.vstack([tri.vertices, [[2.0, 0, 0]]]), tri.faces))
     scene = Scene(placements=[Placement("o", 0, p, [0.1] * 3, [0, 1, 0], [1, 0, 0]) for p in simple_head(40)])
     write_scn(tmp_path / "head.scn", scene)
+    text = FLORET.read_text().splitlines()
+    k = text.index("points:") + 1
+    text[k] = "1e300 " + " ".join(text[k].split()[1:])
+    (tmp_path / "big.floret").write_text("\n".join(text) + "\n")
+    (tmp_path / "garbage.toml").write_bytes(bytes(range(128, 256)) * 2)
     (tmp_path / "samples.toml").write_text("[surface]\nsamples = 1000000000000\n")
     (tmp_path / "frames.toml").write_text("[dynamics]\nframes = 100000000\n")
     (tmp_path / "interval.toml").write_text("[dynamics]\ninterval = 1e-9\n")
@@ -35,6 +40,12 @@ def inputs(tmp_path):
 
 # (command, arguments with {d} the inputs folder, message fragment, output that must not exist)
 PROBES = [
+    ("floret-animate", ["{d}/big.floret", REPO / "pipelines" / "sunflower" / "draft" / "ray_open.floret", "-o", "{d}/f1"],
+     "coordinates within +-1e+12", "{d}/f1"),
+    ("floret-animate", [REPO / "pipelines" / "examples" / "lu_bud.floret", "--lu", "{d}/garbage.toml", "-o", "{d}/f2"],
+     "expected TOML (UTF-8 text)", "{d}/f2"),
+    ("branch-gen", ["{d}/head.scn", "--base", "nan", "nan", "nan", "-o", "{d}/b1"], "--base must be three finite numbers",
+     "{d}/b1"),
     ("phyllotaxis", ["{d}/samples.toml", "-o", "{d}/h1"], "surface.samples in [16, 10000000]", "{d}/h1"),
     ("phyllotaxis", ["{d}/frames.toml", "-o", "{d}/h2"], "dynamics.frames in [1, 100000]", "{d}/h2"),
     ("phyllotaxis", ["{d}/interval.toml", "-o", "{d}/h3"], "dynamics.interval >= 0.001", "{d}/h3"),

@@ -9,6 +9,7 @@ Writes ``OUT_DIR/skeleton.obj`` (``l`` polylines), ``OUT_DIR/skeleton.radii``,
 """
 from __future__ import annotations
 
+import math
 import warnings
 
 import click
@@ -50,6 +51,9 @@ def _run(scene, params, output, rba, frame_step, algorithm, seed, base, quiet):
     if seed is not None:
         p.seed = seed
     if base is not None:
+        if not all(math.isfinite(b) and abs(b) < 1e12 for b in base):
+            from inflo.formats.errors import InputError
+            raise InputError(f"--base must be three finite numbers (|x| < 1e12), found {' '.join(map(str, base))}")
         p.base = list(base)
     algo = algorithm or p.algorithm
     sc = read_scn(scene) if algo == "rodkaew" else None

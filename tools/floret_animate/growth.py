@@ -193,6 +193,9 @@ def read_lu_params(path) -> LuParams:
         raise InputError(f"{os.fspath(path)}: cannot read ({exc.strerror})") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{os.fspath(path)}: expected TOML, found an error: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{os.fspath(path)}: expected TOML (UTF-8 text), found byte 0x{exc.object[exc.start]:02x} "
+                         f"at offset {exc.start}") from None
     return parse_lu_params(data, path)
 
 
