@@ -32,6 +32,7 @@ def inputs(tmp_path):
     text[k] = "1e300 " + " ".join(text[k].split()[1:])
     (tmp_path / "big.floret").write_text("\n".join(text) + "\n")
     (tmp_path / "garbage.toml").write_bytes(bytes(range(128, 256)) * 2)
+    (tmp_path / "huge.obj").write_text("v 0 0 0\nv 1e308 0 0\nv 0 1 0\nf 1 2 3\n")
     (tmp_path / "samples.toml").write_text("[surface]\nsamples = 1000000000000\n")
     (tmp_path / "frames.toml").write_text("[dynamics]\nframes = 100000000\n")
     (tmp_path / "interval.toml").write_text("[dynamics]\ninterval = 1e-9\n")
@@ -40,6 +41,7 @@ def inputs(tmp_path):
 
 # (command, arguments with {d} the inputs folder, message fragment, output that must not exist)
 PROBES = [
+    ("canopy-render", ["{d}/huge.obj", "-o", "{d}/r1.png"], "coordinates within +-1e+15", "{d}/r1.png"),
     ("floret-animate", ["{d}/big.floret", REPO / "pipelines" / "sunflower" / "draft" / "ray_open.floret", "-o", "{d}/f1"],
      "coordinates within +-1e+12", "{d}/f1"),
     ("floret-animate", [REPO / "pipelines" / "examples" / "lu_bud.floret", "--lu", "{d}/garbage.toml", "-o", "{d}/f2"],

@@ -17,6 +17,9 @@ import numpy as np
 from inflo.formats.errors import InputError
 from inflo.formats.obj import ObjMesh, list_obj_sequence, read_obj
 
+MAX_COORDINATE = 1e15
+"""Largest coordinate canopy-render frames (the camera fit squares coordinates: 1e308 overflowed)."""
+
 __all__ = ["Layer", "resolve_inputs", "sequence_length", "FrameReader", "count_primitives"]
 
 
@@ -121,7 +124,11 @@ class FrameReader:
         key = (layer, 0 if lay.is_static else frame)
         mesh = self._cache.get(key)
         if mesh is None:
-            mesh = _share(self._last.get(layer), read_obj(lay.path(frame)))
+            path = lay.path(frame)
+            mesh = _share(self._last.get(layer), read_obj(path))
+            if len(mesh.vertices) and np.abs(mesh.vertices).max() > MAX_COORDINATE:
+                raise InputError(f"{path}: expected coordinates within +-{MAX_COORDINATE:g} (a renderable scene), "
+                                 f"found {float(np.abs(mesh.vertices).max()):g}")
             self._cache[key] = mesh
             self._last[layer] = mesh
         return mesh
