@@ -1,0 +1,265 @@
+"""Write the gaillardia key poses (disk_*, ray_*, bract_* .floret) from a few numbers per pose.
+
+The .floret files under draft/ and final/ are the pipeline's inputs and are committed; this script
+documents how their control points were laid out and regenerates them after a change of the
+numbers below (``python make_keys.py`` in this folder; ``python make_keys.py OUT_DIR`` writes both
+sets under OUT_DIR, which the tests use to check that the committed files are up to date). The two
+sets differ only in their polygonization (each organ's ``lambda:`` and ``eta:``), so a draft and a
+final floret have the same shape. See README.md.
+
+Units: a floret model of unit diameter fills its primordium's disc (formats/phyllotaxis.md), so
+the numbers are in disc diameters; local +Y is the floret axis (the receptacle's normal), +X
+points away from the head centre along the receptacle's meridian.
+
+- **Ray floret** of *Gaillardia x grandiflora* 'Oranges and Lemons' (thesis ch. 9: "In the variety
+  shown, ray florets are tubular"): the ligule is rolled into a trumpet, open in a narrow slit
+  along its upper side, its mouth flared into three shallow lobes. One bilateral organ per colour
+  (symmetry 1): ``tube`` (orange-red) and ``limb`` (the flared, lobed mouth, yellow). Row j of
+  either is an arc of 2 x ARC_HALF = 300 degrees round the tube's centre line: the half petal's
+  columns go from the midline at the bottom of the tube (column 0) round the +Z side to the edge
+  of the slit, and the bilateral mirror gives the -Z half. The tube's base row is a ring on the
+  receptacle (y = 0, the only vertices there: pipelines/yarrow/weights.py fixes the lowest ones);
+  the limb starts GAP beyond the tube's end along its centre line, so the two organs never touch
+  (fccompose's exact test counts touching as intersecting) and the limb is not fixed: it moves
+  with the tube's animation. Five key poses (``bud``, ``early``, ``mid``, ``late``, ``open``) of
+  one development ``ray_pose(s)``: short and erect in bud, the tube lengthening and bending
+  outward until it lies outward (+X), rising a little, the mouth flaring. floret-animate blends a
+  limb's base points linearly but the tube's end along its intrinsic (arc-length keeping) path;
+  five poses keep the two within a small fraction of the gap between them (the tests check it).
+- **Disk floret** (the sunflower's design, pipelines/sunflower/make_keys.py): organ ``corolla``
+  (five-fold, bilateral half petal 3 columns x 7 rows, fused to the last row), ``anthers`` (the
+  anther tube, a five-fold closed cylinder) and ``pistil``; ``bud`` (a closed barrel), ``open``
+  (a tube with five short spreading lobes, the anthers risen above them), ``late`` (the pistil
+  risen above the anthers).
+- **Involucral bract** (phyllary; ch. 9: "specialized leaves that surround the head and protect
+  it in its early development"; the sunflower's design, narrower): organ ``bract``, a lanceolate
+  blade with an acuminate tip; ``bud`` erect and incurved over the young head; ``open`` spreading
+  outward over the rim (on the domed receptacle that points it down), under the ray florets.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+
+# polygonization per quality: (lambda, eta) of each organ; a .func name is written as is (relative
+# to the key pose's folder). The corolla's eta falls to 1 vertex at the lobe tips (lobe_eta_*.func)
+# and the bract's at its acuminate tip (bract_eta_*.func; formats/fcc.md "Mesh quality matters").
+# The tube and limb do not narrow to a point: a constant eta round the 300-degree arc, the rows
+# about as far apart as the columns
+RES = {
+    "draft": {"corolla": ("0.34", "../lobe_eta_draft.func"), "anthers": ("0.5", "3"), "pistil": ("1.0", "3"),
+              "tube": ("0.1", "7"), "limb": ("0.34", "9"), "bract": ("0.34", "../bract_eta_draft.func")},
+    "final": {"corolla": ("0.34", "../lobe_eta_final.func"), "anthers": ("1.0", "3"), "pistil": ("1.0", "3"),
+              "tube": ("0.07", "9"), "limb": ("0.25", "13"), "bract": ("0.2", "../bract_eta_final.func")},
+}
+
+# ---- disk floret (the sunflower's) ----------------------------------------------------------------
+DISK_NU, DISK_NV, DISK_FUSED = 3, 7, 6
+DISK = {
+    # corolla: radius, height and half angle (degrees; 36 = the symmetry plane) per row;
+    # anthers / pistil: (radius, bottom, top) of the cylinder
+    "bud": dict(time=0.0,
+                r=[0.16, 0.24, 0.31, 0.33, 0.30, 0.20, 0.05],
+                y=[0.00, 0.14, 0.30, 0.46, 0.60, 0.72, 0.78],
+                half=[36, 36, 36, 36, 36, 34, 12],
+                anthers=(0.10, 0.0, 0.40), pistil=(0.035, 0.0, 0.34)),
+    "open": dict(time=0.55,
+                 r=[0.15, 0.20, 0.28, 0.36, 0.42, 0.46, 0.56],
+                 y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.86, 0.90],
+                 half=[36, 36, 36, 36, 36, 34, 8],
+                 anthers=(0.10, 0.0, 1.12), pistil=(0.035, 0.0, 0.96)),
+    "late": dict(time=1.0,
+                 r=[0.15, 0.20, 0.28, 0.36, 0.42, 0.47, 0.58],
+                 y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.85, 0.86],
+                 half=[36, 36, 36, 36, 36, 34, 8],
+                 anthers=(0.10, 0.0, 1.16), pistil=(0.035, 0.0, 1.50)),
+}
+
+# ---- ray floret: a tube of 300 degrees round a centre line, and its flared, three-lobed mouth -------
+ARC_HALF = 150.0  # degrees from the bottom midline to the edge of the slit, each side
+RAY_NU = 7  # half cross-section columns, ARC_HALF / 6 = 25 degrees apart
+TUBE_NV, LIMB_NV = 8, 4
+THETA = np.radians(np.linspace(0.0, ARC_HALF, RAY_NU))
+# the gap between the tube's end and the limb's base, along the centre line (floret units: about
+# 2 % of the open floret's length; a ray floret of the head is 0.05-0.2 scene units per floret
+# unit, so 0.003-0.012 scene units: 6-24 x fccompose's spacing)
+GAP = 0.06
+# the mouth's three shallow lobes: how far each column of the limb's last row falls short of the
+# lobes' tips, as a fraction of the limb's length: the middle lobe at the bottom (0 degrees), a
+# notch (50), a lateral lobe (100) and the edge of the slit (150)
+LOBE_RECESS = np.array([0.0, 0.08, 0.30, 0.14, 0.0, 0.12, 0.36])
+RAY_POSES = {"bud": 0.0, "early": 0.25, "mid": 0.5, "late": 0.75, "open": 1.0}
+
+
+def _lerp(a, b, s):
+    return a + (b - a) * s
+
+
+def ray_pose(s: float) -> dict:
+    """The ray floret's development at stage s in [0, 1] (0 bud, 1 open).
+
+    The tube's length, its bend from erect (0 degrees from +Y) to lying outward (BEND degrees),
+    its radius at the base and at the mouth, the limb's length and the radius of its flared mouth.
+    """
+    grow = s  # lengths grow linearly with the stage
+    bend = 64.0 * min(1.0, s / 0.9) ** 1.2  # the tube lies outward, rising 26 degrees, when open
+    return dict(length=_lerp(0.45, 1.90, grow), bend=bend,
+                r_base=_lerp(0.09, 0.14, s), r_end=_lerp(0.09, 0.21, s),
+                limb=_lerp(0.16, 0.60, grow), r_mouth=_lerp(0.085, 0.50, s ** 1.3),
+                lobe=_lerp(0.25, 1.0, s))
+
+
+def centre_line(length: float, bend: float, nv: int, extra=()):
+    """Rows of the tube's centre line, evenly spaced in arc length: (nv, 2) points (x, y) and their
+    headings (radians from +Y toward +X). The tube rises straight from the base, bends outward by
+    ``bend`` degrees between 2 % and 60 % of its length, and runs straight on. ``extra`` arc
+    lengths beyond ``length`` (the limb's rows) are returned as a second pair."""
+    sig_all = np.concatenate([np.linspace(0.0, length, nv), np.asarray(extra, float)])
+    fine = np.linspace(0.0, sig_all.max(), 4001)
+    a, b = 0.02 * length, 0.60 * length
+    w = np.clip((fine - a) / (b - a), 0.0, 1.0)
+    psi = np.radians(bend) * w * w * (3.0 - 2.0 * w)
+    dx = np.concatenate([[0.0], np.cumsum(0.5 * (np.sin(psi[1:]) + np.sin(psi[:-1])) * np.diff(fine))])
+    dy = np.concatenate([[0.0], np.cumsum(0.5 * (np.cos(psi[1:]) + np.cos(psi[:-1])) * np.diff(fine))])
+    pts = np.stack([np.interp(sig_all, fine, dx), np.interp(sig_all, fine, dy)], axis=1)
+    heading = np.interp(sig_all, fine, psi)
+    return pts[:nv], heading[:nv], pts[nv:], heading[nv:]
+
+
+def ring_rows(centre, heading, radius, back=None):
+    """Half cross-sections: row j an arc of radius[j] round centre[j], perpendicular to the heading,
+    column i at THETA[i] from the bottom midline toward +Z; ``back[j, i]`` moves a point back along
+    the centre line (the lobes)."""
+    nv = len(centre)
+    pts = np.zeros((nv, RAY_NU, 3))
+    for j in range(nv):
+        t = np.array([np.sin(heading[j]), np.cos(heading[j])])
+        bottom = np.array([t[1], -t[0]])
+        for i, th in enumerate(THETA):
+            xy = centre[j] + radius[j] * np.cos(th) * bottom
+            if back is not None:
+                xy = xy - back[j, i] * t
+            pts[j, i] = (xy[0], xy[1], radius[j] * np.sin(th))
+    return pts
+
+
+def ray_nets(s: float):
+    """(tube, limb) half control nets of the ray floret at stage s."""
+    p = ray_pose(s)
+    f = np.linspace(0.0, 1.0, LIMB_NV)
+    limb_sig = p["length"] + GAP + p["limb"] * f
+    c, h, lc, lh = centre_line(p["length"], p["bend"], TUBE_NV, limb_sig)
+    # the tube widens a little toward its mouth (a trumpet)
+    rt = p["r_base"] + (p["r_end"] - p["r_base"]) * np.linspace(0.0, 1.0, TUBE_NV) ** 1.5
+    tube = ring_rows(c, h, rt)
+    rl = p["r_end"] + (p["r_mouth"] - p["r_end"]) * f ** 1.6
+    back = np.zeros((LIMB_NV, RAY_NU))
+    back[-1] = LOBE_RECESS * p["lobe"] * p["limb"]
+    limb = ring_rows(lc, lh, rl, back)
+    return tube, limb
+
+
+# ---- involucral bract (the sunflower's) -------------------------------------------------------------
+BRACT_NU, BRACT_NV = 4, 6
+U_BRACT = np.linspace(0.0, 1.0, BRACT_NU)
+BRACT = {
+    # midrib (x outward, y up off the receptacle): erect and incurved over the young head in bud,
+    # spreading outward over the rim when open (the receptacle's dome tilts it down), under the ray
+    # florets; lanceolate, narrower than the sunflower's ovate bracts
+    "bud": dict(time=0.0,
+                mid=[(0.00, 0.00), (0.02, 0.26), (-0.02, 0.52), (-0.09, 0.76), (-0.19, 0.98), (-0.31, 1.16)],
+                half=[0.08, 0.16, 0.19, 0.16, 0.09, 0.02],
+                cup=0.6),
+    "open": dict(time=1.0,
+                 mid=[(0.00, 0.00), (0.16, 0.16), (0.44, 0.26), (0.76, 0.24), (1.04, 0.14), (1.28, 0.00)],
+                 half=[0.09, 0.19, 0.22, 0.18, 0.10, 0.02],
+                 cup=0.25),
+}
+
+
+def fmt_rows(pts):
+    return "\n".join("  " + "   ".join(f"{x:.4f} {y:.4f} {z:.4f}" for x, y, z in row) for row in pts)
+
+
+def ring_net(r, y, half):
+    """Half petal of a five-fold whorl: row j is an arc of radius r[j] at height y[j]."""
+    nv = len(r)
+    pts = np.zeros((nv, DISK_NU, 3))
+    for j in range(nv):
+        a = np.radians(np.linspace(0.0, half[j], DISK_NU))
+        pts[j, :, 0] = r[j] * np.cos(a)
+        pts[j, :, 1] = y[j]
+        pts[j, :, 2] = r[j] * np.sin(a)
+    return pts
+
+
+def cylinder_net(radius, bottom, top):
+    """Half petal of a five-fold closed cylinder (fused along its whole height), 2 x 3 points."""
+    a = np.radians([0.0, 36.0])
+    pts = np.zeros((3, 2, 3))
+    for j, y in enumerate(np.linspace(bottom, top, 3)):
+        pts[j, :, 0] = radius * np.cos(a)
+        pts[j, :, 1] = y
+        pts[j, :, 2] = radius * np.sin(a)
+    return pts
+
+
+def blade_net(p, nu, nv, u):
+    """Half blade along a midrib in the x-y plane: column i at u_i of the row's half width, cupped."""
+    mid = np.array(p["mid"], float)
+    pts = np.zeros((nv, nu, 3))
+    for j in range(nv):
+        a = mid[min(j + 1, nv - 1)] - mid[max(j - 1, 0)]
+        t = a / np.linalg.norm(a)
+        n = np.array([-t[1], t[0]])
+        w = p["half"][j]
+        for i, ui in enumerate(u):
+            lift = p["cup"] * w * ui * ui * 0.5
+            xy = mid[j] + lift * n
+            pts[j, i] = (xy[0], xy[1], ui * w)
+    return pts
+
+
+def organ(name, material, degree, grid, symmetry, fused, res, pts, bilateral=True):
+    lam, eta = res
+    return (f"organ: {name}\nmaterial: {material}\ndegree: {degree}\ngrid: {grid}\nsymmetry: {symmetry}\n"
+            f"bilateral: {'on' if bilateral else 'off'}\nfused: {fused}\nlambda: {lam}\neta: {eta}\n"
+            f"points:\n{fmt_rows(pts)}\n")
+
+
+# material ids (colors.toml)
+M_TUBE, M_COROLLA, M_ANTHERS, M_PISTIL, M_BRACT, M_LIMB = 0, 1, 2, 3, 4, 6
+
+
+def write(out: Path, quality: str) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    res = RES[quality]
+    head = "# gaillardia {what}, key pose '{key}' ({q}); written by make_keys.py\nfloret 1\nname: {name}\ntime: {t}\n\n"
+    for key, p in DISK.items():
+        text = head.format(what="disk floret", key=key, q=quality, name="disk", t=p["time"])
+        text += organ("corolla", M_COROLLA, "3 3", f"{DISK_NU} {DISK_NV}", "5 0", DISK_FUSED, res["corolla"],
+                      ring_net(p["r"], p["y"], p["half"])) + "\n"
+        text += organ("anthers", M_ANTHERS, "1 2", "2 3", "5 0", 3, res["anthers"], cylinder_net(*p["anthers"])) + "\n"
+        text += organ("pistil", M_PISTIL, "1 2", "2 3", "5 0", 3, res["pistil"], cylinder_net(*p["pistil"]))
+        (out / f"disk_{key}.floret").write_text(text)
+    for key, s in RAY_POSES.items():
+        tube, limb = ray_nets(s)
+        text = head.format(what="tubular ray floret", key=key, q=quality, name="ray", t=s)
+        text += organ("tube", M_TUBE, "3 3", f"{RAY_NU} {TUBE_NV}", "1 0", 0, res["tube"], tube) + "\n"
+        text += organ("limb", M_LIMB, "3 3", f"{RAY_NU} {LIMB_NV}", "1 0", 0, res["limb"], limb)
+        (out / f"ray_{key}.floret").write_text(text)
+    for key, p in BRACT.items():
+        text = head.format(what="involucral bract", key=key, q=quality, name="bract", t=p["time"])
+        text += organ("bract", M_BRACT, "2 3", f"{BRACT_NU} {BRACT_NV}", "1 0", 0, res["bract"],
+                      blade_net(p, BRACT_NU, BRACT_NV, U_BRACT))
+        (out / f"bract_{key}.floret").write_text(text)
+
+
+if __name__ == "__main__":
+    root = Path(sys.argv[1]) if len(sys.argv) > 1 else HERE
+    for q in RES:
+        write(root / q, q)
