@@ -83,7 +83,7 @@ from inflo.tools.pbd.solver import (
 )
 
 from .log import FrameLog, read_log, write_log
-from .model import Model, build_model, carry, predict, rest_values, template_positions
+from .model import Model, Schedule, build_model, carry
 
 __all__ = ["ComposeResult", "CollisionError", "InitialIntersectionError", "SimulationDiverged", "compose_canopy",
            "Simulation"]
@@ -278,12 +278,12 @@ class Simulation:
     def _pose(self, x: np.ndarray, florets, frame: float, size: float) -> None:
         """Put the vertices of ``florets`` on their templates at ``frame``, scaled by ``size``."""
         m = self.model
-        ba, bb, al, mats = self.schedule(frame)
-        mats = mats.copy()
+        sched = self.schedule(frame)
+        mats = sched.matrix.copy()
         mats[florets, :, :3] *= size
         off = m.floret_vertex_offset
         verts = np.concatenate([np.arange(off[f], off[f + 1]) for f in florets]).astype(np.int32)
-        template_positions(m.template_x, m.vertex_floret, off, ba, bb, al, mats, verts, x)
+        m.template_positions(sched._replace(matrix=mats), vertices=verts, out=x)
 
     def size_factor(self, frame: float) -> np.ndarray:
         """(nf,) the size of each floret relative to its own at ``frame``: 1, or growing linearly
@@ -292,33 +292,31 @@ class Simulation:
         g = s0 + (1.0 - s0) * (frame - self.emerge_frame) / float(self.params.emergence_growth_frames)
         return np.clip(np.where(s0 < 1.0, g, 1.0), 0.0, 1.0)
 
-    def schedule(self, frame: float):
+    def schedule(self, frame: float) -> Schedule:
         """:meth:`.model.Model.schedule` at ``frame``, each floret's placement scaled by
         :meth:`size_factor` (about its base: the floret's local origin)."""
         if self._sched_frame != frame:
-            ba, bb, al, mats = self.model.schedule(frame)
+            sched = self.model.schedule(frame)
             if (self.emerge_scale < 1.0).any():
-                mats = mats.copy()
+                mats = sched.matrix.copy()
                 mats[:, :, :3] *= self.size_factor(frame)[:, None, None]
-            self._sched = (ba, bb, al, mats)
+                sched = sched._replace(matrix=mats)
+            self._sched = sched
             self._sched_frame = frame
         return self._sched
 
     def initial_positions(self) -> np.ndarray:
         """Positions of frame 0: every floret's template at its time, placed."""
         m = self.model
-        ba, bb, al, mats = self.schedule(0.0)
         x = np.zeros((m.n_vertices, 3))
-        template_positions(m.template_x, m.vertex_floret, m.floret_vertex_offset, ba, bb, al, mats,
-                           np.arange(m.n_vertices, dtype=np.int32), x)
+        m.template_positions(self.schedule(0.0), vertices=np.arange(m.n_vertices, dtype=np.int32), out=x)
         self.update_rest(0.0)
         return x
 
     def update_rest(self, frame: float) -> None:
-        m = self.model
-        ba, bb, al, mats = self.schedule(frame)
-        rest_values(m.template_x, m.vertex_floret, m.floret_vertex_offset, ba, bb, al, mats,
-                    m.edge_indices, m.hinge_indices, self.edge_rest_length, self.hinge_rest_angle)
+        """The rest values (:attr:`edge_rest_length`, :attr:`hinge_rest_angle`) at ``frame``."""
+        self.model.rest_values(self.schedule(frame), edge_rest_length=self.edge_rest_length,
+                               hinge_rest_angle=self.hinge_rest_angle)
 
     def _cell(self, x: np.ndarray) -> float:
         if self.cell_size is None:
@@ -387,22 +385,20 @@ class Simulation:
         m = self.model
         p = self.params
         t0 = time.perf_counter()
-        oa, ob, oal, m_old = (a.copy() for a in self.schedule(frame_from))
-        ba, bb, al, m_new = self.schedule(frame_to)
+        old = Schedule(*(a.copy() for a in self.schedule(frame_from)))
+        new = self.schedule(frame_to)
         self.update_rest(frame_to)
         # rigid carry: D = M_new M_old^-1 per floret
-        full_old = np.zeros((len(m_old), 4, 4))
-        full_old[:, :3] = m_old
+        full_old = np.zeros((len(old.matrix), 4, 4))
+        full_old[:, :3] = old.matrix
         full_old[:, 3, 3] = 1.0
         full_new = np.zeros_like(full_old)
-        full_new[:, :3] = m_new
+        full_new[:, :3] = new.matrix
         full_new[:, 3, 3] = 1.0
         delta = np.ascontiguousarray((full_new @ np.linalg.inv(full_old))[:, :3])
         xp = np.empty_like(x)
-        predict(x, m.vertex_floret, m.floret_vertex_offset, delta, m.template_x, oa, ob, oal, ba, bb, al,
-                m_new, xp)
-        template_positions(m.template_x, m.vertex_floret, m.floret_vertex_offset, ba, bb, al, m_new,
-                           m.vertex_fixed, xp)
+        m.predict(x, delta=delta, old=old, new=new, out=xp)
+        m.template_positions(new, vertices=m.vertex_fixed, out=xp)
         t1 = time.perf_counter()
         w = m.vertex_inv_mass
         if self.converged_below is None:

@@ -8,7 +8,9 @@ structure-of-arrays system:
   per-constraint stiffness, ``vertex_inv_mass`` (0 for the fixed vertices of the weight files),
   ``vertex_floret``, the template frames of every animation (``template_x``, local coordinates,
   scaled by the entry's initial scale) and per-floret tables; plus :meth:`Model.schedule`, which
-  gives at any (fractional) frame each floret's developmental time and placement matrix.
+  gives at any (fractional) frame each floret's developmental time and placement matrix (a
+  :class:`Schedule`), and keyword wrappers of the kernels below that take a ``Schedule``
+  (:meth:`Model.template_positions`, :meth:`Model.rest_values`, :meth:`Model.predict`).
 - ``State`` (changing): ``vertex_x`` and the frame reached.
 
 Rest values at a time (edge lengths, eq. 3.11; signed dihedral angles, eq. 3.13) are computed
@@ -42,6 +44,7 @@ import math
 import functools
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -56,7 +59,7 @@ from inflo.formats.weights import read_weight_file
 from inflo.tools.pbd.constraints import signed_dihedral_angle, wrap_angle
 from inflo.tools.pbd.solver import mesh_edges, mesh_hinges
 
-__all__ = ["Template", "Floret", "Model", "State", "build_model", "read_weight_file"]
+__all__ = ["Template", "Floret", "Model", "Schedule", "State", "build_model", "read_weight_file"]
 
 
 @dataclass
@@ -144,6 +147,19 @@ def _load_template(params: CanopyParams, entry) -> Template:
     return Template(entry.id, np.ascontiguousarray(frames), tri, mesh_edges(tri), mesh_hinges(tri), fixed,
                     float(k_stretch), float(k_bend), str(entry.path.raw), list(mesh.materials),
                     None if mesh.face_material is None else np.asarray(mesh.face_material, np.int32))
+
+
+class Schedule(NamedTuple):
+    """Per-floret tables at one (fractional) frame for the kernels (:meth:`Model.schedule`)."""
+
+    base_a: np.ndarray
+    """(nf,) int64: row of ``template_x`` of the template frame at or before each floret's time"""
+    base_b: np.ndarray
+    """(nf,) int64: row of ``template_x`` of the template frame after it (the same at the end)"""
+    alpha: np.ndarray
+    """(nf,) float64: interpolation weight of frame b"""
+    matrix: np.ndarray
+    """(nf, 3, 4) float64: local-to-scene affine maps (scene scale included)"""
 
 
 @dataclass
@@ -265,17 +281,15 @@ class Model:
         scale = np.diag(list(self.params.scene_scale) + [1.0])
         return scale @ m
 
-    def schedule(self, frame: float):
+    def schedule(self, frame: float) -> Schedule:
         """Per-floret tables at ``frame`` for the kernels.
 
         Returns
         -------
-        base_a, base_b : (nf,) int64
-            Rows of ``template_x`` of the two template frames around each floret's time.
-        alpha : (nf,) float64
-            Interpolation weight of frame b.
-        matrix : (nf, 3, 4) float64
-            Local-to-scene affine maps.
+        Schedule
+            ``base_a``, ``base_b`` ((nf,) int64): rows of ``template_x`` of the two template
+            frames around each floret's time; ``alpha`` ((nf,) float64): interpolation weight of
+            frame b; ``matrix`` ((nf, 3, 4) float64): local-to-scene affine maps.
         """
         nf = len(self.florets)
         base_a = np.empty(nf, np.int64)
@@ -298,7 +312,30 @@ class Model:
             if not carried[k]:
                 mats[k] = self.matrix(fl, frame)[:3]
         mats[rba_ids] = rba_mats
-        return base_a, base_b, alpha, mats
+        return Schedule(base_a, base_b, alpha, mats)
+
+    # -- kernel launches (keyword arguments; the kernels take the arrays positionally) ----------
+
+    def template_positions(self, schedule: Schedule, *, vertices: np.ndarray, out: np.ndarray) -> None:
+        """``out[v] = M_f T_f(v)`` for the listed ``vertices`` ((k,) int32): their templates at the
+        schedule's times, placed (:func:`template_positions`)."""
+        template_positions(self.template_x, self.vertex_floret, self.floret_vertex_offset, schedule.base_a,
+                           schedule.base_b, schedule.alpha, schedule.matrix, vertices, out)
+
+    def rest_values(self, schedule: Schedule, *, edge_rest_length: np.ndarray,
+                    hinge_rest_angle: np.ndarray) -> None:
+        """Fill ``edge_rest_length`` (e,) and ``hinge_rest_angle`` (h,): rest lengths (eq. 3.11) and
+        signed rest angles (eq. 3.13) at the schedule's times (:func:`rest_values`)."""
+        rest_values(self.template_x, self.vertex_floret, self.floret_vertex_offset, schedule.base_a,
+                    schedule.base_b, schedule.alpha, schedule.matrix, self.edge_indices, self.hinge_indices,
+                    edge_rest_length, hinge_rest_angle)
+
+    def predict(self, vertex_x: np.ndarray, *, delta: np.ndarray, old: Schedule, new: Schedule,
+                out: np.ndarray) -> None:
+        """Predicted positions of a growth step from schedule ``old`` to ``new`` into ``out``
+        (:func:`predict`; ``delta`` (nf, 3, 4): each floret's placement change)."""
+        predict(vertex_x, self.vertex_floret, self.floret_vertex_offset, delta, self.template_x, old.base_a,
+                old.base_b, old.alpha, new.base_a, new.base_b, new.alpha, new.matrix, out)
 
     @functools.cached_property
     def _rba_tables(self) -> list:
