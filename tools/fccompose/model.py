@@ -1,8 +1,8 @@
 """The canopy as a constraint system: static Model, changing State (Warp's split; thesis 3, 8 f).
 
-:func:`build_model` reads everything a ``.fcc`` file names (OBJ sequences, single OBJs, weight
-files, SCN files, RBA folders), instances every placement and concatenates the florets into one
-structure-of-arrays system:
+:func:`build_model` reads everything a ``.fcc`` file names (:func:`load_inputs`: OBJ sequences,
+single OBJs, weight files, SCN files, RBA folders), then :func:`assemble_model`, which reads no
+files, instances every placement and concatenates the florets into one structure-of-arrays system:
 
 - ``Model`` (static): ``tri_indices``, ``edge_indices``, ``hinge_indices`` (global vertex ids),
   per-constraint stiffness, ``vertex_inv_mass`` (0 for the fixed vertices of the weight files),
@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 import functools
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
@@ -59,7 +60,8 @@ from inflo.formats.weights import read_weight_file
 from inflo.tools.pbd.constraints import signed_dihedral_angle, wrap_angle
 from inflo.tools.pbd.solver import mesh_edges, mesh_hinges
 
-__all__ = ["Template", "Floret", "Model", "Schedule", "State", "build_model", "read_weight_file"]
+__all__ = ["Template", "Floret", "Model", "Schedule", "State", "RbaSequence", "Inputs", "build_model",
+           "load_inputs", "assemble_model", "read_weight_file"]
 
 
 @dataclass
@@ -102,6 +104,18 @@ class Template:
     def n_vertices(self) -> int:
         return self.frames.shape[1]
 
+    @classmethod
+    def from_frames(cls, id: int, frames, faces, *, fixed=None, k_stretch: float = 0.99, k_bend: float = 0.99,
+                    source: str = "", materials=None, face_material=None) -> "Template":
+        """A template of ``frames`` ((F, nv, 3) local positions, already scaled) and triangles
+        ``faces`` (m, 3): its edges and hinges are those of the triangles (:func:`mesh_edges`,
+        :func:`mesh_hinges`), ``fixed`` the vertex ids of its weight file (None: none)."""
+        tri = np.ascontiguousarray(faces, dtype=np.int32)
+        fixed = np.zeros(0, np.int32) if fixed is None else np.asarray(fixed, np.int32)
+        return cls(id, np.ascontiguousarray(frames, dtype=np.float64), tri, mesh_edges(tri), mesh_hinges(tri),
+                   fixed, float(k_stretch), float(k_bend), source, list(materials or []),
+                   None if face_material is None else np.asarray(face_material, np.int32))
+
 
 @dataclass
 class Floret:
@@ -139,14 +153,13 @@ def _load_template(params: CanopyParams, entry) -> Template:
         raise FormatError(entry.path.resolved, None, "triangles (f lines)", "none")
     frames = frames * np.asarray(entry.scale, float)
     nv = frames.shape[1]
-    fixed = np.zeros(0, np.int32)
+    fixed = None
     if entry.id in params.weights:
         fixed = read_weight_file(params.weights[entry.id].resolved, nv)
     k_stretch, k_bend = params.stiffness(entry.id)
-    tri = np.ascontiguousarray(faces, dtype=np.int32)
-    return Template(entry.id, np.ascontiguousarray(frames), tri, mesh_edges(tri), mesh_hinges(tri), fixed,
-                    float(k_stretch), float(k_bend), str(entry.path.raw), list(mesh.materials),
-                    None if mesh.face_material is None else np.asarray(mesh.face_material, np.int32))
+    return Template.from_frames(entry.id, frames, faces, fixed=fixed, k_stretch=k_stretch, k_bend=k_bend,
+                                source=str(entry.path.raw), materials=mesh.materials,
+                                face_material=mesh.face_material)
 
 
 class Schedule(NamedTuple):
@@ -455,19 +468,64 @@ def _rba_matrix(floret: Floret, frame: float) -> np.ndarray:
 # --------------------------------------------------------------------------------------------------
 
 
-def build_model(params: CanopyParams) -> Model:
-    """Load every file ``params`` names and instance every placement (thesis 8 f).
+class RbaSequence(NamedTuple):
+    """One ``rigid body animation`` entry's RBA files, read against its scene."""
+
+    paths: list
+    """the RBA files, in frame order"""
+    frames: list
+    """their :class:`~inflo.formats.rba.RbaFrame` objects"""
+    scale: np.ndarray
+    """(3,) the entry's scale, multiplying every RBA row's"""
+
+
+class Inputs(NamedTuple):
+    """What :func:`load_inputs` read for :func:`assemble_model`."""
+
+    scenes: dict
+    """scene path -> :class:`~inflo.formats.scn.Scene`, in the order the florets are numbered"""
+    templates: Mapping
+    """animation/obj id -> :class:`Template`, iterated in the ``.fcc``'s entry order"""
+    rbas: dict
+    """scene path -> :class:`RbaSequence` of the scenes with a ``rigid body animation`` line"""
+
+
+class _TemplateFiles(Mapping):
+    """The ``animation``/``obj`` entries of a ``.fcc`` as id -> :class:`Template`, each read from
+    its files on its first lookup: only placed templates are read, in placement order (so the
+    first bad file named is the first a placement needs). Iterates over the ids in entry order."""
+
+    def __init__(self, params: CanopyParams):
+        self._params = params
+        self._entries = {e.id: e for e in params.animations}
+        self._read: dict = {}
+
+    def __contains__(self, id) -> bool:
+        return id in self._entries
+
+    def __getitem__(self, id) -> Template:
+        if id not in self._read:
+            self._read[id] = _load_template(self._params, self._entries[id])
+        return self._read[id]
+
+    def __iter__(self):
+        return iter(self._entries)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+
+def load_inputs(params: CanopyParams) -> Inputs:
+    """Read the SCN files and RBA folders ``params`` names; the OBJ sequences, OBJs and weight
+    files of its entries are read as :func:`assemble_model` looks their templates up.
 
     Raises
     ------
     FormatError, InputError
-        Unreadable or malformed inputs; an animation whose frames differ in topology (naming the
-        first differing frame); an SCN id with no ``animation``/``obj`` entry; an RBA id that is
-        not an ``rba:`` placement of its scene; an ``rba:`` placement without a ``rigid body
-        animation`` entry for its scene; a scene without placements.
+        Unreadable or malformed inputs; no scene file; a second ``rigid body animation`` line for
+        a scene; an RBA folder without RBA files; an RBA id that is not an ``rba:`` placement of
+        its scene.
     """
-    templates = {e.id: None for e in params.animations}
-    entries = {e.id: e for e in params.animations}
     if not params.scene_files and not params.rigid_body_animations:
         raise InputError(f"{params.source}: expected at least one 'scene file path', found none")
 
@@ -478,7 +536,6 @@ def build_model(params: CanopyParams) -> Model:
             scene_paths.append(r.scene_path.resolved)
     scenes = {p: read_scn(p) for p in scene_paths}
     rbas = {}
-    rba_rows = {}
     for r in params.rigid_body_animations:
         sp = r.scene_path.resolved
         if sp in rbas:
@@ -487,19 +544,46 @@ def build_model(params: CanopyParams) -> Model:
         paths, frames = read_rba_sequence(r.rba_folder.resolved, scenes[sp])
         if not paths:
             raise FormatError(params.source, r.line, "a folder with RBA files", f"none in {r.rba_folder.raw}")
-        rbas[sp] = (paths, frames, np.asarray(r.scale, float))
-        rba_rows[sp] = _rba_rows(frames, len(scenes[sp].placements))
+        rbas[sp] = RbaSequence(paths, frames, np.asarray(r.scale, float))
+    return Inputs(scenes, _TemplateFiles(params), rbas)
+
+
+def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rbas: Mapping | None = None) -> Model:
+    """Instance every placement and concatenate the florets into one system (thesis 8 f); reads
+    no files.
+
+    Parameters
+    ----------
+    params : CanopyParams
+        The run's parameters (kept as :attr:`Model.params`; ``run_frames``, ``scene_scale`` and
+        ``source`` are used here).
+    scenes : mapping of path -> Scene
+        Florets are numbered in this order (scenes, then placements in file order).
+    templates : mapping of int -> Template
+        By animation/obj id; the placed ones' frames are stacked in ``template_x`` in this
+        mapping's order, and each is looked up when a placement first names it.
+    rbas : mapping of path -> RbaSequence, optional
+        The RBA sequences moving the ``rba:`` placements of those scenes.
+
+    Raises
+    ------
+    FormatError, InputError
+        An SCN id with no template; an ``rba:`` placement of a scene without an RBA sequence, or
+        listed in none of its RBA files; no placements at all.
+    """
+    rbas = {} if rbas is None else rbas
+    rba_rows = {sp: _rba_rows(seq.frames, len(scenes[sp].placements)) for sp, seq in rbas.items()}
 
     florets: list[Floret] = []
-    for sp in scene_paths:
-        scene = scenes[sp]
+    placed: dict = {}
+    for sp, scene in scenes.items():
         for k, p in enumerate(scene.placements):
-            if p.id not in entries:
+            if p.id not in templates:
                 raise FormatError(sp, None, f"placement ids naming an 'animation' or 'obj' entry of {params.source}",
                                   f"id {p.id} (placement {k}, '{p.kind}:')")
-            if templates[p.id] is None:
-                templates[p.id] = _load_template(params, entries[p.id])
-            fl = Floret(len(florets), p, templates[p.id], sp, k, p.material)
+            if p.id not in placed:
+                placed[p.id] = templates[p.id]
+            fl = Floret(len(florets), p, placed[p.id], sp, k, p.material)
             if p.kind == "rba":
                 if sp not in rbas:
                     raise FormatError(sp, None, "a 'rigid body animation' line for this scene's 'rba:' placements",
@@ -517,7 +601,7 @@ def build_model(params: CanopyParams) -> Model:
         raise InputError(f"{params.source}: expected placements in the scene files, found none")
 
     # concatenate
-    used = [t for t in templates.values() if t is not None]
+    used = [placed[i] for i in templates if i in placed]
     template_offset, rows = {}, 0
     for t in used:
         template_offset[t.id] = rows
@@ -552,8 +636,8 @@ def build_model(params: CanopyParams) -> Model:
         for fl in florets:
             if fl.placement.frame_end is not None:
                 ends.append(int(fl.placement.frame_end))
-        for paths, _, _ in rbas.values():
-            ends.append(len(paths) - 1)
+        for seq in rbas.values():
+            ends.append(len(seq.paths) - 1)
         n_frames = max(ends)
 
     cat = lambda xs, dt, shape: (np.ascontiguousarray(np.concatenate(xs), dtype=dt)  # noqa: E731
@@ -576,6 +660,22 @@ def build_model(params: CanopyParams) -> Model:
         n_frames=int(n_frames),
         params=params,
     )
+
+
+def build_model(params: CanopyParams) -> Model:
+    """Load every file ``params`` names and instance every placement (thesis 8 f):
+    :func:`load_inputs`, then :func:`assemble_model`.
+
+    Raises
+    ------
+    FormatError, InputError
+        Unreadable or malformed inputs; an animation whose frames differ in topology (naming the
+        first differing frame); an SCN id with no ``animation``/``obj`` entry; an RBA id that is
+        not an ``rba:`` placement of its scene; an ``rba:`` placement without a ``rigid body
+        animation`` entry for its scene; a scene without placements.
+    """
+    inputs = load_inputs(params)
+    return assemble_model(params, inputs.scenes, inputs.templates, inputs.rbas)
 
 
 # --------------------------------------------------------------------------------------------------

@@ -1,0 +1,103 @@
+"""fccompose's model (issue 15): assemble_model without files, Schedule and the kernels'
+keyword wrappers."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from inflo.formats.errors import FormatError
+from inflo.formats.fcc import CanopyParams
+from inflo.formats.placement import placement_matrix
+from inflo.formats.rba import RbaFrame
+from inflo.formats.scn import Placement, Scene
+from inflo.tools.fccompose.model import RbaSequence, Schedule, Template, assemble_model
+from inflo.tools.pbd.constraints import signed_dihedral_angle, wrap_angle
+
+# a unit square of two triangles in its local frame, flat at frame 0 and folded along its
+# diagonal at frame 1; vertices 0 and 1 (one edge) are fixed
+SQUARE = np.array([[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]], float)
+FOLDED = SQUARE + np.array([[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0.5, 0]])
+FACES = np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def _template(fixed=(0, 1)) -> Template:
+    return Template.from_frames(0, np.stack([SQUARE, FOLDED]), FACES, fixed=fixed, k_stretch=0.9, k_bend=0.8)
+
+
+def _ca(x: float, material: int) -> Placement:
+    return Placement("ca", 0, [x, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0], frame_start=0, frame_end=4,
+                     material=material)
+
+
+def _model(**params):
+    scenes = {Path("a.scn"): Scene([_ca(0.0, 1), _ca(3.0, 2)])}
+    return assemble_model(CanopyParams(**params), scenes, {0: _template()})
+
+
+def test_assemble_model_without_files():
+    m = _model()
+    assert m.n_vertices == 8 and m.n_triangles == 4 and m.n_frames == 4  # to the end of the ca: window
+    np.testing.assert_array_equal(m.tri_indices, np.concatenate([FACES, FACES + 4]))
+    np.testing.assert_array_equal(m.tri_floret, [0, 0, 1, 1])
+    np.testing.assert_array_equal(m.vertex_floret, [0] * 4 + [1] * 4)
+    np.testing.assert_array_equal(m.floret_vertex_offset, [0, 4, 8])
+    np.testing.assert_array_equal(m.vertex_fixed, [0, 1, 4, 5])
+    np.testing.assert_array_equal(m.vertex_inv_mass, [0, 0, 1, 1, 0, 0, 1, 1])
+    assert len(m.edge_indices) == 10 and len(m.hinge_indices) == 2  # 5 edges and 1 hinge a square
+    np.testing.assert_array_equal(m.edge_stiffness, 0.9)
+    np.testing.assert_array_equal(m.hinge_stiffness, 0.8)
+    assert m.template_offset == {0: 0} and m.template_x.shape == (8, 3)
+    assert [fl.index for fl in m.florets] == [0, 1] and m.florets[1].vertex_offset == 4
+    names, face = m.face_materials
+    assert names == ["mtl1", "mtl2"] and face.tolist() == [0, 0, 1, 1]
+    assert _model(run_frames=2).n_frames == 2
+
+
+def test_schedule_is_a_named_tuple_and_places_the_templates():
+    m = _model()
+    sched = m.schedule(2.0)  # u = 2/4 of the two template frames
+    assert isinstance(sched, Schedule)
+    base_a, base_b, alpha, matrix = sched  # unpacks like the tuple it was
+    np.testing.assert_array_equal(base_a, [0, 0])
+    np.testing.assert_array_equal(base_b, [4, 4])
+    np.testing.assert_allclose(alpha, [0.5, 0.5])
+    np.testing.assert_allclose(matrix[1], placement_matrix([3, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0])[:3])
+    x = np.zeros((8, 3))
+    m.template_positions(sched, vertices=np.arange(8, dtype=np.int32), out=x)
+    half = 0.5 * (SQUARE + FOLDED)
+    np.testing.assert_allclose(x, np.concatenate([half, half + [3, 0, 0]]), atol=1e-15)
+    rest_l, rest_a = np.zeros(len(m.edge_indices)), np.zeros(len(m.hinge_indices))
+    m.rest_values(sched, edge_rest_length=rest_l, hinge_rest_angle=rest_a)
+    # lengths (eq. 3.11) and angles (eq. 3.13) of the two template frames, interpolated
+    local = m.edge_indices % 4
+    length = lambda p: np.linalg.norm(p[local[:, 0]] - p[local[:, 1]], axis=1)  # noqa: E731
+    np.testing.assert_allclose(rest_l, 0.5 * (length(SQUARE) + length(FOLDED)), rtol=1e-14)
+    h = m.hinge_indices[0] % 4
+    th_a, th_b = (signed_dihedral_angle(*p[h]) for p in (SQUARE, FOLDED))
+    np.testing.assert_allclose(rest_a, wrap_angle(th_a + 0.5 * wrap_angle(th_b - th_a)), rtol=1e-14)
+    assert abs(rest_a[0]) > 0.1
+
+
+def test_rba_florets_emerge_at_their_first_listed_frame():
+    row = lambda ids: RbaFrame(ids, [[2.0 * i, 0, 0] for i in ids], [[1, 1, 1]] * len(ids),  # noqa: E731
+                               [[0, 1, 0]] * len(ids), [[1, 0, 0]] * len(ids))
+    frames = [row([0]), row([0]), row([0, 1])]
+    scene = Scene([Placement("rba", 0, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0], frame_start=0, frame_end=2)
+                   for _ in range(2)])
+    seq = RbaSequence([Path(f"rba/{k:04d}.rba") for k in range(3)], frames, np.ones(3))
+    m = assemble_model(CanopyParams(), {Path("s.scn"): scene}, {0: _template()}, {Path("s.scn"): seq})
+    np.testing.assert_array_equal(m.floret_birth, [0, 2])
+    assert m.n_frames == 2
+    x = np.zeros((8, 3))
+    m.template_positions(m.schedule(0.0), vertices=np.arange(8, dtype=np.int32), out=x)
+    np.testing.assert_allclose(x[4:], SQUARE + [2, 0, 0])  # it waits at its first RBA pose
+    with pytest.raises(FormatError, match="'rigid body animation' line"):
+        assemble_model(CanopyParams(), {Path("s.scn"): scene}, {0: _template()})
+
+
+def test_a_placement_naming_no_template_is_refused():
+    scenes = {Path("a.scn"): Scene([_ca(0.0, 1), Placement("ca", 7, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0])])}
+    with pytest.raises(FormatError, match=r"a.scn: expected placement ids naming .* found id 7 \(placement 1"):
+        assemble_model(CanopyParams(), scenes, {0: _template()})
