@@ -1,18 +1,20 @@
-"""fccompose's model (issue 15): assemble_model without files, Schedule and the kernels'
-keyword wrappers."""
+"""fccompose's Model/State/Control split (issue 15): assemble_model without files, Schedule,
+State and the resume files it is written to and read from."""
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from inflo.formats.errors import FormatError
+from inflo.formats.errors import FormatError, InputError
 from inflo.formats.fcc import CanopyParams
 from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import RbaFrame
 from inflo.formats.scn import Placement, Scene
-from inflo.tools.fccompose.model import RbaSequence, Schedule, Template, assemble_model
+from inflo.tools.fccompose.compose import Simulation, _load_state, _save_state
+from inflo.tools.fccompose.model import RbaSequence, Schedule, State, Template, assemble_model
 from inflo.tools.pbd.constraints import signed_dihedral_angle, wrap_angle
 
 # a unit square of two triangles in its local frame, flat at frame 0 and folded along its
@@ -80,6 +82,21 @@ def test_schedule_is_a_named_tuple_and_places_the_templates():
     assert abs(rest_a[0]) > 0.1
 
 
+def test_simulation_of_an_assembled_model_grows_the_templates():
+    """Usable without files: frame 0 is the placed templates; a step onto frame 4, the last
+    template frame, puts the two florets, far apart, on their folded templates (the prediction
+    lands an undeformed floret on its template, where the rest values hold)."""
+    m = _model()
+    sim = Simulation(m)
+    st = sim.state
+    assert isinstance(st, State) and st.frame == 0 and st.born.all()
+    np.testing.assert_allclose(st.vertex_x, np.concatenate([SQUARE, SQUARE + [3, 0, 0]]), atol=1e-15)
+    np.testing.assert_array_equal(sim.initial_positions(), st.vertex_x)
+    res, waiting = sim.advance(0.0, 4.0, {})
+    assert waiting == [] and not len(res.remaining)
+    np.testing.assert_allclose(sim.state.vertex_x, np.concatenate([FOLDED, FOLDED + [3, 0, 0]]), atol=1e-9)
+
+
 def test_rba_florets_emerge_at_their_first_listed_frame():
     row = lambda ids: RbaFrame(ids, [[2.0 * i, 0, 0] for i in ids], [[1, 1, 1]] * len(ids),  # noqa: E731
                                [[0, 1, 0]] * len(ids), [[1, 0, 0]] * len(ids))
@@ -90,9 +107,9 @@ def test_rba_florets_emerge_at_their_first_listed_frame():
     m = assemble_model(CanopyParams(), {Path("s.scn"): scene}, {0: _template()}, {Path("s.scn"): seq})
     np.testing.assert_array_equal(m.floret_birth, [0, 2])
     assert m.n_frames == 2
-    x = np.zeros((8, 3))
-    m.template_positions(m.schedule(0.0), vertices=np.arange(8, dtype=np.int32), out=x)
-    np.testing.assert_allclose(x[4:], SQUARE + [2, 0, 0])  # it waits at its first RBA pose
+    st = State.at_start(m)
+    np.testing.assert_array_equal(st.born, [True, False])
+    np.testing.assert_allclose(st.vertex_x[4:], SQUARE + [2, 0, 0])  # waits at its first RBA pose
     with pytest.raises(FormatError, match="'rigid body animation' line"):
         assemble_model(CanopyParams(), {Path("s.scn"): scene}, {0: _template()})
 
@@ -101,3 +118,29 @@ def test_a_placement_naming_no_template_is_refused():
     scenes = {Path("a.scn"): Scene([_ca(0.0, 1), Placement("ca", 7, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0])])}
     with pytest.raises(FormatError, match=r"a.scn: expected placement ids naming .* found id 7 \(placement 1"):
         assemble_model(CanopyParams(), scenes, {0: _template()})
+
+
+def test_state_files_keep_their_format(tmp_path):
+    """The resume files are written from a State and read into one: the same files and json keys
+    as before the State existed (run.json: fingerprint, frame, not_emerged, emerged_smaller; the
+    positions as state/frame_NNNN.npy), so a folder an older fccompose wrote still resumes."""
+    m = _model()
+    nf, n = len(m.florets), m.n_vertices
+    x = np.random.default_rng(1).normal(size=(n, 3))
+    st = State(x, 3, np.array([True, False]), np.array([0.75, 1.0]), np.array([1.5, 0.0]))
+    (tmp_path / "frame_0003.obj").write_text("")
+    _save_state(tmp_path, st, "abc")
+    assert (tmp_path / "state" / "run.json").read_text() == (
+        '{"fingerprint": "abc", "frame": 3, "not_emerged": [1], "emerged_smaller": [[0, 0.75, 1.5]]}\n')
+    back = _load_state(tmp_path, "abc", m)
+    assert back.frame == 3 and back.vertex_x.tobytes() == x.tobytes()
+    np.testing.assert_array_equal(back.born, st.born)
+    np.testing.assert_array_equal(back.emerge_scale, st.emerge_scale)
+    np.testing.assert_array_equal(back.emerge_frame, st.emerge_frame)
+    # everything present at its own size: the two optional keys are left out
+    _save_state(tmp_path, State(x, 4, np.ones(nf, bool), np.ones(nf), np.zeros(nf)), "abc")
+    assert json.loads((tmp_path / "state" / "run.json").read_text()) == {"fingerprint": "abc", "frame": 4}
+    assert sorted(p.name for p in (tmp_path / "state").iterdir()) == ["frame_0004.npy", "run.json"]
+    assert _load_state(tmp_path, "abc", m) is None  # frame_0004.obj is missing: nothing to resume
+    with pytest.raises(InputError, match="different parameters"):
+        _load_state(tmp_path, "other", m)

@@ -44,8 +44,13 @@ The canopy is written as ``OUT/frame_NNNN.obj`` (frame 0 is the initial state) e
 period and at the last frame, one OBJ group ``floret_<index>`` per floret and per triangle the
 ``usemtl`` of its template OBJ (a floret's organs keep their materials), else ``mtl<id>`` from the
 SCN ``mtl:`` lines (:attr:`.model.Model.face_materials`). ``OUT/log.csv`` (:mod:`.log`) has a row per frame. Next to every
-written frame ``OUT/state/frame_NNNN.npy`` keeps the exact float64 positions so that ``resume``
-continues bit-identically from the last complete frame.
+written frame ``OUT/state/`` keeps the run's :class:`.model.State` (``frame_NNNN.npy``: the exact
+float64 positions; ``run.json``: the frame, the inputs' fingerprint and which florets have emerged,
+at what size) so that ``resume`` continues bit-identically from the last complete frame.
+
+The split of :mod:`.model`: :class:`.model.Model` is what never changes, :class:`.model.State`
+what a frame hands to the next, and :class:`Simulation` the control (solver settings, rest
+values, the present florets' collision system, caches) that moves the state one step at a time.
 """
 from __future__ import annotations
 
@@ -55,6 +60,7 @@ import io
 import json
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -83,7 +89,7 @@ from inflo.tools.pbd.solver import (
 )
 
 from .log import FrameLog, read_log, write_log
-from .model import Model, Schedule, build_model, carry
+from .model import Model, Schedule, State, build_model, carry
 
 __all__ = ["ComposeResult", "CollisionError", "InitialIntersectionError", "SimulationDiverged", "compose_canopy",
            "Simulation"]
@@ -145,8 +151,47 @@ def _ids_text(ids, most: int = 20) -> str:
     return ", ".join(map(str, ids[:most])) + (" ..." if len(ids) > most else "")
 
 
+@dataclass(frozen=True)
+class Present:
+    """The collision system of the florets present (:meth:`Simulation.set_born`): the model's
+    own arrays, and None for the masks and renumbering, when every floret is present."""
+
+    tri_on: np.ndarray | None
+    """(m,) bool over the model's triangles: those of present florets"""
+    tri_ids: np.ndarray | None
+    """(k,) int32: their indices"""
+    tri: np.ndarray
+    """(k, 3) int32: their triangles (global vertex ids)"""
+    vertex_ids: np.ndarray | None
+    """the present florets' vertices (global ids)"""
+    tri_local: np.ndarray
+    """(k, 3) int32: their triangles, numbered in ``vertex_ids``"""
+    edge_on: np.ndarray | None
+    """(e,) bool over the model's edges: those of present florets"""
+    edge_local: np.ndarray
+    """their edges, numbered in ``vertex_ids``"""
+
+    @classmethod
+    def of(cls, model: Model, born: np.ndarray) -> "Present":
+        """The system of the florets of the (nf,) bool mask ``born``."""
+        m = model
+        if born.all():
+            return cls(None, None, m.tri_indices, None, m.tri_indices, None, m.edge_indices)
+        tri_on = born[m.tri_floret]
+        tri = np.ascontiguousarray(m.tri_indices[tri_on])
+        # the collision system of the present florets alone: their vertices, renumbered
+        vertex_ids = np.nonzero(born[m.vertex_floret])[0]
+        local = np.full(m.n_vertices, -1, np.int32)
+        local[vertex_ids] = np.arange(len(vertex_ids), dtype=np.int32)
+        e_on = born[m.vertex_floret[m.edge_indices[:, 0]]]
+        return cls(tri_on, np.nonzero(tri_on)[0].astype(np.int32), tri, vertex_ids,
+                   np.ascontiguousarray(local[tri]), e_on, np.ascontiguousarray(local[m.edge_indices[e_on]]))
+
+
 class Simulation:
-    """The solver state and one-step update of Algorithm 1 (usable without files, e.g. benchmarks).
+    """The control of Algorithm 1: solver settings and caches over a static :class:`.model.Model`,
+    and the one-step update of its changing :class:`.model.State` (usable without files, e.g.
+    benchmarks).
 
     Parameters
     ----------
@@ -154,6 +199,18 @@ class Simulation:
     coloured : bool
         Solve internal constraints colour by colour in parallel (see :mod:`inflo.tools.pbd.solver`);
         False (default): the serial Gauss-Seidel sweep.
+    state : State or None
+        Where to start (e.g. one ``--resume`` read back, :meth:`restore`); None: frame 0
+        (:meth:`.model.State.at_start`).
+
+    Attributes
+    ----------
+    state : State
+        Positions, frame and emergence; :meth:`advance` moves it one step.
+    present : Present
+        The collision system of the florets present (derived from ``state.born``).
+    edge_rest_length, hinge_rest_angle : (e,), (h,) float64
+        Rest values at the last time :meth:`update_rest` was given.
 
     The default solve is floret by floret (internal constraints never join two florets), florets
     in parallel, each the serial Gauss-Seidel order of its own constraints
@@ -163,7 +220,7 @@ class Simulation:
     prediction puts them on their templates), so only florets in contact pay for the iterations.
     """
 
-    def __init__(self, model: Model, *, coloured: bool = False):
+    def __init__(self, model: Model, *, coloured: bool = False, state: State | None = None):
         self.model = model
         p = model.params
         self.params = p
@@ -181,48 +238,32 @@ class Simulation:
             self.hinge_parts = np.array([0, len(model.hinge_indices)], np.int64)
         self.one_part = len(self.edge_parts) - 1 != nf
         self.sweeps = np.zeros(len(self.edge_parts) - 1, np.int64)
-        # emergence at a smaller size (the module doc): per floret the size it emerged at and when
-        self.emerge_scale = np.ones(nf)
-        self.emerge_frame = np.zeros(nf)
-        self.set_born(model.floret_birth <= 0)
-        self._sched_frame = None
-        self._sched = None
+        self._sched = None  # (frame, Schedule) of the last schedule() call
+        # measured on the first positions detected from (the module doc of inflo.tools.collide)
         self.cell_size = None
         self.converged_below = None
+        self.restore(State.at_start(model) if state is None else state)
+
+    def restore(self, state: State) -> None:
+        """Go on from ``state``: its florets present, the rest values of its frame."""
+        self.state = state
+        self._sched = None
+        self.set_born(state.born)
+        self.update_rest(float(state.frame))
 
     def set_born(self, born: np.ndarray) -> None:
         """Make the florets of the (nf,) bool mask ``born`` the canopy: only their triangles and
         edges enter collision detection, the sanity checks and the output (see the module doc)."""
-        m = self.model
-        self.born = np.asarray(born, dtype=bool).copy()
-        if self.born.all():
-            self.tri_on = None
-            self.tri_active_ids = None
-            self.tri_active = m.tri_indices
-            self.vertex_ids = None
-            self.tri_local = m.tri_indices
-            self.edge_local = m.edge_indices
-            self.edge_on = None
-            return
-        self.tri_on = self.born[m.tri_floret]
-        self.tri_active_ids = np.nonzero(self.tri_on)[0].astype(np.int32)
-        self.tri_active = np.ascontiguousarray(m.tri_indices[self.tri_on])
-        # the collision system of the present florets alone: their vertices, renumbered
-        self.vertex_ids = np.nonzero(self.born[m.vertex_floret])[0]
-        local = np.full(m.n_vertices, -1, np.int32)
-        local[self.vertex_ids] = np.arange(len(self.vertex_ids), dtype=np.int32)
-        e_on = self.born[m.vertex_floret[m.edge_indices[:, 0]]]
-        self.tri_local = np.ascontiguousarray(local[self.tri_active])
-        self.edge_on = e_on
-        self.edge_local = np.ascontiguousarray(local[m.edge_indices[e_on]])
+        self.state.born = np.asarray(born, dtype=bool).copy()
+        self.present = Present.of(self.model, self.state.born)
 
     def global_tris(self, pairs: np.ndarray) -> np.ndarray:
-        """Triangle pairs indexing :attr:`tri_active` -> indices into the model's triangles."""
-        return pairs if self.tri_active_ids is None else self.tri_active_ids[pairs]
+        """Triangle pairs indexing ``present.tri`` -> indices into the model's triangles."""
+        return pairs if self.present.tri_ids is None else self.present.tri_ids[pairs]
 
     def intersecting(self, x: np.ndarray) -> np.ndarray:
         """Exact static test of the present canopy: intersecting triangle pairs (model indices)."""
-        return self.global_tris(intersecting_pairs(x, self.tri_active))
+        return self.global_tris(intersecting_pairs(x, self.present.tri))
 
     def emerge(self, x: np.ndarray, frame: float) -> tuple[list, list]:
         """Let the florets due by ``frame`` emerge where they intersect nothing (module doc).
@@ -234,11 +275,12 @@ class Simulation:
         smaller. Returns (the florets that emerged, those still waiting), placement indices.
         """
         m = self.model
-        due = ~self.born & (m.floret_birth <= frame + 1e-9)
+        st = self.state
+        due = ~st.born & (m.floret_birth <= frame + 1e-9)
         if not due.any():
             return [], []
         cand = np.nonzero(due)[0]
-        born = self.born.copy()
+        born = st.born.copy()
         out: list = []
         for size in self.params.emergence_scales:
             if not len(cand):
@@ -263,15 +305,15 @@ class Simulation:
                 due[c] = False
                 out.append(c)
                 if size < 1.0:
-                    self.emerge_scale[c] = size
-                    self.emerge_frame[c] = frame
+                    st.emerge_scale[c] = size
+                    st.emerge_frame[c] = frame
             cand = np.array(left, np.int64)
             if size < 1.0 and len(cand):
                 self._pose(x, cand, frame, 1.0)  # still waiting: back at their own size
         if out:
-            self._sched_frame = None
+            self._sched = None
             self.set_born(born)
-            if (self.emerge_scale[out] < 1.0).any():
+            if (st.emerge_scale[out] < 1.0).any():
                 self.update_rest(frame)  # the rest values of the smaller florets' size
         return out, cand.tolist()
 
@@ -288,28 +330,26 @@ class Simulation:
     def size_factor(self, frame: float) -> np.ndarray:
         """(nf,) the size of each floret relative to its own at ``frame``: 1, or growing linearly
         from the size it emerged at to 1 over ``emergence growth frames``."""
-        s0 = self.emerge_scale
-        g = s0 + (1.0 - s0) * (frame - self.emerge_frame) / float(self.params.emergence_growth_frames)
+        s0 = self.state.emerge_scale
+        g = s0 + (1.0 - s0) * (frame - self.state.emerge_frame) / float(self.params.emergence_growth_frames)
         return np.clip(np.where(s0 < 1.0, g, 1.0), 0.0, 1.0)
 
     def schedule(self, frame: float) -> Schedule:
         """:meth:`.model.Model.schedule` at ``frame``, each floret's placement scaled by
         :meth:`size_factor` (about its base: the floret's local origin)."""
-        if self._sched_frame != frame:
+        if self._sched is None or self._sched[0] != frame:
             sched = self.model.schedule(frame)
-            if (self.emerge_scale < 1.0).any():
+            if (self.state.emerge_scale < 1.0).any():
                 mats = sched.matrix.copy()
                 mats[:, :, :3] *= self.size_factor(frame)[:, None, None]
                 sched = sched._replace(matrix=mats)
-            self._sched = sched
-            self._sched_frame = frame
-        return self._sched
+            self._sched = (frame, sched)
+        return self._sched[1]
 
     def initial_positions(self) -> np.ndarray:
-        """Positions of frame 0: every floret's template at its time, placed."""
-        m = self.model
-        x = np.zeros((m.n_vertices, 3))
-        m.template_positions(self.schedule(0.0), vertices=np.arange(m.n_vertices, dtype=np.int32), out=x)
+        """Positions of frame 0: every floret's template at its time, placed
+        (:meth:`.model.State.at_start`); the rest values become frame 0's."""
+        x = State.at_start(self.model).vertex_x
         self.update_rest(0.0)
         return x
 
@@ -317,6 +357,15 @@ class Simulation:
         """The rest values (:attr:`edge_rest_length`, :attr:`hinge_rest_angle`) at ``frame``."""
         self.model.rest_values(self.schedule(frame), edge_rest_length=self.edge_rest_length,
                                hinge_rest_angle=self.hinge_rest_angle)
+
+    def advance(self, frame_from: float, frame_to: float, timing: dict) -> tuple[CollisionResult, list]:
+        """One step of :attr:`state` from ``frame_from`` to ``frame_to`` (:meth:`step`), then the
+        emergence of the florets due by then (:meth:`emerge`). Returns the step's CollisionResult
+        and the florets still waiting (placement indices)."""
+        st = self.state
+        st.vertex_x, res = self.step(st.vertex_x, frame_from, frame_to, timing)
+        _, waiting = self.emerge(st.vertex_x, frame_to)
+        return res, waiting
 
     def _cell(self, x: np.ndarray) -> float:
         if self.cell_size is None:
@@ -350,10 +399,10 @@ class Simulation:
     def stretch_range(self, x: np.ndarray) -> tuple[float, float]:
         """(smallest, largest) edge length / rest length of the present florets (log columns)."""
         m = self.model
-        if self.edge_on is None:
+        on = self.present.edge_on
+        if on is None:
             return edge_stretch_range(x, m.edge_indices, self.edge_rest_length, self.stretch_floor)
-        return edge_stretch_range(x, m.edge_indices[self.edge_on], self.edge_rest_length[self.edge_on],
-                                  self.stretch_floor)
+        return edge_stretch_range(x, m.edge_indices[on], self.edge_rest_length[on], self.stretch_floor)
 
     def step(self, x: np.ndarray, frame_from: float, frame_to: float, timing: dict, depth: int = 0):
         """One simulation step from ``frame_from`` to ``frame_to``; returns (new x, CollisionResult).
@@ -373,8 +422,8 @@ class Simulation:
             xm, r1 = self.step(x, frame_from, mid, timing, depth + 1)
             xp, r2 = self.step(xm, mid, frame_to, timing, depth + 1)
             return xp, _merged(res, r1, r2)
-        if len(res.remaining) and self.vertex_ids is not None:
-            res.remaining.indices = self.vertex_ids[res.remaining.indices]
+        if len(res.remaining) and self.present.vertex_ids is not None:
+            res.remaining.indices = self.present.vertex_ids[res.remaining.indices]
         return xp, res
 
     def _attempt(self, x: np.ndarray, frame_from: float, frame_to: float, timing: dict,
@@ -423,7 +472,8 @@ class Simulation:
         kw = dict(thickness=p.spacing, stiffness=p.k_collision, iterations=p.collision_iterations,
                   max_retries=p.max_collision_retries, tolerance=default_tolerance(x, p.spacing),
                   cell_size=self._cell(x), fallback="parts")
-        v = self.vertex_ids
+        present = self.present
+        v = present.vertex_ids
         nf = len(m.florets)
         lo, hi = p.stretch_bounds
         # checked with a 1 % margin, so that the written (rounded) frame is within the bounds too
@@ -433,9 +483,9 @@ class Simulation:
             x0s, x1s, tri, edges, vp = x, xp, m.tri_indices, m.edge_indices, m.vertex_floret
             rest = self.edge_rest_length
         else:  # florets yet to emerge take no part: solve the present ones' system, then scatter
-            x0s, x1s, tri, edges = x[v], xp[v], self.tri_local, self.edge_local
+            x0s, x1s, tri, edges = x[v], xp[v], present.tri_local, present.edge_local
             vp = m.vertex_floret[v]
-            rest = self.edge_rest_length[self.edge_on]
+            rest = self.edge_rest_length[present.edge_on]
         relax = None
         if p.relax_iterations > 0 and p.solver_iterations > 0 and not self.coloured:
             relax = self._relaxer(xp, v, vp, int(p.relax_iterations), timing)
@@ -585,19 +635,23 @@ def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndar
     return path
 
 
-def _save_state(out: Path, x: np.ndarray, k: int, fingerprint: str, born: np.ndarray | None = None,
-                sim: "Simulation | None" = None) -> None:
+def _save_state(out: Path, state: State, fingerprint: str) -> None:
+    """Write ``state`` to ``out/state/``: ``frame_NNNN.npy`` (the exact float64 positions, the
+    only one kept) and ``run.json`` (``fingerprint``, ``frame``; ``not_emerged``: the florets not
+    yet present, ``emerged_smaller``: [floret, size, frame] of those that emerged smaller, each
+    only when there are any)."""
     sdir = out / "state"
     sdir.mkdir(exist_ok=True)
     buf = io.BytesIO()
-    np.save(buf, x, allow_pickle=False)
+    np.save(buf, state.vertex_x, allow_pickle=False)
+    k = int(state.frame)
     write_bytes_atomic(sdir / frame_name(k, "frame_", ".npy", 4), buf.getvalue())
     info = {"fingerprint": fingerprint, "frame": k}
-    if born is not None and not born.all():
-        info["not_emerged"] = np.nonzero(~born)[0].tolist()
-    if sim is not None and (sim.emerge_scale < 1.0).any():
-        small = np.nonzero(sim.emerge_scale < 1.0)[0]
-        info["emerged_smaller"] = [[int(i), float(sim.emerge_scale[i]), float(sim.emerge_frame[i])]
+    if not state.born.all():
+        info["not_emerged"] = np.nonzero(~state.born)[0].tolist()
+    small = np.nonzero(state.emerge_scale < 1.0)[0]
+    if len(small):
+        info["emerged_smaller"] = [[int(i), float(state.emerge_scale[i]), float(state.emerge_frame[i])]
                                    for i in small]
     write_text_atomic(sdir / "run.json", json.dumps(info) + "\n")
     for old in sorted(sdir.glob("frame_*.npy")):
@@ -605,7 +659,9 @@ def _save_state(out: Path, x: np.ndarray, k: int, fingerprint: str, born: np.nda
             old.unlink()
 
 
-def _load_resume(out: Path, fingerprint: str, n_vertices: int):
+def _load_state(out: Path, fingerprint: str, model: Model) -> State | None:
+    """The :class:`State` :func:`_save_state` wrote to ``out/state/``; None when there is none or
+    its frame's OBJ is missing (nothing to resume: start from frame 0)."""
     sdir = out / "state"
     run = sdir / "run.json"
     if not run.is_file():
@@ -620,9 +676,30 @@ def _load_resume(out: Path, fingerprint: str, n_vertices: int):
     if not st.is_file() or not obj.is_file():
         return None
     x = np.load(st, allow_pickle=False)
-    if x.shape != (n_vertices, 3):
-        raise InputError(f"{st}: expected positions of {n_vertices} vertices, found shape {x.shape}")
-    return k, x, [int(i) for i in info.get("not_emerged", [])], info.get("emerged_smaller", [])
+    if x.shape != (model.n_vertices, 3):
+        raise InputError(f"{st}: expected positions of {model.n_vertices} vertices, found shape {x.shape}")
+    nf = len(model.florets)
+    born = np.ones(nf, bool)
+    born[[int(i) for i in info.get("not_emerged", [])]] = False
+    emerge_scale, emerge_frame = np.ones(nf), np.zeros(nf)
+    for i, size, frame in info.get("emerged_smaller", []):
+        emerge_scale[int(i)] = size
+        emerge_frame[int(i)] = frame
+    return State(x, k, born, emerge_scale, emerge_frame)
+
+
+@dataclass
+class _Run:
+    """What a run of :func:`compose_canopy` keeps beside its :class:`Simulation`: where it
+    writes, how it reports, what it has logged."""
+
+    sim: Simulation
+    out: Path
+    fingerprint: str
+    strict: bool
+    warn: Callable
+    result: ComposeResult
+    log_rows: list = field(default_factory=list)
 
 
 def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, strict: bool = False,
@@ -661,76 +738,61 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
     model = build_model(params)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    sim = Simulation(model, coloured=coloured)
     fp = _fingerprint(params, model)
-    every = params.output_every
     n = model.n_frames
-    result = ComposeResult(n_triangles=model.n_triangles, n_vertices=model.n_vertices, last_frame=n)
-    warn = warn or (lambda msg: None)
-    log_rows: list = []
-
-    start = None
-    if resume:
-        start = _load_resume(out, fp, model.n_vertices)
-    if start is not None:
-        k0, x, not_emerged, smaller = start
-        born = np.ones(len(model.florets), bool)
-        born[not_emerged] = False
-        sim.set_born(born)
-        for i, size, frame in smaller:
-            sim.emerge_scale[int(i)] = size
-            sim.emerge_frame[int(i)] = frame
-        log_rows = [r for r in read_log(out / "log.csv") if r and int(r[0]) <= k0]
-        result.first_frame = k0 + 1
-        sim.update_rest(float(k0))
+    state = _load_state(out, fp, model) if resume else None
+    run = _Run(Simulation(model, coloured=coloured, state=state), out, fp, strict, warn or (lambda msg: None),
+               ComposeResult(n_triangles=model.n_triangles, n_vertices=model.n_vertices, last_frame=n))
+    result = run.result
+    if state is not None:
+        run.log_rows = [r for r in read_log(out / "log.csv") if r and int(r[0]) <= state.frame]
+        result.first_frame = state.frame + 1
     else:
-        k0 = 0
-        x = sim.initial_positions()
-        row = FrameLog(0, 0)
-        t0 = time.perf_counter()
-        pairs = sim.intersecting(x)
-        row["t_sanity_s"] = time.perf_counter() - t0
-        row["intersecting_pairs"] = len(pairs)
-        row["florets_present"] = int(sim.born.sum())
-        if len(pairs):
-            fl = _pairs_by_floret(model, pairs)
-            msg = (f"{params.source}: expected a collision-free first frame (thesis 4.2), found "
-                   f"{len(pairs)} intersecting triangle pairs between florets {_florets_text(fl[:20])}"
-                   + (" ..." if len(fl) > 20 else "")
-                   + " (placement indices; --allow-initial-intersections to go on)")
-            if not allow_initial_intersections:
-                raise InitialIntersectionError(msg)
-            warn(msg)
-        row["rms_edge_error"] = distance_residual(x, model.edge_indices, sim.edge_rest_length)
-        row["rms_dihedral_error_deg"] = math.degrees(
-            bending_residual(x, model.hinge_indices, sim.hinge_rest_angle))
-        row["min_edge_stretch"], row["max_edge_stretch"] = sim.stretch_range(x)
-        t0 = time.perf_counter()
-        result.frames_written.append(_write_frame(out, model, x, 0, sim.tri_on))
-        _save_state(out, x, 0, fp, sim.born, sim)
-        row["t_write_s"] = time.perf_counter() - t0
-        log_rows.append(row)
-        write_log(out / "log.csv", log_rows)
+        _first_frame(run, allow_initial_intersections)
         result.first_frame = 1
 
+    k0 = run.sim.state.frame
     bar_cm = progress(n - k0) if progress else contextlib.nullcontext(None)
     with bar_cm as bar:
-        _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_rows, result, bar)
+        _run_frames(run, bar)
     if result.waiting:
         ids = result.waiting
-        warn(f"{len(ids)} florets due to emerge found no room by frame {n} (placement indices "
-             f"{_ids_text(ids)}): each intersects the "
-             f"canopy, or itself, where its RBA files place it")
+        run.warn(f"{len(ids)} florets due to emerge found no room by frame {n} (placement indices "
+                 f"{_ids_text(ids)}): each intersects the "
+                 f"canopy, or itself, where its RBA files place it")
     # frames of an earlier, longer run in the same folder are not part of this one
+    every = params.output_every
     remove_stale_frames(out, [frame_name(k, "frame_", ".obj", 4) for k in range(n + 1)
                               if k % every == 0 or k == n], ".obj")
     result.seconds = time.perf_counter() - t_start
     return result
 
 
-def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_rows, result, bar):
+def _first_frame(run: _Run, allow_initial_intersections: bool) -> None:
+    """Frame 0, the initial state: it must be collision-free (thesis 4.2); logged and written."""
+    row = FrameLog(0, 0)
+    pairs = _end_of_frame(run, row, check=True)
+    if len(pairs):
+        fl = _pairs_by_floret(run.sim.model, pairs)
+        msg = (f"{run.sim.params.source}: expected a collision-free first frame (thesis 4.2), found "
+               f"{len(pairs)} intersecting triangle pairs between florets {_florets_text(fl[:20])}"
+               + (" ..." if len(fl) > 20 else "")
+               + " (placement indices; --allow-initial-intersections to go on)")
+        if not allow_initial_intersections:
+            raise InitialIntersectionError(msg)
+        run.warn(msg)
+    _record(run, row, write=True)
+
+
+def _run_frames(run: _Run, bar) -> None:
+    """Frames ``state.frame + 1`` to the last: ``updates per frame`` steps each, with the
+    emergence after every step; the frame's log row; its OBJ and state every output period and
+    at the last frame."""
+    sim = run.sim
+    params, model, st = sim.params, sim.model, sim.state
     upf = params.updates_per_frame
-    for k in range(k0 + 1, n + 1):
+    n, every = model.n_frames, params.output_every
+    for k in range(st.frame + 1, n + 1):
         row = FrameLog(k, upf)
         timing: dict = {}
         remaining = []
@@ -739,9 +801,8 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
         for s in range(upf):
             f_from = (k - 1) + s / upf
             f_to = (k - 1) + (s + 1) / upf
-            x, res = sim.step(x, f_from, f_to, timing)
-            _, waiting = sim.emerge(x, f_to)
-            result.steps += 1
+            res, waiting = sim.advance(f_from, f_to, timing)
+            run.result.steps += 1
             row["vt_candidates"] += res.stats.get("vt_candidates", 0)
             row["ee_candidates"] += res.stats.get("ee_candidates", 0)
             row["collisions_found"] += res.found[0] if res.found else 0
@@ -759,43 +820,62 @@ def _run_frames(params, model, sim, out, x, k0, n, every, strict, warn, fp, log_
             msg = (f"frame {k}: {row['remaining_pairs']} colliding pairs left after "
                    f"{params.max_collision_retries} retries between florets {_florets_text(remaining[:20])}"
                    f" (those florets were moved back along their own motion, whole)")
-            result.remaining_reports.append((k, remaining))
-            if strict:
+            run.result.remaining_reports.append((k, remaining))
+            if run.strict:
                 raise CollisionError(msg)
-            warn(msg)
-        sim.check_whole(x, k)
+            run.warn(msg)
+        sim.check_whole(st.vertex_x, k)
+        st.frame = k
         row["substeps"] = timing.get("substeps", 0)
         row["relax_sweeps"] = timing.get("relax_sweeps", 0)
         row["florets_retreated"] = len(retreated)
-        row["min_edge_stretch"], row["max_edge_stretch"] = sim.stretch_range(x)
         row["florets_smaller"] = int(np.count_nonzero(sim.size_factor(float(k)) < 1.0))
         row["t_rest_s"] = timing.get("rest", 0.0)
         row["t_internal_s"] = timing.get("internal", 0.0)
         row["t_collide_s"] = timing.get("collide", 0.0)
-        row["rms_edge_error"] = distance_residual(x, model.edge_indices, sim.edge_rest_length)
-        row["rms_dihedral_error_deg"] = math.degrees(
-            bending_residual(x, model.hinge_indices, sim.hinge_rest_angle))
-        row["florets_present"] = int(sim.born.sum())
         row["florets_waiting"] = len(waiting)
-        result.waiting = waiting
-        if params.sanity_check_every and k % params.sanity_check_every == 0:
-            t0 = time.perf_counter()
-            pairs = sim.intersecting(x)
-            row["t_sanity_s"] = time.perf_counter() - t0
-            row["intersecting_pairs"] = len(pairs)
-            if len(pairs):
-                fl = _pairs_by_floret(model, pairs)
-                msg = (f"frame {k}: sanity check found {len(pairs)} intersecting triangle pairs "
-                       f"between florets {_florets_text(fl[:20])}")
-                if strict:
-                    raise CollisionError(msg)
-                warn(msg)
-        log_rows.append(row)
-        if k % every == 0 or k == n:
-            t0 = time.perf_counter()
-            result.frames_written.append(_write_frame(out, model, x, k, sim.tri_on))
-            _save_state(out, x, k, fp, sim.born, sim)
-            row["t_write_s"] = time.perf_counter() - t0
-            write_log(out / "log.csv", log_rows)
+        run.result.waiting = waiting
+        check = bool(params.sanity_check_every) and k % params.sanity_check_every == 0
+        pairs = _end_of_frame(run, row, check=check)
+        if pairs is not None and len(pairs):
+            fl = _pairs_by_floret(model, pairs)
+            msg = (f"frame {k}: sanity check found {len(pairs)} intersecting triangle pairs "
+                   f"between florets {_florets_text(fl[:20])}")
+            if run.strict:
+                raise CollisionError(msg)
+            run.warn(msg)
+        _record(run, row, write=k % every == 0 or k == n)
         if bar is not None:
             bar.update(1)
+
+
+def _end_of_frame(run: _Run, row: FrameLog, *, check: bool) -> np.ndarray | None:
+    """The log columns of the state at the end of a frame: residuals, stretch, florets present
+    and, ``check``, the exact static intersection test. Returns its intersecting triangle pairs
+    (model indices), None when not checked."""
+    sim = run.sim
+    m, x = sim.model, sim.state.vertex_x
+    row["min_edge_stretch"], row["max_edge_stretch"] = sim.stretch_range(x)
+    row["rms_edge_error"] = distance_residual(x, m.edge_indices, sim.edge_rest_length)
+    row["rms_dihedral_error_deg"] = math.degrees(bending_residual(x, m.hinge_indices, sim.hinge_rest_angle))
+    row["florets_present"] = int(sim.state.born.sum())
+    if not check:
+        return None
+    t0 = time.perf_counter()
+    pairs = sim.intersecting(x)
+    row["t_sanity_s"] = time.perf_counter() - t0
+    row["intersecting_pairs"] = len(pairs)
+    return pairs
+
+
+def _record(run: _Run, row: FrameLog, *, write: bool) -> None:
+    """Log the frame's ``row``; ``write``: write the frame's OBJ and state, then the log."""
+    run.log_rows.append(row)
+    if write:
+        sim = run.sim
+        t0 = time.perf_counter()
+        run.result.frames_written.append(_write_frame(run.out, sim.model, sim.state.vertex_x, sim.state.frame,
+                                                      sim.present.tri_on))
+        _save_state(run.out, sim.state, run.fingerprint)
+        row["t_write_s"] = time.perf_counter() - t0
+        write_log(run.out / "log.csv", run.log_rows)

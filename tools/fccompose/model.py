@@ -11,7 +11,10 @@ files, instances every placement and concatenates the florets into one structure
   gives at any (fractional) frame each floret's developmental time and placement matrix (a
   :class:`Schedule`), and keyword wrappers of the kernels below that take a ``Schedule``
   (:meth:`Model.template_positions`, :meth:`Model.rest_values`, :meth:`Model.predict`).
-- ``State`` (changing): ``vertex_x`` and the frame reached.
+- ``State`` (changing): the positions ``vertex_x``, the last frame completed and which florets
+  have emerged, at what size and when; what ``fccompose --resume`` saves and loads
+  (:mod:`.compose`). The solver's settings and caches (the control) are
+  :class:`inflo.tools.fccompose.compose.Simulation`'s.
 
 Rest values at a time (edge lengths, eq. 3.11; signed dihedral angles, eq. 3.13) are computed
 from the two template frames around the floret's developmental time, each mapped through the
@@ -399,10 +402,42 @@ class Model:
 
 @dataclass
 class State:
-    """Changing data: positions and the last frame completed."""
+    """Changing data of the canopy: everything a run carries from one frame to the next.
+
+    ``fccompose`` writes it next to every output frame and ``--resume`` reads it back
+    (``OUT/state/``, :mod:`.compose`), so a resumed run continues bit-identically.
+
+    Attributes
+    ----------
+    vertex_x : (n, 3) float64
+        Positions after the last step.
+    frame : int
+        The last frame completed.
+    born : (nf,) bool
+        The florets that have emerged (the canopy; the others wait at their first RBA pose).
+    emerge_scale : (nf,) float64
+        The size (a fraction of its own) each floret emerged at: 1, or one of the ``emergence
+        scales`` when it had no room at its own size.
+    emerge_frame : (nf,) float64
+        The (fractional) frame it emerged at that size; it grows back to its own size from there.
+    """
 
     vertex_x: np.ndarray
-    frame: int = 0
+    frame: int
+    born: np.ndarray
+    emerge_scale: np.ndarray
+    emerge_frame: np.ndarray
+
+    @classmethod
+    def at_start(cls, model: "Model", vertex_x: np.ndarray | None = None) -> "State":
+        """Frame 0: the florets whose emergence frame is 0 present at their own size; positions
+        ``vertex_x``, by default every floret's template at its time at frame 0, placed."""
+        nf = len(model.florets)
+        if vertex_x is None:
+            vertex_x = np.zeros((model.n_vertices, 3))
+            model.template_positions(model.schedule(0.0), vertices=np.arange(model.n_vertices, dtype=np.int32),
+                                     out=vertex_x)
+        return cls(vertex_x, 0, model.floret_birth <= 0, np.ones(nf), np.zeros(nf))
 
 
 def _ramp(frame: float, start, end) -> float:
