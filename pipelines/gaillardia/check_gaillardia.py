@@ -19,7 +19,7 @@ Prints, and fails (exit 1) on any of:
   run, the disk florets' height above the receptacle (in floret units: bud 0.8, open with the
   anthers up 1.1, late with the pistil up 1.5) must fall from the rim to the centre (Spearman rank
   correlation with the distance from the centre > 0.5), and some inner florets must still be in
-  bud;
+  bud (lower than 1.0: the anther tube not yet risen above the corolla);
 - **growth**: the head (its outermost floret bases) must grow at least three times in diameter
   from the first frame with florets to the last (fig. 9.4: "the dramatic, yet stable change in
   size due to the dynamic phyllotaxis").
@@ -46,6 +46,9 @@ RAYS = 21
 BOUNDS = (0.5, 1.5)
 LIMB_GAP = (0.3, 2.0)
 GROWTH = 3.0
+# a disk floret is in bud below this height (floret units): the bud is 0.78 high, the anther tube
+# rises above the corolla (0.9) to 1.12 by the open key pose (developmental time 0.55)
+BUD = 1.0
 
 
 def floret_faces(mesh) -> dict:
@@ -165,9 +168,9 @@ def main(build: Path) -> int:
     disk = [p for p in heights if types[p] == "disk"]
     h = np.array([heights[p] for p in disk])
     rho = float(spearmanr(radius[disk], h).statistic) if len(disk) > 2 else float("nan")
-    buds = int((h < 0.95).sum())
+    buds = int((h < BUD).sum())
     print(f"phase effect at frame {k}: {len(disk)} disk florets, height {h.min():.2f}-{h.max():.2f} floret units, "
-          f"rank correlation with the distance from the centre {rho:.2f}, {buds} still in bud (height < 0.95)")
+          f"rank correlation with the distance from the centre {rho:.2f}, {buds} still in bud (height < {BUD})")
     if not rho > 0.5:
         failures.append(f"no phase effect at frame {k}: rank correlation {rho:.2f}")
     if buds == 0:

@@ -46,14 +46,19 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 
 # polygonization per quality: (lambda, eta) of each organ; a .func name is written as is (relative
-# to the key pose's folder). The corolla's eta falls to 1 vertex at the lobe tips (lobe_eta_*.func)
+# to the key pose's folder). The corolla's eta falls to 1 vertex at the lobe tips (lobe_eta.func)
 # and the bract's at its acuminate tip (bract_eta_*.func; formats/fcc.md "Mesh quality matters").
+# The corolla keeps 3 vertices a row at both qualities: with the sunflower's final 5 (its
+# lobe_eta_final.func) the rim edges of the tube, where the lobes part, were a third of a median
+# edge and this head's crowded disk florets stretched them to 1.47 x rest (a first final build,
+# frames 55-71, with florets moved back by fccompose's fallback); the final's extra triangles go
+# into the anther tube and the pistil (slivers of aspect 10 and 20 at the draft's rows)
 # The tube and limb do not narrow to a point: a constant eta round the 300-degree arc, the rows
 # about as far apart as the columns
 RES = {
-    "draft": {"corolla": ("0.34", "../lobe_eta_draft.func"), "anthers": ("0.5", "3"), "pistil": ("1.0", "3"),
+    "draft": {"corolla": ("0.34", "../lobe_eta.func"), "anthers": ("0.5", "3"), "pistil": ("1.0", "3"),
               "tube": ("0.1", "7"), "limb": ("0.34", "9"), "bract": ("0.34", "../bract_eta_draft.func")},
-    "final": {"corolla": ("0.34", "../lobe_eta_final.func"), "anthers": ("1.0", "3"), "pistil": ("1.0", "3"),
+    "final": {"corolla": ("0.34", "../lobe_eta.func"), "anthers": ("0.34", "3"), "pistil": ("0.5", "3"),
               "tube": ("0.07", "9"), "limb": ("0.25", "13"), "bract": ("0.2", "../bract_eta_final.func")},
 }
 
