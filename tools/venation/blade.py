@@ -1,0 +1,354 @@
+"""The leaf blade (Runions sec. 4.2.2): a closed polygon with the point where it attaches to the
+petiole, its growth (secs. 4.2.3, 4.3; fig. 4.2) and its triangle mesh.
+
+The blade is given at scale 1 (a contour sampled by arc length, or a polygon) and grows about its
+base B: at step t its margin is ``B + diag(sigma_t) (P - B)``, with sigma_t the growth
+schedule's scale (:class:`Growth`). Points are tested against the scale-1 polygon after undoing
+the scale, through a band structure (the polygon's edges sorted into horizontal bands), so a test
+costs a few edges.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+__all__ = ["Blade", "BladeBands", "Growth", "blade_from_points", "inside_blade", "triangulate_blade",
+           "polygon_area", "self_intersections", "GROWTH_TYPES"]
+
+GROWTH_TYPES = ("none", "marginal", "uniform", "anisotropic")
+"""``none``: the blade does not grow; ``marginal``: the margin is scaled about the base, veins and
+sources stay (sec. 4.2.3); ``uniform``: isogonic growth, everything is scaled (by scaling the unit
+distance down instead, lambda_t = lambda_0 sigma_0 / sigma_t); ``anisotropic``: uniform
+anisotropic growth (fig. 4.2d), a scale per axis applied to the blade, the veins and the sources."""
+
+
+class BladeBands(NamedTuple):
+    """The polygon's edges sorted into ``nb`` horizontal bands of height 1 / ``inv_dy`` from ``y0``:
+    the edges overlapping band b are ``edge[start[b]:start[b + 1]]`` (edge i runs from vertex i to
+    vertex i + 1)."""
+
+    poly: np.ndarray  # (m, 2) float64
+    y0: float
+    inv_dy: float
+    nb: int
+    start: np.ndarray  # (nb + 1,) int64
+    edge: np.ndarray  # (E,) int64
+
+
+def polygon_area(poly) -> float:
+    """Signed area (positive counter-clockwise) of the closed polygon ``poly`` (m, 2)."""
+    p = np.asarray(poly, dtype=np.float64)
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def self_intersections(poly) -> tuple[int, int] | None:
+    """A pair of non-adjacent edges (i, j) of the closed polygon that cross, or None."""
+    p = np.asarray(poly, dtype=np.float64)
+    m = len(p)
+    a, b = p, np.roll(p, -1, axis=0)
+    lo = np.minimum(a, b)
+    hi = np.maximum(a, b)
+    order = np.argsort(lo[:, 0], kind="stable")
+    for oi, i in enumerate(order):
+        for j in order[oi + 1:]:
+            if lo[j, 0] > hi[i, 0]:
+                break
+            if abs(i - j) in (1, m - 1) or lo[j, 1] > hi[i, 1] or hi[j, 1] < lo[i, 1]:
+                continue
+            if _segments_cross(a[i], b[i], a[j], b[j]):
+                return (int(min(i, j)), int(max(i, j)))
+    return None
+
+
+def _segments_cross(p1, p2, q1, q2) -> bool:
+    def orient(a, b, c):
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+    d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
+    d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
+    return (d1 * d2 < 0) and (d3 * d4 < 0)
+
+
+def _bands(poly: np.ndarray) -> BladeBands:
+    m = len(poly)
+    y = poly[:, 1]
+    y0, y1 = float(y.min()), float(y.max())
+    nb = max(1, min(4096, m))
+    dy = (y1 - y0) / nb or 1.0
+    inv = 1.0 / dy
+    e_lo = np.minimum(y, np.roll(y, -1))
+    e_hi = np.maximum(y, np.roll(y, -1))
+    b0 = np.clip(np.floor((e_lo - y0) * inv).astype(np.int64), 0, nb - 1)
+    b1 = np.clip(np.floor((e_hi - y0) * inv).astype(np.int64), 0, nb - 1)
+    rows = [np.arange(a, b + 1) for a, b in zip(b0, b1)]
+    band_of = np.concatenate(rows)
+    edge_of = np.repeat(np.arange(m), [len(r) for r in rows])
+    order = np.lexsort((edge_of, band_of))
+    band_of, edge_of = band_of[order], edge_of[order]
+    counts = np.bincount(band_of, minlength=nb)
+    start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    return BladeBands(np.ascontiguousarray(poly), y0, inv, nb, start, edge_of.astype(np.int64))
+
+
+@njit(cache=True)
+def _inside(x, y, poly, y0, inv_dy, nb, start, edge):
+    """Crossing-number test of (x, y) against the polygon, using the band of y."""
+    b = np.int64(math.floor((y - y0) * inv_dy))
+    if b < 0 or b >= nb:
+        return False
+    m = poly.shape[0]
+    inside = False
+    for k in range(start[b], start[b + 1]):
+        i = edge[k]
+        j = i + 1 if i + 1 < m else 0
+        yi, yj = poly[i, 1], poly[j, 1]
+        if (yi > y) != (yj > y):
+            xc = poly[i, 0] + (y - yi) * (poly[j, 0] - poly[i, 0]) / (yj - yi)
+            if x < xc:
+                inside = not inside
+    return inside
+
+
+@njit(cache=True)
+def inside_blade(pts, base, scale, bands, out):
+    """``out[i]`` = point ``pts[i]`` lies inside the blade scaled by ``scale`` (2,) about ``base``."""
+    poly, y0, inv_dy, nb, start, edge = bands.poly, bands.y0, bands.inv_dy, bands.nb, bands.start, bands.edge
+    for i in range(pts.shape[0]):
+        x = base[0] + (pts[i, 0] - base[0]) / scale[0]
+        y = base[1] + (pts[i, 1] - base[1]) / scale[1]
+        out[i] = _inside(x, y, poly, y0, inv_dy, nb, start, edge)
+
+
+@dataclass(frozen=True)
+class Blade:
+    """A leaf blade at scale 1.
+
+    Attributes
+    ----------
+    polygon : (m, 2) float64
+        The margin, counter-clockwise, not closed (the last vertex joins the first).
+    base : (2,) float64
+        The attachment point to the petiole: the centre of growth and the default initial vein node.
+    bands : BladeBands
+    area : float
+        Area at scale 1.
+    """
+
+    polygon: np.ndarray
+    base: np.ndarray
+    bands: BladeBands
+    area: float
+
+    @property
+    def lo(self) -> np.ndarray:
+        return self.polygon.min(axis=0)
+
+    @property
+    def hi(self) -> np.ndarray:
+        return self.polygon.max(axis=0)
+
+    def scaled(self, scale) -> np.ndarray:
+        """(m, 2): the margin at ``scale`` (a number or (sx, sy)) about the base."""
+        s = np.broadcast_to(np.asarray(scale, dtype=np.float64), (2,))
+        return self.base + (self.polygon - self.base) * s
+
+    def contains(self, pts, scale=1.0) -> np.ndarray:
+        """(n,) bool: points (n, 2) inside the blade at ``scale``."""
+        p = np.ascontiguousarray(pts, dtype=np.float64).reshape(-1, 2)
+        out = np.zeros(len(p), np.bool_)
+        inside_blade(p, self.base, np.broadcast_to(np.asarray(scale, float), (2,)).copy(), self.bands, out)
+        return out
+
+    def distance_to_margin(self, pts, scale=1.0) -> np.ndarray:
+        """(n,) distances of points to the margin at ``scale``."""
+        poly = self.scaled(scale)
+        a, b = poly, np.roll(poly, -1, axis=0)
+        p = np.asarray(pts, dtype=np.float64).reshape(-1, 1, 2)
+        ab = b - a
+        t = np.clip(np.einsum("ijk,jk->ij", p - a, ab) / np.maximum(np.einsum("jk,jk->j", ab, ab), 1e-300), 0, 1)
+        q = a + t[..., None] * ab
+        return np.sqrt(((p - q) ** 2).sum(-1)).min(axis=1)
+
+
+def blade_from_points(points, base=None) -> Blade:
+    """A :class:`Blade` from margin points (m, 2) (either orientation, not closed).
+
+    ``base`` defaults to the lowest point of the margin (least y; among equals the one nearest the
+    middle in x). Raises ``ValueError`` for fewer than 3 points, a zero area or a self-crossing margin.
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if len(p) > 1 and np.allclose(p[0], p[-1]):
+        p = p[:-1]
+    if len(p) < 3:
+        raise ValueError(f"a blade needs at least 3 margin points, got {len(p)}")
+    a = polygon_area(p)
+    ext = float(np.ptp(p, axis=0).max())
+    if not abs(a) > 1e-12 * max(ext, 1e-300) ** 2:
+        raise ValueError("the margin encloses no area")
+    if a < 0:
+        p = p[::-1].copy()
+        a = -a
+    hit = self_intersections(p)
+    if hit is not None:
+        raise ValueError(f"the margin crosses itself (edges {hit[0]} and {hit[1]})")
+    if base is None:
+        ymin = p[:, 1].min()
+        low = np.flatnonzero(p[:, 1] <= ymin + 1e-9 * ext)
+        mid = 0.5 * (p[:, 0].min() + p[:, 0].max())
+        b = p[low[np.argmin(np.abs(p[low, 0] - mid))]]
+    else:
+        b = np.asarray(base, dtype=np.float64).reshape(2)
+    p.setflags(write=False)
+    b = b.copy()
+    b.setflags(write=False)
+    return Blade(polygon=p, base=b, bands=_bands(np.ascontiguousarray(p)), area=float(a))
+
+
+# --------------------------------------------------------------------------------------------
+# growth
+
+
+@dataclass(frozen=True)
+class Growth:
+    """The growth schedule: the blade's scale (sx, sy) at every step (sec. 4.2.3).
+
+    ``kind`` is one of :data:`GROWTH_TYPES`. ``scale_at(t)`` is ``initial + rate * t`` per axis until
+    ``final`` (``sigma_{t + dt} = sigma_t + delta sigma``), or ``f(t / steps)`` for growth functions
+    ``f`` (``.func``, x in [0, 1]); the blade stops growing after :attr:`steps` steps.
+    """
+
+    kind: str
+    initial: tuple[float, float] = (1.0, 1.0)
+    final: tuple[float, float] = (1.0, 1.0)
+    rate: tuple[float, float] = (0.0, 0.0)
+    functions: tuple | None = None  # (fx, fy): callables of x in [0, 1]
+    function_steps: int = 0
+
+    @property
+    def steps(self) -> int:
+        """Growth steps: after these the blade keeps its final size."""
+        if self.kind == "none":
+            return 0
+        if self.functions is not None:
+            return int(self.function_steps)
+        n = 0
+        for a, b, r in zip(self.initial, self.final, self.rate):
+            if b > a:
+                n = max(n, int(math.ceil((b - a) / r - 1e-9)))
+        return n
+
+    def scale_at(self, t: int) -> np.ndarray:
+        """(2,) float64: (sx, sy) at step t (clamped to the end of growth)."""
+        if self.kind == "none":
+            return np.ones(2)
+        if self.functions is not None:
+            x = 1.0 if self.function_steps <= 0 else min(max(t / self.function_steps, 0.0), 1.0)
+            return np.array([float(f(x)) for f in self.functions])
+        s = np.array(self.initial, dtype=np.float64) + np.array(self.rate, dtype=np.float64) * t
+        return np.minimum(s, np.maximum(np.array(self.final, dtype=np.float64), np.array(self.initial)))
+
+    @property
+    def final_scale(self) -> np.ndarray:
+        return self.scale_at(self.steps)
+
+
+# --------------------------------------------------------------------------------------------
+# triangle mesh
+
+
+def triangulate_blade(poly, spacing: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """A triangle mesh of the polygon (m, 2): its margin points (edges longer than ``spacing``
+    divided) plus interior points on a triangular lattice of ``spacing`` (default: 1/48 of the blade's
+    extent), Delaunay-triangulated
+    (scipy), keeping the triangles inside the margin. Falls back to ear clipping of the margin
+    alone when the triangulation does not respect the margin (the kept area differs from the
+    polygon's).
+
+    Returns
+    -------
+    vertices : (n, 2) float64
+        The margin points first, in order, then the interior points.
+    faces : (f, 3) int32, counter-clockwise
+    """
+    from scipy.spatial import Delaunay
+
+    p = np.asarray(poly, dtype=np.float64)
+    if polygon_area(p) < 0:
+        p = p[::-1]
+    edge = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
+    h = float(spacing) if spacing else float(np.ptp(p, axis=0).max()) / 48.0
+    # margin edges longer than the spacing are divided
+    pieces = np.maximum(1, np.ceil(edge / h - 1e-9).astype(np.int64))
+    if np.any(pieces > 1):
+        q = np.roll(p, -1, axis=0)
+        p = np.vstack([p[i] + (q[i] - p[i]) * (np.arange(k)[:, None] / k) for i, k in enumerate(pieces)])
+    lo, hi = p.min(0), p.max(0)
+    rows = np.arange(lo[1] + 0.5 * h, hi[1], h * math.sqrt(3) / 2)
+    pts = []
+    for k, y in enumerate(rows):
+        xs = np.arange(lo[0] + (0.5 + 0.5 * (k % 2)) * h, hi[0], h)
+        pts.append(np.column_stack([xs, np.full(len(xs), y)]))
+    inner = np.vstack(pts) if pts else np.zeros((0, 2))
+    if len(inner):
+        bl = blade_from_points(p, base=p[0])
+        inner = inner[bl.contains(inner)]
+        if len(inner):
+            inner = inner[bl.distance_to_margin(inner) > 0.5 * h]
+    verts = np.vstack([p, inner])
+    area = polygon_area(p)
+    try:
+        tri = Delaunay(verts)
+        f = tri.simplices.astype(np.int64)
+        c = verts[f].mean(axis=1)
+        keep = blade_from_points(p, base=p[0]).contains(c)
+        f = f[keep]
+        a = verts[f]
+        cross = (a[:, 1, 0] - a[:, 0, 0]) * (a[:, 2, 1] - a[:, 0, 1]) - (a[:, 1, 1] - a[:, 0, 1]) * (a[:, 2, 0] - a[:, 0, 0])
+        f[cross < 0] = f[cross < 0][:, [0, 2, 1]]
+        kept = 0.5 * np.abs(cross).sum()
+        if abs(kept - area) <= 1e-9 * area:
+            return verts, f.astype(np.int32)
+    except Exception:  # Qhull on a degenerate set: ear clipping below
+        pass
+    return p.copy(), _ear_clip(p)
+
+
+def _ear_clip(p: np.ndarray) -> np.ndarray:
+    """Triangles of a simple counter-clockwise polygon by ear clipping (O(m^2))."""
+    idx = list(range(len(p)))
+    out = []
+
+    def cross(a, b, c):
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+    guard = 0
+    while len(idx) > 3 and guard < 10 * len(p) ** 2:
+        guard += 1
+        n = len(idx)
+        for k in range(n):
+            i0, i1, i2 = idx[k - 1], idx[k], idx[(k + 1) % n]
+            a, b, c = p[i0], p[i1], p[i2]
+            if cross(a, b, c) <= 0:
+                continue
+            ok = True
+            for j in idx:
+                if j in (i0, i1, i2):
+                    continue
+                q = p[j]
+                if cross(a, b, q) >= 0 and cross(b, c, q) >= 0 and cross(c, a, q) >= 0:
+                    ok = False
+                    break
+            if ok:
+                out.append((i0, i1, i2))
+                del idx[k]
+                break
+        else:
+            break
+    if len(idx) == 3:
+        out.append(tuple(idx))
+    return np.array(out, dtype=np.int32).reshape(-1, 3)

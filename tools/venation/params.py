@@ -1,0 +1,512 @@
+"""The venation TOML parameter file (spec: ``formats/venation.md``).
+
+Read with the stdlib :mod:`tomllib`; every key is checked against :data:`SCHEMA` (unknown keys and
+sections are rejected naming the closest known one, with ``file:line``), defaults are filled and
+the values come back as :class:`Params`, one frozen dataclass per section. The dataclasses are the
+schema: each field's kind (in its metadata) and default. Paths (``.con``, ``.cset``, ``.func``) are
+resolved relative to the parameter file. :func:`load_inputs` then reads the blade contour and the
+growth functions and checks what needs them (a closed contour, the base and the initial vein nodes
+inside the blade, non-decreasing growth).
+
+Sections (Runions ch. 4):
+
+- top level: ``seed``, ``max_iterations``, ``max_nodes``;
+- ``[blade]``: the leaf blade (sec. 4.2.2) as a contour or a polygon, its size and base;
+- ``[growth]``: none, marginal, uniform (isogonic) or anisotropic growth (sec. 4.2.3, fig. 4.2);
+- ``[veins]``: open or closed patterns (secs. 4.2, 4.3), D, d_k, the initial vein nodes;
+- ``[sources]``: auxin sources by dart throwing: b_s, b_v, rho (sec. 4.2.3);
+- ``[width]``: vein widths by Murray's law (sec. 4.2.5, eq. 3.5);
+- ``[texture]``: the PNG of the veins over the blade;
+- ``[output]``: frames for an animation, the blade mesh.
+"""
+from __future__ import annotations
+
+import math
+import os
+import re
+import tomllib
+from dataclasses import MISSING, dataclass, field, fields
+from pathlib import Path
+
+import numpy as np
+
+from inflo.formats.errors import FormatError, InputError, did_you_mean, read_bytes, shorten
+
+from .blade import GROWTH_TYPES, Blade, Growth, blade_from_points
+
+__all__ = ["SCHEMA", "Params", "Run", "BladeSpec", "GrowthSpec", "Veins", "Sources", "Width", "Texture", "Output",
+           "read_params", "parse_params", "load_inputs", "Inputs", "PATTERNS", "NEIGHBOURHOODS"]
+
+PATTERNS = ("open", "closed")
+NEIGHBOURHOODS = ("relative", "urquhart")
+MAX_SAMPLES = 100_000
+MAX_TEXTURE = 16_384
+
+_NUM = (int, float)
+
+
+def _key(kind, default):
+    """A parameter: its kind (how :func:`parse_params` checks it) and default.
+
+    Kinds: ``"float"``, ``"int"``, ``"str"``, ``"bool"``, ``("choice", options)``, ``"path"`` (a file
+    name, resolved against the parameter file; "" for none), ``"point"`` ([x, y]), ``"points"``
+    (a list of [x, y]), ``"scale"`` (a number or [sx, sy]), ``"paths"`` (one file name or a list of
+    one or two), ``"color"`` ("#rrggbb"; "" for none where allowed).
+    """
+    if isinstance(default, list):
+        return field(default_factory=lambda: list(default), metadata={"kind": kind})
+    return field(default=default, metadata={"kind": kind})
+
+
+@dataclass(frozen=True)
+class Run:
+    """Top-level keys: the seed of every random choice and the work limits."""
+
+    seed: int = _key("int", 1)
+    max_iterations: int = _key("int", 100_000)
+    max_nodes: int = _key("int", 2_000_000)
+
+
+@dataclass(frozen=True)
+class BladeSpec:
+    """``[blade]``: the leaf blade at scale 1 (sec. 4.2.2)."""
+
+    contour: str = _key("path", "")
+    contour_name: str = _key("str", "")
+    polygon: list = _key("points", [])
+    samples: int = _key("int", 256)
+    size: float = _key("float", 1.0)
+    base: list | None = _key("point", None)
+
+
+@dataclass(frozen=True)
+class GrowthSpec:
+    """``[growth]``: the blade's growth (sec. 4.2.3, fig. 4.2)."""
+
+    type: str = _key(("choice", GROWTH_TYPES), "none")
+    initial: float | list = _key("scale", 1.0)
+    final: float | list = _key("scale", 1.0)
+    rate: float | list = _key("scale", 0.01)
+    scale: str | list = _key("paths", "")
+    steps: int = _key("int", 0)
+
+
+@dataclass(frozen=True)
+class Veins:
+    """``[veins]``: the venation algorithm (secs. 4.2, 4.3)."""
+
+    pattern: str = _key(("choice", PATTERNS), "open")
+    neighbourhood: str = _key(("choice", NEIGHBOURHOODS), "relative")
+    step: float = _key("float", 1.0)
+    kill_distance: float = _key("float", 1.0)
+    roots: list = _key("points", [])
+
+
+@dataclass(frozen=True)
+class Sources:
+    """``[sources]``: auxin sources by dart throwing (sec. 4.2.3)."""
+
+    birth_source: float = _key("float", 2.0)
+    birth_vein: float = _key("float", 2.0)
+    darts: float = _key("float", 0.01)
+    settle: int = _key("int", 10)
+
+
+@dataclass(frozen=True)
+class Width:
+    """``[width]``: vein widths by Murray's law (sec. 4.2.5, eq. 3.5)."""
+
+    tip: float = _key("float", 0.25)
+    exponent: float = _key("float", 2.0)
+    increment: float = _key("float", 0.0)
+
+
+@dataclass(frozen=True)
+class Texture:
+    """``[texture]``: the PNG of the veins drawn by width over the blade."""
+
+    size: int = _key("int", 1024)
+    blade_color: str = _key("color", "#5c8c3a")
+    vein_color: str = _key("color", "#dee8aa")
+    background: str = _key("color", "")
+    width_scale: float = _key("float", 1.0)
+    supersample: int = _key("int", 3)
+
+
+@dataclass(frozen=True)
+class Output:
+    """``[output]``: frames of the pattern forming, the blade mesh."""
+
+    frame_step: int = _key("int", 0)
+    frame_textures: bool = _key("bool", False)
+    mesh_spacing: float = _key("float", 0.0)
+
+
+@dataclass(frozen=True)
+class Params:
+    """A checked venation parameter file."""
+
+    run: Run = field(default_factory=Run)
+    blade: BladeSpec = field(default_factory=BladeSpec)
+    growth: GrowthSpec = field(default_factory=GrowthSpec)
+    veins: Veins = field(default_factory=Veins)
+    sources: Sources = field(default_factory=Sources)
+    width: Width = field(default_factory=Width)
+    texture: Texture = field(default_factory=Texture)
+    output: Output = field(default_factory=Output)
+    source: str = "<params>"
+    text: str = ""
+
+
+_SECTIONS = {"blade": BladeSpec, "growth": GrowthSpec, "veins": Veins, "sources": Sources, "width": Width,
+             "texture": Texture, "output": Output}
+
+
+def _schema(cls) -> dict[str, tuple]:
+    out = {}
+    for f in fields(cls):
+        default = f.default_factory() if f.default is MISSING else f.default
+        out[f.name] = (f.metadata["kind"], default)
+    return out
+
+
+#: section ("" for the top level) -> key -> (kind, default), from the dataclasses.
+SCHEMA: dict[str, dict[str, tuple]] = {"": _schema(Run), **{n: _schema(c) for n, c in _SECTIONS.items()}}
+
+
+def _line_of(text: str, section: str | None, key: str | None) -> int | None:
+    """1-based line of ``key`` in ``[section]`` ("" = top level), or of the section header."""
+    current = ""
+    for i, raw in enumerate(text.splitlines(), 1):
+        s = raw.strip()
+        m = re.match(r"^\[+\s*([^\]]+?)\s*\]+", s)
+        if m:
+            current = m.group(1).strip().strip('"').split(".")[0]
+            if key is None and current == section:
+                return i
+            continue
+        if key is not None and current == section and re.match(rf"^[\"']?{re.escape(key)}[\"']?\s*=", s):
+            return i
+    if key is not None and section:
+        return _line_of(text, section, None)
+    return None
+
+
+def parse_params(text: str, path="<params>") -> Params:
+    """Parse and check TOML ``text``; returns :class:`Params` with defaults filled.
+
+    Raises
+    ------
+    FormatError
+        TOML syntax errors, unknown sections or keys (naming the closest known one), values of the
+        wrong type or out of range.
+    """
+    path = os.fspath(path)
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"line (\d+)", str(exc))
+        raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None
+    base = Path(path).resolve().parent
+    known = [k for k in SCHEMA[""]] + list(_SECTIONS)
+    tables = {"": {}}
+    for key, value in raw.items():
+        if key in _SECTIONS:
+            if not isinstance(value, dict):
+                raise FormatError(path, _line_of(text, "", key), f"[{key}] as a table", shorten(repr(value)))
+            tables[key] = value
+        elif key in SCHEMA[""]:
+            tables[""][key] = value
+        else:
+            line = _line_of(text, key, None) or _line_of(text, "", key)
+            raise FormatError(path, line, f"a known key or section{did_you_mean(key, known)}", repr(key))
+    values: dict[str, dict] = {}
+    for section, schema in SCHEMA.items():
+        table = tables.get(section, {})
+        for key in table:
+            if key not in schema:
+                where = f"[{section}]" if section else "the top level"
+                raise FormatError(path, _line_of(text, section, key),
+                                  f"a key of {where}{did_you_mean(key, schema)}", repr(key))
+        values[section] = {}
+        for key, (kind, default) in schema.items():
+            if key in table:
+                values[section][key] = _check(table[key], kind, section, key, text, path, base)
+            else:
+                values[section][key] = list(default) if isinstance(default, list) else default
+    _check_ranges(values, text, path)
+    return Params(run=Run(**values[""]), **{s: c(**values[s]) for s, c in _SECTIONS.items()}, source=path, text=text)
+
+
+def _name(section, key):
+    return f"{section}.{key}" if section else key
+
+
+def _check(value, kind, section, key, text, path, base):
+    line = _line_of(text, section, key)
+
+    def bad(expected):
+        return FormatError(path, line, f"{_name(section, key)} as {expected}", shorten(repr(value)))
+
+    def number(v):
+        return isinstance(v, _NUM) and not isinstance(v, bool) and math.isfinite(v)
+
+    if isinstance(kind, tuple) and kind[0] == "choice":
+        if not isinstance(value, str) or value not in kind[1]:
+            raise bad(f"one of {list(kind[1])}{did_you_mean(str(value), kind[1])}")
+        return value
+    if kind == "float":
+        if not number(value):
+            raise bad("a finite number")
+        return float(value)
+    if kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise bad("an integer")
+        return int(value)
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise bad("true or false")
+        return value
+    if kind == "str":
+        if not isinstance(value, str):
+            raise bad("a string")
+        return value
+    if kind == "path":
+        if not isinstance(value, str):
+            raise bad("a file name")
+        return "" if not value else str(Path(value) if Path(value).is_absolute() else base / value)
+    if kind == "paths":
+        items = [value] if isinstance(value, str) else value
+        if not isinstance(items, list) or not 1 <= len(items) <= 2 or not all(isinstance(v, str) and v for v in items):
+            raise bad("a .func file name or a list of one or two")
+        if items == [""]:
+            return ""
+        out = [str(Path(v) if Path(v).is_absolute() else base / v) for v in items]
+        return out[0] if isinstance(value, str) else out
+    if kind == "point":
+        if not isinstance(value, list) or len(value) != 2 or not all(number(v) for v in value):
+            raise bad("[x, y]")
+        return [float(v) for v in value]
+    if kind == "points":
+        if not isinstance(value, list) or not all(
+                isinstance(p, list) and len(p) == 2 and all(number(v) for v in p) for p in value):
+            raise bad("a list of [x, y] points")
+        return [[float(v) for v in p] for p in value]
+    if kind == "scale":
+        if number(value):
+            return float(value)
+        if isinstance(value, list) and len(value) == 2 and all(number(v) for v in value):
+            return [float(v) for v in value]
+        raise bad("a number or [sx, sy]")
+    if kind == "color":
+        if not isinstance(value, str) or not (value == "" or re.fullmatch(r"#[0-9a-fA-F]{6}", value)):
+            raise bad("a colour '#rrggbb'")
+        return value
+    raise AssertionError(kind)  # pragma: no cover
+
+
+def _check_ranges(p: dict, text: str, path) -> None:
+    def fail(section, key, expected):
+        raise FormatError(path, _line_of(text, section, key), f"{_name(section, key)} {expected}",
+                          shorten(repr(p[section][key])))
+
+    r = p[""]
+    if r["max_iterations"] < 1:
+        fail("", "max_iterations", ">= 1")
+    if r["max_nodes"] < 1:
+        fail("", "max_nodes", ">= 1")
+    b = p["blade"]
+    if b["contour"] and b["polygon"]:
+        fail("blade", "polygon", "absent when blade.contour is given (one blade)")
+    if not b["contour"] and not b["polygon"]:
+        raise FormatError(path, _line_of(text, "blade", None), "a blade: [blade] contour = \"leaf.con\" or "
+                          "polygon = [[x, y], ...]", "neither")
+    if b["polygon"] and len(b["polygon"]) < 3:
+        fail("blade", "polygon", "with at least 3 points")
+    if not 16 <= b["samples"] <= MAX_SAMPLES:
+        fail("blade", "samples", f"in [16, {MAX_SAMPLES}] (margin points sampled along the contour)")
+    if b["size"] <= 0:
+        fail("blade", "size", "> 0")
+    g = p["growth"]
+    aniso = g["type"] == "anisotropic"
+    for key in ("initial", "final", "rate"):
+        v = g[key]
+        if isinstance(v, list) and not aniso:
+            fail("growth", key, "a number (one scale; [sx, sy] needs type = 'anisotropic')")
+        vals = v if isinstance(v, list) else [v]
+        if key == "rate" and any(x <= 0 for x in vals):
+            fail("growth", key, "> 0 (the increase of the scale per step)")
+        if key != "rate" and any(x <= 0 for x in vals):
+            fail("growth", key, "> 0 (a scale of the blade)")
+    ini = np.broadcast_to(np.asarray(g["initial"], float), (2,))
+    fin = np.broadcast_to(np.asarray(g["final"], float), (2,))
+    if np.any(fin < ini):
+        fail("growth", "final", ">= growth.initial (growth does not shrink the blade)")
+    if g["scale"]:
+        if isinstance(g["scale"], list) and len(g["scale"]) == 2 and not aniso:
+            fail("growth", "scale", "one .func (two need type = 'anisotropic')")
+        if g["steps"] < 1:
+            fail("growth", "steps", ">= 1 (the growth steps the .func spans)")
+    elif g["steps"] < 0:
+        fail("growth", "steps", ">= 0")
+    v = p["veins"]
+    if v["step"] <= 0:
+        fail("veins", "step", "> 0 (D, the length of a vein segment)")
+    if v["kill_distance"] <= 0:
+        fail("veins", "kill_distance", "> 0")
+    if v["kill_distance"] < v["step"]:
+        fail("veins", "kill_distance", f">= veins.step {v['step']:g} (a vein would step over its source)")
+    if v["pattern"] == "open" and v["neighbourhood"] == "urquhart":
+        fail("veins", "neighbourhood", "only with pattern = 'closed' (an open source attracts its closest node)")
+    s = p["sources"]
+    if s["birth_source"] <= 0:
+        fail("sources", "birth_source", "> 0 (b_s)")
+    if s["birth_vein"] <= 0:
+        fail("sources", "birth_vein", "> 0 (b_v)")
+    if s["darts"] <= 0:
+        fail("sources", "darts", "> 0 (darts per unit leaf area per step)")
+    if s["settle"] < 0:
+        fail("sources", "settle", ">= 0")
+    w = p["width"]
+    if w["tip"] <= 0:
+        fail("width", "tip", "> 0")
+    if w["exponent"] <= 0:
+        fail("width", "exponent", "> 0")
+    if w["increment"] < 0:
+        fail("width", "increment", ">= 0")
+    t = p["texture"]
+    if not 16 <= t["size"] <= MAX_TEXTURE:
+        fail("texture", "size", f"in [16, {MAX_TEXTURE}] pixels")
+    if not 1 <= t["supersample"] <= 8:
+        fail("texture", "supersample", "in [1, 8]")
+    if t["width_scale"] <= 0:
+        fail("texture", "width_scale", "> 0")
+    for key in ("blade_color", "vein_color"):
+        if not t[key]:
+            fail("texture", key, "a colour '#rrggbb'")
+    o = p["output"]
+    if o["frame_step"] < 0:
+        fail("output", "frame_step", ">= 0 (0: no frames)")
+    if o["mesh_spacing"] < 0:
+        fail("output", "mesh_spacing", ">= 0 (0: the margin's spacing)")
+
+
+def read_params(path) -> Params:
+    """Read and check a venation parameter file (see :func:`parse_params`)."""
+    path = os.fspath(path)
+    data = read_bytes(path)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise FormatError(path, None, "UTF-8 TOML text", "undecodable bytes") from None
+    return parse_params(text, path)
+
+
+# --------------------------------------------------------------------------------------------
+# the files the parameters name
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """What a run needs besides the parameters: the blade, its growth, the initial vein nodes
+    (scale-1 blade coordinates)."""
+
+    blade: Blade
+    growth: Growth
+    roots: np.ndarray
+
+
+def _margin(p: Params) -> np.ndarray:
+    b = p.blade
+    line = _line_of(p.text, "blade", "contour")
+    if b.polygon:
+        return np.asarray(b.polygon, dtype=np.float64) * b.size
+    from inflo.formats.contour import read_con, read_cset
+
+    name = b.contour
+    if name.lower().endswith(".cset"):
+        items = read_cset(name)
+        if b.contour_name:
+            names = [c.name for c in items]
+            if b.contour_name not in names:
+                raise FormatError(p.source, _line_of(p.text, "blade", "contour_name"),
+                                  f"blade.contour_name as a contour of {Path(name).name}"
+                                  f"{did_you_mean(b.contour_name, names)}", repr(b.contour_name))
+            con = items[names.index(b.contour_name)]
+        else:
+            con = items[0]
+    else:
+        con = read_con(name)
+    if not con.closed:
+        raise FormatError(p.source, line, "a closed contour (type 'cr' or 'ce') for blade.contour",
+                          f"{Path(name).name}, an open contour (type {con.type!r})")
+    return con.sample(b.samples)[:, :2] * b.size
+
+
+def load_inputs(p: Params) -> Inputs:
+    """Read the contour and growth functions and check the blade, base and initial vein nodes.
+
+    Raises
+    ------
+    FormatError / InputError
+        A missing or malformed file, an open contour, a margin that crosses itself or encloses no
+        area, a base or initial vein node outside the blade at its initial size, a growth function
+        that is not positive and non-decreasing.
+    """
+    margin = _margin(p)
+    try:
+        blade = blade_from_points(margin, base=p.blade.base)
+    except ValueError as exc:
+        key = "polygon" if p.blade.polygon else "contour"
+        raise FormatError(p.source, _line_of(p.text, "blade", key), f"a simple closed margin for blade.{key}",
+                          str(exc)) from None
+    ext = float(np.ptp(blade.polygon, axis=0).max())
+    tol = 1e-6 * ext
+    if p.blade.base is not None and not _in_or_on(blade, blade.base[None], 1.0, tol)[0]:
+        raise FormatError(p.source, _line_of(p.text, "blade", "base"), "blade.base inside or on the margin",
+                          repr(p.blade.base))
+    growth = _growth(p)
+    s0 = growth.scale_at(0)
+    roots = np.asarray(p.veins.roots, dtype=np.float64).reshape(-1, 2) if p.veins.roots else blade.base[None].copy()
+    kind = growth.kind
+    at_start = blade.base + (roots - blade.base) * s0 if kind in ("uniform", "anisotropic") else roots
+    ok = _in_or_on(blade, at_start, s0 if kind != "none" else np.ones(2), tol)
+    if not ok.all():
+        bad = roots[np.flatnonzero(~ok)[0]].tolist()
+        raise FormatError(p.source, _line_of(p.text, "veins", "roots") if p.veins.roots else _line_of(p.text, "blade", "base"),
+                          "initial vein nodes inside the blade at its initial size", repr(bad))
+    return Inputs(blade=blade, growth=growth, roots=roots)
+
+
+def _in_or_on(blade: Blade, pts, scale, tol) -> np.ndarray:
+    pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
+    inside = blade.contains(pts, scale)
+    near = blade.distance_to_margin(pts, scale) <= tol * max(float(np.max(scale)), 1.0)
+    return inside | near
+
+
+def _growth(p: Params) -> Growth:
+    g = p.growth
+    if g.type == "none":
+        return Growth("none")
+    if g.scale:
+        from inflo.formats.func import read_func
+
+        files = g.scale if isinstance(g.scale, list) else [g.scale]
+        fns = [read_func(f) for f in files]
+        if len(fns) == 1:
+            fns = fns * 2
+        for f, name in zip(fns, files * (2 if len(files) == 1 else 1)):
+            ys = np.asarray(f.sampled()[1])
+            if np.any(ys <= 0) or np.any(np.diff(ys) < -1e-12 * np.abs(ys).max()):
+                raise FormatError(p.source, _line_of(p.text, "growth", "scale"),
+                                  "growth.scale as a positive, non-decreasing function (a scale of the blade)",
+                                  f"{Path(name).name} from {ys[0]:g} to {ys[-1]:g}, least {ys.min():g}")
+        if g.type == "uniform" or g.type == "marginal":
+            fns = [fns[0], fns[0]]
+        return Growth(g.type, functions=tuple(fns), function_steps=g.steps)
+
+    def pair(v):
+        return tuple(float(x) for x in np.broadcast_to(np.asarray(v, dtype=np.float64), (2,)))
+
+    return Growth(g.type, initial=pair(g.initial), final=pair(g.final), rate=pair(g.rate))

@@ -1,0 +1,631 @@
+"""The venation simulation loop (Runions secs. 4.2-4.3, fig. 4.8, fig. 4.10).
+
+Every iteration runs the three processes of fig. 4.8 in turn:
+
+1. **Leaf-blade growth** (sec. 4.2.3): the blade's scale sigma_t follows the growth schedule.
+   Marginal growth scales the margin about the base and leaves sources and vein nodes where they
+   are. Uniform (isogonic) growth scales everything; as the thesis does, the blade, the sources
+   and the veins stay put in *internal* coordinates and the unit distance shrinks instead,
+   lambda_t = lambda_0 sigma_0 / sigma_t (D, d_k, b_s and b_v are multiplied by lambda_t; real
+   positions are base + (p - base) / lambda_t). Anisotropic growth (fig. 4.2d) moves every source
+   and vein node with the blade, per axis.
+2. **Auxin sources** by dart throwing: rho darts per unit (real) leaf area per step, uniform in
+   the current blade; a dart becomes a source when it is farther than b_s from every source and
+   farther than b_v from every vein node.
+3. **Vein development**: each source s influences a set of vein nodes, its closest one (open
+   patterns, fig. 4.10b) or its relative neighbourhood V(s) (closed patterns, eq. 4.1-4.2; or the
+   Urquhart approximation); each influenced node v grows one new node v' = v + D n^ with
+   n^ the normalized sum of the unit vectors toward its sources (eq. 3.1, no tropism in leaves).
+   *Open*: a source is removed as soon as a vein node is closer than d_k. *Closed* (sec. 4.3):
+   when a node first comes within d_k of s, the nodes of V(s) are tagged; tags pass to the
+   nodes they grow; s is removed when every tagged vein in V(s) has reached it (is within d_k)
+   or left V(s); the veins that reached it are joined (an anastomosis edge from each to the one
+   closest to s), so the venation graph holds the loops. Nodes within d_k of a source no longer
+   grow toward it.
+
+Two guards keep the graph clean. A node whose new direction repeats its last one (its sources
+unchanged) grows toward its closest source instead (branch-gen's SCA does the same); a new node
+that would come closer than D/2 to an existing node grows toward the closest source instead, and
+not at all if that is too close as well. In an open pattern the fallback always succeeds (a node
+within D/2 of v + D (s - v)/|s - v| would be nearer to s than v is, given d_k >= D); in a closed
+one a node stopped this way is within 1.5 D of its source and counts as having reached it.
+
+The loop stops after the blade has stopped growing, when no source is left and no dart has been
+accepted for ``settle`` iterations (or at ``max_iterations`` / ``max_nodes``).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable, NamedTuple
+
+import numpy as np
+from numba import njit
+
+from .blade import Blade, Growth, inside_blade
+from .neighbourhood import (
+    MAX_NEIGHBOURS,
+    NEAREST,
+    RELATIVE,
+    URQUHART,
+    Grid,
+    grid_insert,
+    grid_insert_idx,
+    grid_rebuild,
+    grid_remove_cells,
+    make_grid,
+    relative_neighbourhoods,
+)
+
+__all__ = ["SimParams", "VenationResult", "simulate", "Snapshot"]
+
+NEIGHBOURHOODS = {"nearest": NEAREST, "relative": RELATIVE, "urquhart": URQUHART}
+
+
+@dataclass(frozen=True)
+class SimParams:
+    """What the loop needs (lengths at lambda = 1, in blade units; see formats/venation.md).
+
+    pattern : "open" or "closed"
+    neighbourhood : "relative" (exact, eq. 4.1) or "urquhart" (closed patterns only)
+    step : D, the length of a vein segment
+    kill_distance : d_k
+    birth_source, birth_vein : b_s, b_v
+    darts : rho, darts per unit leaf area per step
+    roots : (r, 2) initial vein nodes (scale-1 blade coordinates)
+    settle : iterations without a new source after growth before the run stops
+    """
+
+    pattern: str = "open"
+    neighbourhood: str = "relative"
+    step: float = 1.0
+    kill_distance: float = 1.0
+    birth_source: float = 2.0
+    birth_vein: float = 2.0
+    darts: float = 0.01
+    roots: tuple = ()
+    settle: int = 10
+    max_iterations: int = 100_000
+    max_nodes: int = 2_000_000
+    seed: int = 1
+
+
+class Nodes(NamedTuple):
+    """Vein nodes (capacity rows; internal coordinates)."""
+
+    pos: np.ndarray  # (cap, 2) float64
+    parent: np.ndarray  # (cap,) int64, -1 for the initial nodes
+    iteration: np.ndarray  # (cap,) int64 that created the node (-1 initial)
+    last_dir: np.ndarray  # (cap, 2) direction of the node's last growth
+    acc: np.ndarray  # (cap, 2) sum of unit vectors toward its sources (eq. 3.1), zeroed after use
+    cnt: np.ndarray  # (cap,) int64 |S(v)| this iteration
+    closest: np.ndarray  # (cap,) int64 closest source of S(v)
+    closest_d2: np.ndarray  # (cap,) float64
+    collided: np.ndarray  # (cap,) int64 iteration in which the node could not grow (guard), -1
+
+
+class Sources(NamedTuple):
+    """Auxin sources (capacity rows; every source ever placed, internal coordinates)."""
+
+    pos: np.ndarray  # (cap, 2)
+    alive: np.ndarray  # (cap,) bool
+    born: np.ndarray  # (cap,) int64 iteration
+    died: np.ndarray  # (cap,) int64 iteration (-1 alive)
+    tag_iter: np.ndarray  # (cap,) int64 iteration of tagging (closed), -1
+    tags: np.ndarray  # (cap, MAX_NEIGHBOURS) int64 the tagged nodes V(s)
+    ntag: np.ndarray  # (cap,) int64
+
+
+def _new_nodes(cap):
+    return Nodes(np.zeros((cap, 2)), np.full(cap, -1, np.int64), np.full(cap, -1, np.int64), np.zeros((cap, 2)),
+                 np.zeros((cap, 2)), np.zeros(cap, np.int64), np.full(cap, -1, np.int64), np.zeros(cap),
+                 np.full(cap, -1, np.int64))
+
+
+def _new_sources(cap):
+    return Sources(np.zeros((cap, 2)), np.zeros(cap, np.bool_), np.full(cap, -1, np.int64),
+                   np.full(cap, -1, np.int64), np.full(cap, -1, np.int64),
+                   np.full((cap, MAX_NEIGHBOURS), -1, np.int64), np.zeros(cap, np.int64))
+
+
+def _grow_rows(tup, cap):
+    """The NamedTuple of arrays with room for ``cap`` rows (contents kept)."""
+    fresh = type(tup)(*(_new_nodes(cap) if isinstance(tup, Nodes) else _new_sources(cap)))
+    for a, b in zip(tup, fresh):
+        b[: len(a)] = a
+    return fresh
+
+
+# --------------------------------------------------------------------------------------------
+# kernels
+
+
+@njit(cache=True)
+def _first_within(x, y, r2, pos, grid, skip):
+    """A point of ``grid`` closer than sqrt(r2) to (x, y), other than ``skip``, or -1."""
+    geom = grid.geom
+    h = geom[2]
+    nx, ny = np.int64(geom[3]), np.int64(geom[4])
+    reach = np.int64(math.ceil(math.sqrt(r2) / h))
+    cx = np.int64(math.floor((x - geom[0]) / h))
+    cy = np.int64(math.floor((y - geom[1]) / h))
+    for iy in range(max(cy - reach, 0), min(cy + reach, ny - 1) + 1):
+        for ix in range(max(cx - reach, 0), min(cx + reach, nx - 1) + 1):
+            v = grid.head[ix + nx * iy]
+            while v >= 0:
+                if v != skip and (pos[v, 0] - x) ** 2 + (pos[v, 1] - y) ** 2 < r2:
+                    return v
+                v = grid.nxt[v]
+    return -1
+
+
+@njit(cache=True)
+def throw_darts(cand, base, scale, bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it):
+    """Dart throwing (sec. 4.2.3): candidates ``cand`` (c, 2) in order; one inside the blade (at
+    ``scale`` about ``base``), farther than b_s from every live source and farther than b_v from
+    every vein node becomes source ``n_src`` (inserted into ``src_grid``). Returns the new count."""
+    inside = np.zeros(cand.shape[0], np.bool_)
+    inside_blade(cand, base, scale, bands, inside)
+    for c in range(cand.shape[0]):
+        if not inside[c]:
+            continue
+        x, y = cand[c, 0], cand[c, 1]
+        if _first_within(x, y, bs2, src.pos, src_grid, -1) >= 0:
+            continue
+        if _first_within(x, y, bv2, nodes.pos, node_grid, -1) >= 0:
+            continue
+        s = n_src
+        src.pos[s, 0], src.pos[s, 1] = x, y
+        src.alive[s] = True
+        src.born[s] = it
+        src.died[s] = -1
+        src.tag_iter[s] = -1
+        src.ntag[s] = 0
+        grid_insert(src_grid, src.pos, s, s + 1)
+        n_src += 1
+    return n_src
+
+
+@njit(cache=True)
+def _tag_root(v, s, src, nodes):
+    """The tagged node of source s that node v descends from (v itself included), or -1."""
+    w = v
+    t0 = src.tag_iter[s]
+    while w >= 0:
+        for k in range(src.ntag[s]):
+            if src.tags[s, k] == w:
+                return w
+        if nodes.iteration[w] < t0:
+            return -1
+        w = nodes.parent[w]
+    return -1
+
+
+@njit(cache=True)
+def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra):
+    """Source removal (open: a node within d_k; closed: sec. 4.3's tagging) after the
+    neighbourhoods ``nbr`` of the ``live`` sources were found. Joins the veins that reached a
+    removed closed-pattern source (``extra`` rows from ``n_extra``). Returns (removed, n_extra)."""
+    removed = 0
+    reps = np.empty(MAX_NEIGHBOURS, np.int64)
+    roots = np.empty(MAX_NEIGHBOURS, np.int64)
+    for j in range(live.shape[0]):
+        s = live[j]
+        n = nbr_n[j]
+        if n == 0:
+            continue
+        sx, sy = src.pos[s, 0], src.pos[s, 1]
+        v0 = nbr[j, 0]
+        d0 = (nodes.pos[v0, 0] - sx) ** 2 + (nodes.pos[v0, 1] - sy) ** 2
+        if not closed:
+            if d0 < dk2:
+                src.alive[s] = False
+                src.died[s] = it
+                removed += 1
+            continue
+        if src.tag_iter[s] < 0:
+            if d0 >= dk2:
+                continue
+            src.tag_iter[s] = it
+            src.ntag[s] = n
+            for k in range(n):
+                src.tags[s, k] = nbr[j, k]
+        keep = False
+        nr = 0
+        for k in range(n):
+            v = nbr[j, k]
+            d2 = (nodes.pos[v, 0] - sx) ** 2 + (nodes.pos[v, 1] - sy) ** 2
+            reached = d2 < dk2 or nodes.collided[v] == it - 1
+            t = _tag_root(v, s, src, nodes)
+            if t < 0:
+                continue
+            if not reached:
+                keep = True
+                break
+            # the closest reached node of each tagged vein
+            found = False
+            for q in range(nr):
+                if roots[q] == t:
+                    found = True
+                    u = reps[q]
+                    du = (nodes.pos[u, 0] - sx) ** 2 + (nodes.pos[u, 1] - sy) ** 2
+                    if d2 < du:
+                        reps[q] = v
+            if not found:
+                roots[nr] = t
+                reps[nr] = v
+                nr += 1
+        if keep:
+            continue
+        src.alive[s] = False
+        src.died[s] = it
+        removed += 1
+        if nr >= 2:
+            best = 0
+            bd = np.inf
+            for q in range(nr):
+                u = reps[q]
+                du = (nodes.pos[u, 0] - sx) ** 2 + (nodes.pos[u, 1] - sy) ** 2
+                if du < bd:
+                    bd, best = du, q
+            r0 = reps[best]
+            for q in range(nr):
+                r = reps[q]
+                if r == r0 or nodes.parent[r] == r0 or nodes.parent[r0] == r:
+                    continue
+                dup = False
+                for e in range(n_extra):
+                    if (extra[e, 0] == r and extra[e, 1] == r0) or (extra[e, 0] == r0 and extra[e, 1] == r):
+                        dup = True
+                        break
+                if not dup and n_extra < extra.shape[0]:
+                    extra[n_extra, 0] = min(r, r0)
+                    extra[n_extra, 1] = max(r, r0)
+                    n_extra += 1
+    return removed, n_extra
+
+
+@njit(cache=True)
+def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, it):
+    """Vein development (eq. 3.1): every node influenced by a live source grows one node D along
+    the normalized sum of the unit vectors toward its sources (with the guards of the module
+    docstring). New nodes are inserted into ``grid``; returns the node count."""
+    touched = np.empty(nbr.shape[0] * MAX_NEIGHBOURS + 1, np.int64)
+    nt = 0
+    for j in range(live.shape[0]):
+        s = live[j]
+        if not src.alive[s]:
+            continue
+        sx, sy = src.pos[s, 0], src.pos[s, 1]
+        for k in range(nbr_n[j]):
+            v = nbr[j, k]
+            dx, dy = sx - nodes.pos[v, 0], sy - nodes.pos[v, 1]
+            d2 = dx * dx + dy * dy
+            if d2 <= 0.0 or (closed and d2 < dk2):
+                continue
+            d = math.sqrt(d2)
+            if nodes.cnt[v] == 0:
+                touched[nt] = v
+                nt += 1
+                nodes.closest[v] = s
+                nodes.closest_d2[v] = d2
+            elif d2 < nodes.closest_d2[v] or (d2 == nodes.closest_d2[v] and s < nodes.closest[v]):
+                nodes.closest[v] = s
+                nodes.closest_d2[v] = d2
+            nodes.cnt[v] += 1
+            nodes.acc[v, 0] += dx / d
+            nodes.acc[v, 1] += dy / d
+    order = np.sort(touched[:nt])
+    half2 = 0.25 * step * step
+    for q in range(nt):
+        v = order[q]
+        ax, ay = nodes.acc[v, 0], nodes.acc[v, 1]
+        nodes.acc[v, 0] = 0.0
+        nodes.acc[v, 1] = 0.0
+        nodes.cnt[v] = 0
+        c = nodes.closest[v]
+        vx, vy = nodes.pos[v, 0], nodes.pos[v, 1]
+        grown = False
+        hit = -1
+        for attempt in range(2):
+            if attempt == 0:
+                nn = math.sqrt(ax * ax + ay * ay)
+                if nn < 1e-12:
+                    continue
+                ux, uy = ax / nn, ay / nn
+            else:
+                ux, uy = src.pos[c, 0] - vx, src.pos[c, 1] - vy
+                nn = math.sqrt(ux * ux + uy * uy)
+                if nn <= 0.0:
+                    continue
+                ux, uy = ux / nn, uy / nn
+            if ux * nodes.last_dir[v, 0] + uy * nodes.last_dir[v, 1] > 1.0 - 1e-12:
+                continue
+            wx, wy = vx + step * ux, vy + step * uy
+            u = _first_within(wx, wy, half2, nodes.pos, grid, v)
+            if u >= 0:
+                hit = u
+                continue
+            w = n_nodes
+            n_nodes += 1
+            nodes.pos[w, 0], nodes.pos[w, 1] = wx, wy
+            nodes.parent[w] = v
+            nodes.iteration[w] = it
+            nodes.last_dir[w, 0] = 0.0
+            nodes.last_dir[w, 1] = 0.0
+            nodes.collided[w] = -1
+            nodes.last_dir[v, 0], nodes.last_dir[v, 1] = ux, uy
+            grid_insert(grid, nodes.pos, w, w + 1)
+            grown = True
+            break
+        if not grown and hit >= 0:
+            nodes.collided[v] = it
+    return n_nodes
+
+
+# --------------------------------------------------------------------------------------------
+# the loop
+
+
+@dataclass
+class Snapshot:
+    """The venation at one iteration, in real coordinates (what a frame shows)."""
+
+    iteration: int
+    node_pos: np.ndarray  # (n, 2)
+    node_parent: np.ndarray  # (n,)
+    extra_edges: np.ndarray  # (e, 2) anastomoses
+    blade: np.ndarray  # (m, 2) the margin at this iteration
+    sources: np.ndarray  # (k, 2) live sources
+
+
+@dataclass
+class VenationResult:
+    """A finished run, in real coordinates (the blade at its final size).
+
+    Attributes
+    ----------
+    node_pos : (n, 2) float64
+    node_parent : (n,) int64
+        The node each vein node grew from, -1 for the initial nodes.
+    node_iter : (n,) int64
+        Iteration that created the node (-1 initial).
+    extra_edges : (e, 2) int64
+        Anastomoses (closed patterns): node pairs joined at a removed source, i < j.
+    blade : (m, 2) float64
+        The final margin.
+    sources_placed, sources_left : int
+    source_pos : (k, 2) float64
+        Every source placed, at its final real position; ``source_born``/``source_died``
+        (died -1: still alive).
+    iterations, growth_steps : int
+    stopped : str
+        Why the loop ended: "finished", "max_iterations" or "max_nodes".
+    seconds : float
+    """
+
+    node_pos: np.ndarray
+    node_parent: np.ndarray
+    node_iter: np.ndarray
+    extra_edges: np.ndarray
+    blade: np.ndarray
+    source_pos: np.ndarray
+    source_born: np.ndarray
+    source_died: np.ndarray
+    iterations: int
+    growth_steps: int
+    stopped: str
+    seconds: float = 0.0
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.node_pos)
+
+    @property
+    def sources_placed(self) -> int:
+        return len(self.source_pos)
+
+    @property
+    def sources_left(self) -> int:
+        return int((self.source_died < 0).sum())
+
+
+def _grid_h(step, bv, dk):
+    """Cell size of the point grids: about the birth distance (the common query radius), at least D."""
+    return max(step, 0.5 * bv, 0.5 * dk)
+
+
+def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable | None = None,
+             frame_step: int = 0, progress: Callable | None = None) -> VenationResult:
+    """Run the venation model on ``blade`` growing by ``growth``.
+
+    Parameters
+    ----------
+    on_frame : callable(Snapshot) or None
+        Called every ``frame_step`` iterations (and for the last iteration) when ``frame_step`` > 0.
+    progress : callable(int) or None
+        Called with the number of iterations done since the last call.
+    """
+    t_start = time.perf_counter()
+    kind = growth.kind
+    closed = sp.pattern == "closed"
+    nb_kind = NEAREST if not closed else NEIGHBOURHOODS[sp.neighbourhood]
+    rng = np.random.default_rng(sp.seed)
+    base = np.asarray(blade.base, dtype=np.float64)
+    s0 = growth.scale_at(0)
+    s_end = growth.final_scale
+    # internal coordinates: uniform growth keeps the sigma_0 blade, the others real positions
+    roots = np.asarray(sp.roots, dtype=np.float64).reshape(-1, 2) if len(sp.roots) else base[None].copy()
+    if kind in ("uniform", "anisotropic"):
+        roots = base + (roots - base) * s0
+    blade_box_scale = s0 if kind == "uniform" else (s_end if kind != "none" else np.ones(2))
+    poly_box = blade.scaled(np.maximum(blade_box_scale, s0) if kind != "uniform" else s0)
+    lo = np.minimum(poly_box.min(0), roots.min(0))
+    hi = np.maximum(poly_box.max(0), roots.max(0))
+    pad = 2.0 * sp.step + 1e-9 * float(np.max(hi - lo))
+    lo, hi = lo - pad, hi + pad
+
+    cap = 4096
+    nodes = _new_nodes(cap)
+    n_nodes = len(roots)
+    nodes.pos[:n_nodes] = roots
+    scap = 4096
+    src = _new_sources(scap)
+    n_src = 0
+    extra = np.zeros((1024, 2), np.int64)
+    n_extra = 0
+
+    lam = 1.0
+    h = _grid_h(sp.step, sp.birth_vein, sp.kill_distance)
+    node_grid = make_grid(lo, hi, h, cap)
+    grid_insert(node_grid, nodes.pos, 0, n_nodes)
+    src_grid = make_grid(lo, hi, h, scap)
+    live = np.zeros(0, np.int64)
+    dart_carry = 0.0
+    quiet = 0
+    prev_scale = s0.copy()
+    stopped = "finished"
+    timings = {"darts": 0.0, "neighbourhoods": 0.0, "sources": 0.0, "growth": 0.0}
+    it = 0
+    n_growth = growth.steps
+
+    def real(p, lam_now):
+        if kind == "uniform":
+            return base + (p - base) / lam_now
+        return p.copy()
+
+    def snapshot(it_now, lam_now, sc_now):
+        margin = blade.scaled(sc_now if kind != "none" else 1.0)
+        return Snapshot(it_now, real(nodes.pos[:n_nodes], lam_now), nodes.parent[:n_nodes].copy(),
+                        extra[:n_extra].copy(), margin, real(src.pos[live], lam_now) if len(live) else np.zeros((0, 2)))
+
+    last_frame = -1
+    while True:
+        if it >= sp.max_iterations:
+            stopped = "max_iterations"
+            break
+        if n_nodes >= sp.max_nodes:
+            stopped = "max_nodes"
+            break
+        sc = growth.scale_at(it)
+        grid_remove_cells(src_grid, src.pos, live)
+        # 1. blade growth
+        if kind == "uniform":
+            lam = float(s0[0] / sc[0])
+            blade_scale = s0
+        elif kind == "anisotropic":
+            blade_scale = sc
+            ratio = sc / prev_scale
+            if np.any(ratio != 1.0):
+                nodes.pos[:n_nodes] = base + (nodes.pos[:n_nodes] - base) * ratio
+                src.pos[:n_src] = base + (src.pos[:n_src] - base) * ratio
+                grid_rebuild(node_grid, nodes.pos, np.arange(n_nodes, dtype=np.int64))
+        elif kind == "marginal":
+            blade_scale = sc
+        else:
+            blade_scale = np.ones(2)
+        prev_scale = sc
+        D = sp.step * lam
+        dk2 = (sp.kill_distance * lam) ** 2
+        bs2 = (sp.birth_source * lam) ** 2
+        bv2 = (sp.birth_vein * lam) ** 2
+        h_want = _grid_h(D, sp.birth_vein * lam, sp.kill_distance * lam)
+        if h_want < 0.5 * node_grid.geom[2] and node_grid.geom[2] * 0.999 > _min_h(lo, hi):
+            node_grid = make_grid(lo, hi, h_want, cap)
+            grid_rebuild(node_grid, nodes.pos, np.arange(n_nodes, dtype=np.int64))
+            src_grid = make_grid(lo, hi, h_want, scap)
+        # the live sources in their grid
+        live = np.flatnonzero(src.alive[:n_src]).astype(np.int64)
+        grid_insert_idx(src_grid, src.pos, live)
+
+        # 2. auxin sources by dart throwing
+        t0 = time.perf_counter()
+        area_real = blade.area * float(sc[0] * sc[1]) if kind != "none" else blade.area
+        want = sp.darts * area_real + dart_carry
+        n_darts = int(math.floor(want))
+        dart_carry = want - n_darts
+        placed = 0
+        if n_darts > 0:
+            poly_now = blade.scaled(blade_scale)
+            blo, bhi = poly_now.min(0), poly_now.max(0)
+            box_area = float(np.prod(bhi - blo))
+            area_int = blade.area * float(blade_scale[0] * blade_scale[1])
+            n_draw = int(math.ceil(n_darts * box_area / max(area_int, 1e-300)))
+            if n_src + n_draw > scap:
+                scap = max(2 * scap, n_src + n_draw + 1024)
+                src = _grow_rows(src, scap)
+                src_grid = Grid(src_grid.head, np.concatenate([src_grid.nxt, np.full(scap - len(src_grid.nxt), -1, np.int64)]),
+                                src_grid.geom)
+            cand = blo + (bhi - blo) * rng.random((n_draw, 2))
+            before = n_src
+            n_src = throw_darts(cand, base, np.ascontiguousarray(blade_scale, dtype=np.float64), blade.bands, src,
+                                n_src, src_grid, bs2, nodes, node_grid, bv2, it)
+            placed = n_src - before
+            if placed:
+                live = np.concatenate([live, np.arange(before, n_src, dtype=np.int64)])
+        timings["darts"] += time.perf_counter() - t0
+
+        # 3. neighbourhoods, source removal, vein growth
+        t0 = time.perf_counter()
+        k = len(live)
+        nbr = np.full((k, MAX_NEIGHBOURS), -1, np.int64)
+        nbr_n = np.zeros(k, np.int64)
+        if k and n_nodes:
+            relative_neighbourhoods(src.pos, live, nodes.pos, n_nodes, node_grid, nb_kind, nbr, nbr_n)
+        t1 = time.perf_counter()
+        timings["neighbourhoods"] += t1 - t0
+        if n_extra + k > len(extra):
+            extra = np.concatenate([extra, np.zeros((len(extra) + k, 2), np.int64)])
+        _, n_extra = update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra)
+        t2 = time.perf_counter()
+        timings["sources"] += t2 - t1
+        need = n_nodes + int(nbr_n.sum()) + 1
+        if need > cap:
+            cap = max(2 * cap, need + 1024)
+            nodes = _grow_rows(nodes, cap)
+            node_grid = Grid(node_grid.head, np.concatenate([node_grid.nxt, np.full(cap - len(node_grid.nxt), -1, np.int64)]),
+                             node_grid.geom)
+        n_before = n_nodes
+        n_nodes = grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, D, dk2, node_grid, it)
+        if n_nodes > n_before:
+            new = nodes.pos[n_before:n_nodes]
+            if np.any(new < lo) or np.any(new > hi):
+                lo = np.minimum(lo, new.min(0) - pad)
+                hi = np.maximum(hi, new.max(0) + pad)
+                node_grid = make_grid(lo, hi, node_grid.geom[2], cap)
+                grid_rebuild(node_grid, nodes.pos, np.arange(n_nodes, dtype=np.int64))
+                src_grid = make_grid(lo, hi, node_grid.geom[2], scap)
+                live_now = np.flatnonzero(src.alive[:n_src]).astype(np.int64)
+                grid_insert_idx(src_grid, src.pos, live_now)
+                live = live_now
+        timings["growth"] += time.perf_counter() - t2
+        it += 1
+        if progress is not None:
+            progress(1)
+        n_alive = int(src.alive[:n_src].sum())
+        quiet = 0 if placed else quiet + 1
+        done = it >= n_growth and n_alive == 0 and quiet >= sp.settle
+        if on_frame is not None and frame_step > 0 and ((it - 1) % frame_step == 0 or done):
+            live = np.flatnonzero(src.alive[:n_src]).astype(np.int64)
+            on_frame(snapshot(it - 1, lam, sc))
+            last_frame = it - 1
+        if done:
+            break
+    live = np.flatnonzero(src.alive[:n_src]).astype(np.int64)
+    if on_frame is not None and frame_step > 0 and last_frame != it - 1:
+        on_frame(snapshot(it - 1, lam, growth.scale_at(max(it - 1, 0))))
+    sc_end = growth.scale_at(max(it - 1, 0))
+    margin = blade.scaled(sc_end if kind != "none" else 1.0)
+    return VenationResult(
+        node_pos=real(nodes.pos[:n_nodes], lam), node_parent=nodes.parent[:n_nodes].copy(),
+        node_iter=nodes.iteration[:n_nodes].copy(), extra_edges=extra[:n_extra].copy(), blade=margin,
+        source_pos=real(src.pos[:n_src], lam), source_born=src.born[:n_src].copy(),
+        source_died=src.died[:n_src].copy(), iterations=it, growth_steps=n_growth, stopped=stopped,
+        seconds=time.perf_counter() - t_start, timings=timings)
+
+
+def _min_h(lo, hi, max_cells=1 << 20):
+    ext = np.maximum(hi - lo, 1e-12)
+    return math.sqrt(ext[0] * ext[1] / max_cells)
