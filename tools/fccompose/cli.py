@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import os
 
 import click
 
@@ -28,6 +29,7 @@ def main(params, output, resume, strict, allow_initial_intersections, frames, qu
     p = read_fcc(params)
     if frames is not None:
         p = dataclasses.replace(p, run_frames=int(frames))
+    _refuse_output_holding_inputs(params, p, output)
     warn = (lambda msg: None) if quiet else (lambda msg: click.echo(f"fccompose: warning: {msg}", err=True))
     res = compose_canopy(
         p, output, resume=resume, strict=strict, allow_initial_intersections=allow_initial_intersections,
@@ -36,3 +38,25 @@ def main(params, output, resume, strict, allow_initial_intersections, frames, qu
     if not quiet:
         click.echo(f"fccompose: {len(res.frames_written)} frames written to {output} "
                    f"({res.n_triangles} triangles, {res.steps} steps, {res.seconds:.1f} s)", err=True)
+
+
+def _refuse_output_holding_inputs(source, p, output) -> None:
+    """Bad input (one line, exit 2) when the output folder is, or holds, a file or folder the run
+    reads: fccompose removes the frames of earlier runs from its output folder, so ``-o anim``
+    where ``anim`` is an input animation would delete its own inputs (issue 14)."""
+    from pathlib import Path
+
+    from inflo.formats.errors import InputError
+
+    out = Path(os.path.abspath(output))
+    inputs = [(e.path, "animation" if e.kind == "animation" else "obj") for e in p.animations]
+    inputs += [(r.rba_folder, "rigid body animation") for r in p.rigid_body_animations]
+    inputs += [(r.scene_path, "rigid body animation") for r in p.rigid_body_animations]
+    inputs += [(f, "scene file path") for f in p.scene_files]
+    inputs += [(f, "weight") for f in p.weights.values()]
+    for fp, key in inputs:
+        path = Path(os.path.abspath(fp.resolved))
+        if path == out or out in path.parents:
+            where = f"{source}:{fp.line}: " if fp.line else f"{source}: "
+            raise InputError(f"{where}expected an output folder that holds none of the inputs, found -o {output} "
+                             f"holding the '{key}' input {fp.raw}")
