@@ -642,3 +642,18 @@ def test_rba_matrices_of_all_florets_at_once_equal_the_one_by_one_placement(inpu
         assert sorted(ids.tolist()) == [0, 1]
         for k, mat in zip(ids, mats):
             np.testing.assert_allclose(mat, m.matrix(m.florets[k], frame)[:3], rtol=0, atol=1e-13)
+
+
+def test_resume_refuses_an_input_changed_since_the_interruption(inputs, tmp_path):
+    """The resume fingerprint covers every input file: a scene edited between the interrupted run
+    and --resume is named in a one-line error, exit 2 (issue 14)."""
+    d = tmp_path / "case"
+    shutil.copytree(inputs["dir"], d)
+    out = tmp_path / "out"
+    res = run_cli("fccompose", d / "dense.fcc", "-o", out, "-q", "--frames", "2")
+    assert res.returncode == 0, res.stderr
+    scn = next(p for p in d.glob("*.scn"))
+    scn.write_text(scn.read_text() + "# edited\n")
+    res = run_cli("fccompose", d / "dense.fcc", "-o", out, "--resume", "-q")
+    assert res.returncode == 2
+    assert f"found {scn.name} changed since it was interrupted" in res.stderr, res.stderr

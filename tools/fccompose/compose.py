@@ -601,12 +601,35 @@ def _merged(failed: CollisionResult, a: CollisionResult, b: CollisionResult) -> 
     return out
 
 
-def _fingerprint(params: CanopyParams, model: Model) -> str:
+def _input_hashes(params: CanopyParams) -> dict:
+    """sha256 of every file the run reads besides the templates (scene files, RBA frames, weight
+    files), keyed by the path as the ``.fcc`` names it (an RBA folder: ``folder/NNNN.rba`` each),
+    so that ``--resume`` can name the input that changed (issue 14)."""
+    out = {}
+    paths = [(f.raw, f.resolved) for f in params.scene_files]
+    for r in params.rigid_body_animations:
+        paths.append((r.scene_path.raw, r.scene_path.resolved))
+        folder = Path(r.rba_folder.resolved)
+        if folder.is_dir():
+            paths += [(f"{r.rba_folder.raw.rstrip('/')}/{p.name}", p) for p in sorted(folder.glob("*.rba"))]
+    paths += [(f.raw, f.resolved) for f in params.weights.values()]
+    for raw, path in paths:
+        path = Path(path)
+        if path.is_file() and raw not in out:
+            out[raw] = hashlib.sha256(path.read_bytes()).hexdigest()
+    return out
+
+
+def _fingerprint(params: CanopyParams, model: Model, inputs: dict | None = None) -> str:
+    """One hash of the parameter file, the templates (positions and triangles) and ``inputs``
+    (:func:`_input_hashes`): a resumed run must have read the same."""
     h = hashlib.sha256()
     if params.source is not None and Path(params.source).is_file():
         h.update(Path(params.source).read_bytes())
     h.update(model.template_x.tobytes())
     h.update(model.tri_indices.tobytes())
+    for raw, digest in sorted((inputs or {}).items()):
+        h.update(raw.encode("utf-8") + b"\0" + digest.encode("ascii"))
     return h.hexdigest()
 
 
@@ -635,7 +658,7 @@ def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndar
     return path
 
 
-def _save_state(out: Path, state: State, fingerprint: str) -> None:
+def _save_state(out: Path, state: State, fingerprint: str, inputs: dict | None = None) -> None:
     """Write ``state`` to ``out/state/``: ``frame_NNNN.npy`` (the exact float64 positions, the
     only one kept) and ``run.json`` (``fingerprint``, ``frame``; ``not_emerged``: the florets not
     yet present, ``emerged_smaller``: [floret, size, frame] of those that emerged smaller, each
@@ -647,6 +670,8 @@ def _save_state(out: Path, state: State, fingerprint: str) -> None:
     k = int(state.frame)
     write_bytes_atomic(sdir / frame_name(k, "frame_", ".npy", 4), buf.getvalue())
     info = {"fingerprint": fingerprint, "frame": k}
+    if inputs:
+        info["inputs"] = inputs
     if not state.born.all():
         info["not_emerged"] = np.nonzero(~state.born)[0].tolist()
     small = np.nonzero(state.emerge_scale < 1.0)[0]
@@ -659,7 +684,7 @@ def _save_state(out: Path, state: State, fingerprint: str) -> None:
             old.unlink()
 
 
-def _load_state(out: Path, fingerprint: str, model: Model) -> State | None:
+def _load_state(out: Path, fingerprint: str, model: Model, inputs: dict | None = None) -> State | None:
     """The :class:`State` :func:`_save_state` wrote to ``out/state/``; None when there is none or
     its frame's OBJ is missing (nothing to resume: start from frame 0)."""
     sdir = out / "state"
@@ -668,6 +693,14 @@ def _load_state(out: Path, fingerprint: str, model: Model) -> State | None:
         return None
     info = json.loads(run.read_text())
     if info.get("fingerprint") != fingerprint:
+        before = info.get("inputs") or {}
+        changed = [k for k in sorted(set(before) | set(inputs or {})) if before.get(k) != (inputs or {}).get(k)]
+        if changed:
+            what = ("removed since" if changed[0] not in (inputs or {}) else
+                    "added since" if changed[0] not in before else "changed since")
+            raise InputError(f"{run}: expected the inputs of the run to resume, found {changed[0]} {what} it "
+                             f"was interrupted{f' (and {len(changed) - 1} more)' if len(changed) > 1 else ''} "
+                             f"(delete {out} or run without --resume)")
         raise InputError(f"{run}: expected a run of the same parameters and inputs to resume, "
                          f"found one of different parameters (delete {out} or run without --resume)")
     k = int(info["frame"])
@@ -700,6 +733,8 @@ class _Run:
     warn: Callable
     result: ComposeResult
     log_rows: list = field(default_factory=list)
+    inputs: dict = field(default_factory=dict)
+    """sha256 of each input file (:func:`_input_hashes`), saved with the state"""
 
 
 def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, strict: bool = False,
@@ -738,11 +773,13 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
     model = build_model(params)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    fp = _fingerprint(params, model)
+    inputs = _input_hashes(params)
+    fp = _fingerprint(params, model, inputs)
     n = model.n_frames
-    state = _load_state(out, fp, model) if resume else None
+    state = _load_state(out, fp, model, inputs) if resume else None
     run = _Run(Simulation(model, coloured=coloured, state=state), out, fp, strict, warn or (lambda msg: None),
-               ComposeResult(n_triangles=model.n_triangles, n_vertices=model.n_vertices, last_frame=n))
+               ComposeResult(n_triangles=model.n_triangles, n_vertices=model.n_vertices, last_frame=n),
+               inputs=inputs)
     result = run.result
     if state is not None:
         run.log_rows = [r for r in read_log(out / "log.csv") if r and int(r[0]) <= state.frame]
@@ -876,6 +913,6 @@ def _record(run: _Run, row: FrameLog, *, write: bool) -> None:
         t0 = time.perf_counter()
         run.result.frames_written.append(_write_frame(run.out, sim.model, sim.state.vertex_x, sim.state.frame,
                                                       sim.present.tri_on))
-        _save_state(run.out, sim.state, run.fingerprint)
+        _save_state(run.out, sim.state, run.fingerprint, run.inputs)
         row["t_write_s"] = time.perf_counter() - t0
         write_log(run.out / "log.csv", run.log_rows)
