@@ -90,8 +90,8 @@ RAY_NU = 7  # half cross-section columns, ARC_HALF / 6 = 25 degrees apart
 TUBE_NV, LIMB_NV = 8, 4
 THETA = np.radians(np.linspace(0.0, ARC_HALF, RAY_NU))
 # the gap between the tube's end and the limb's base, along the centre line (floret units: about
-# 2 % of the open floret's length; a ray floret of the head is 0.05-0.2 scene units per floret
-# unit, so 0.003-0.012 scene units: 6-24 x fccompose's spacing)
+# 2 % of the open floret's length; a ray floret of the head is 0.09-0.24 scene units per floret
+# unit, so 0.005-0.014 scene units: 10-28 x fccompose's spacing)
 GAP = 0.06
 # the mouth's three shallow lobes: how far each column of the limb's last row falls short of the
 # lobes' tips, as a fraction of the limb's length: the middle lobe at the bottom (0 degrees), a
