@@ -101,6 +101,33 @@ def list_sequence(source, suffix: str) -> list[Path]:
     return [Path(n) for n in sorted(names, key=_natural_key)]
 
 
+_NUMBERED = re.compile(r"^(.*?)(\d+)(\.[^.]+)$")
+
+
+def first_missing_frame(paths, *, start: int | None = None) -> str | None:
+    """The name of the first frame missing from a numbered sequence (``frame_0003.obj`` between
+    ``frame_0002.obj`` and ``frame_0004.obj``), or None when the numbers run without a gap.
+
+    ``start``: the number the sequence must begin with (RBA files: 0, file NNNN is frame NNNN);
+    None: any. Names that are not one prefix + digits + suffix (a glob of unrelated files) are not
+    checked. File NNNN is frame NNNN, so a gap would re-time every later frame silently.
+    """
+    parsed = [_NUMBERED.match(Path(p).name) for p in paths]
+    if not parsed or any(m is None for m in parsed):
+        return None
+    if len({(m.group(1), m.group(3)) for m in parsed}) != 1:
+        return None
+    nums = [int(m.group(2)) for m in parsed]
+    width = len(parsed[0].group(2))
+    prefix, suffix = parsed[0].group(1), parsed[0].group(3)
+    expected = nums[0] if start is None else start
+    for n in nums:
+        if n != expected:
+            return f"{prefix}{expected:0{width}d}{suffix}"
+        expected += 1
+    return None
+
+
 def remove_stale_frames(folder, keep, suffix: str, prefix: str = "frame_") -> list[Path]:
     """Remove ``prefix<digits>suffix`` files in ``folder`` whose names are not in ``keep`` (paths or
     names): the frames of an earlier, longer run that this run did not write, so a sequence folder

@@ -657,3 +657,21 @@ def test_resume_refuses_an_input_changed_since_the_interruption(inputs, tmp_path
     res = run_cli("fccompose", d / "dense.fcc", "-o", out, "--resume", "-q")
     assert res.returncode == 2
     assert f"found {scn.name} changed since it was interrupted" in res.stderr, res.stderr
+
+
+def test_a_gap_in_an_input_sequence_is_refused(inputs, tmp_path):
+    """File NNNN is frame NNNN: a missing RBA file or animation frame would re-time everything
+    after it silently; fccompose names the first missing file (issue 14)."""
+    from inflo.formats.atomic import first_missing_frame
+
+    assert first_missing_frame(["a/frame_0000.obj", "a/frame_0001.obj", "a/frame_0003.obj"]) == "frame_0002.obj"
+    assert first_missing_frame(["1.obj", "2.obj", "3.obj"]) is None
+    assert first_missing_frame(["1.obj", "2.obj"], start=0) == "0.obj"
+    assert first_missing_frame(["x.obj", "frame_0002.obj"]) is None  # not one numbered sequence
+    d = tmp_path / "case"
+    shutil.copytree(inputs["dir"], d)
+    frames = sorted((d / "anim").glob("frame_*.obj"))
+    frames[5].unlink()
+    res = run_cli("fccompose", d / "dense.fcc", "-o", tmp_path / "out", "-q")
+    assert res.returncode == 2 and f"{frames[5].name} missing" in res.stderr, res.stderr
+    assert not (tmp_path / "out").exists() or not list((tmp_path / "out").glob("*.obj"))

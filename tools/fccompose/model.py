@@ -55,6 +55,7 @@ from numba import njit
 
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.fcc import CanopyParams
+from inflo.formats.atomic import first_missing_frame
 from inflo.formats.obj import read_obj, read_obj_sequence
 from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import read_rba_sequence
@@ -148,7 +149,11 @@ def _load_template(params: CanopyParams, entry) -> Template:
         mesh = read_obj(entry.path.resolved)
         frames = mesh.vertices[None]
     else:
-        _, meshes = read_obj_sequence(entry.path.resolved)
+        paths, meshes = read_obj_sequence(entry.path.resolved)
+        gap = first_missing_frame(paths)
+        if gap is not None:
+            raise FormatError(params.source, entry.line, f"an OBJ sequence without a gap in {entry.path.raw} (a "
+                              "missing frame would re-time the animation)", f"{gap} missing")
         frames = np.stack([m.vertices for m in meshes])
         mesh = meshes[0]
     faces = mesh.faces
@@ -579,6 +584,10 @@ def load_inputs(params: CanopyParams) -> Inputs:
         paths, frames = read_rba_sequence(r.rba_folder.resolved, scenes[sp])
         if not paths:
             raise FormatError(params.source, r.line, "a folder with RBA files", f"none in {r.rba_folder.raw}")
+        gap = first_missing_frame(paths, start=0)
+        if gap is not None:
+            raise FormatError(params.source, r.line, f"RBA files numbered from 0 without a gap (file NNNN is frame "
+                              f"NNNN) in {r.rba_folder.raw}", f"{gap} missing")
         rbas[sp] = RbaSequence(paths, frames, np.asarray(r.scale, float))
     return Inputs(scenes, _TemplateFiles(params), rbas)
 
