@@ -126,3 +126,38 @@ def test_separating_plane_decides_pairs_the_edge_determinants_cannot():
         P, Q = rng.normal(size=(3, 3)), rng.normal(size=(3, 3))
         if separated(*P, *Q):
             assert not triangles_intersect_exact(*P, *Q)
+
+
+def test_separated_never_claims_an_intersecting_pair_and_decides_flat_facets():
+    """Coplanar pairs (two triangles of one flat facet, touching or not) and random near-degenerate
+    pairs: whenever ``separated`` says disjoint, the exact test agrees; disjoint triangles of one
+    plane are decided without the exact fallback."""
+    import numpy as np
+
+    from inflo.tools.collide.exact import triangles_intersect_exact
+    from inflo.tools.collide.tritri import separated
+
+    rng = np.random.default_rng(11)
+    decided = 0
+    for _ in range(3000):
+        # a random plane, two random triangles in it (on a grid so touching cases occur)
+        o, u, v = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+        pts = rng.integers(0, 4, size=(6, 2)).astype(float)
+        P = [o + a * u + b * v for a, b in pts[:3]]
+        Q = [o + a * u + b * v for a, b in pts[3:]]
+        if separated(*P, *Q):
+            decided += 1
+            assert not triangles_intersect_exact(*P, *Q)
+    assert decided > 300
+    # a flat facet's two disjoint triangles (rows of a straight cylinder column)
+    P = [np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])]
+    Q = [np.array([2.0, 1.0, 0.0]), np.array([3.0, 1.0, 0.0]), np.array([2.0, 2.0, 0.0])]
+    assert separated(*P, *Q) and not triangles_intersect_exact(*P, *Q)
+    # touching at a vertex: not separated
+    Q = [np.array([1.0, 0.0, 0.0]), np.array([2.0, 0.0, 0.0]), np.array([1.0, 1.0, 0.0])]
+    assert not separated(*P, *Q) and triangles_intersect_exact(*P, *Q)
+    for _ in range(3000):
+        P = rng.normal(size=(3, 3))
+        Q = P[rng.integers(0, 3, 3)] + rng.normal(size=(3, 3)) * 10.0 ** rng.integers(-12, 0)
+        if separated(*P, *Q):
+            assert not triangles_intersect_exact(*P, *Q)

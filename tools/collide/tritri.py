@@ -188,12 +188,61 @@ def _certainly_one_side(a, b, c, p, q, r):
     return abs(d2) > e2 and (d2 > 0) == (d0 > 0)
 
 
+_O2D_ERRBOUND = (3.0 + 16.0 * 2.0 ** -53) * 2.0 ** -53  # Shewchuk's ccwerrboundA
+
+
+@njit(cache=True, inline="always")
+def _orient2d_sign(ax, ay, bx, by, cx, cy):
+    """Sign of the 2-D orientation of (a, b, c), or 0 where float64 cannot certify it (Shewchuk)."""
+    left = (ax - cx) * (by - cy)
+    right = (ay - cy) * (bx - cx)
+    det = left - right
+    if abs(det) > _O2D_ERRBOUND * (abs(left) + abs(right)):
+        return 1 if det > 0 else -1
+    return 0
+
+
+@njit(cache=True, inline="always")
+def _edge_separates(a, b, c, p, q, r, i, j):
+    """The line through edge ab of triangle abc, in the projection onto axes (i, j), certainly has
+    c on one side and p, q, r strictly on the other."""
+    sc = _orient2d_sign(a[i], a[j], b[i], b[j], c[i], c[j])
+    if sc == 0:
+        return False
+    for v in (p, q, r):
+        if _orient2d_sign(a[i], a[j], b[i], b[j], v[i], v[j]) != -sc:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _separated_in_projection(p0, p1, p2, q0, q1, q2):
+    """Disjoint projections onto the coordinate plane most nearly parallel to p0p1p2 (a separating
+    edge line of either triangle, every sign certified): then the triangles are disjoint too. Decides
+    coplanar pairs, where every plane-side determinant is zero (two triangles of one flat facet)."""
+    nx = (p1[1] - p0[1]) * (p2[2] - p0[2]) - (p1[2] - p0[2]) * (p2[1] - p0[1])
+    ny = (p1[2] - p0[2]) * (p2[0] - p0[0]) - (p1[0] - p0[0]) * (p2[2] - p0[2])
+    nz = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0])
+    ax, ay, az = abs(nx), abs(ny), abs(nz)
+    if ax >= ay and ax >= az:
+        i, j = 1, 2
+    elif ay >= az:
+        i, j = 0, 2
+    else:
+        i, j = 0, 1
+    return (_edge_separates(p0, p1, p2, q0, q1, q2, i, j) or _edge_separates(p1, p2, p0, q0, q1, q2, i, j)
+            or _edge_separates(p2, p0, p1, q0, q1, q2, i, j) or _edge_separates(q0, q1, q2, p0, p1, p2, i, j)
+            or _edge_separates(q1, q2, q0, p0, p1, p2, i, j) or _edge_separates(q2, q0, q1, p0, p1, p2, i, j))
+
+
 @njit(cache=True)
 def separated(p0, p1, p2, q0, q1, q2):
-    """True when one triangle's plane certainly separates the other triangle: disjoint, decided in
-    float64 even where :func:`certified` is not (e.g. parallel edges of two concentric cylinders,
-    whose edge-edge determinants are exactly zero)."""
-    return _certainly_one_side(p0, p1, p2, q0, q1, q2) or _certainly_one_side(q0, q1, q2, p0, p1, p2)
+    """True when the triangles are certainly disjoint, decided in float64 even where
+    :func:`certified` is not: one triangle's plane separates the other (e.g. parallel edges of two
+    concentric cylinders, whose edge-edge determinants are exactly zero), or their projections onto
+    a coordinate plane are separated by an edge line (coplanar triangles of one flat facet)."""
+    return (_certainly_one_side(p0, p1, p2, q0, q1, q2) or _certainly_one_side(q0, q1, q2, p0, p1, p2)
+            or _separated_in_projection(p0, p1, p2, q0, q1, q2))
 
 
 @njit(cache=True)
