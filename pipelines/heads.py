@@ -1,0 +1,147 @@
+"""Checks shared by the dense-head species builds (pipelines/sunflower, pipelines/gaillardia).
+
+Each species' ``check_<species>.py`` runs :func:`check_head` with its own facts (ray count, bud
+height, extra per-frame or whole-run checks) and prints the same report: intersections of every
+written canopy frame (exact static test, within the canopy and with the receptacle), the edge
+stretch bounds from fccompose's log, every floret present at the end, the ray florets on the
+margin, and the phase effect at two thirds of the run. Imported by path (the scripts put this
+folder on ``sys.path``).
+"""
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+from scipy.stats import spearmanr
+
+from inflo.formats.obj import list_obj_sequence, read_obj
+from inflo.formats.rba import read_rba
+from inflo.formats.scn import read_scn
+from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
+
+BOUNDS = (0.5, 1.5)
+
+
+def floret_faces(mesh) -> dict:
+    """Face indices of each floret_<placement> group."""
+    out = {}
+    for g, name in enumerate(mesh.groups):
+        if name.startswith("floret_"):
+            out[int(name.split("_")[1])] = np.nonzero(mesh.face_group == g)[0]
+    return out
+
+
+def floret_heights(mesh, frame_rba, scene) -> dict:
+    """Height of each floret's highest vertex above its base, along its axis, in floret units."""
+    rows = {int(i): k for k, i in enumerate(frame_rba.ids)}
+    out = {}
+    for pid, faces in floret_faces(mesh).items():
+        if pid not in rows or scene.placements[pid].kind != "rba":
+            continue
+        r = rows[pid]
+        v = mesh.vertices[np.unique(mesh.faces[faces])]
+        up = frame_rba.up[r] / np.linalg.norm(frame_rba.up[r])
+        scale = float(frame_rba.scale[r, 1]) * float(scene.placements[pid].scale[1])
+        out[pid] = float(((v - frame_rba.pos[r]) @ up).max()) / scale
+    return out
+
+
+class Head:
+    """The build of one head: its typed scene, canopy frames, receptacle meshes and RBA frames."""
+
+    def __init__(self, build: Path):
+        self.build = Path(build)
+        self.scene = read_scn(self.build / "head" / "typed.scn")
+        self.types = [p.type for p in self.scene.placements]
+        self.canopy = list_obj_sequence(self.build / "canopy")
+        self.receptacle = list_obj_sequence(self.build / "head" / "receptacle")
+        self.rba = sorted((self.build / "head" / "rba").glob("*.rba"))
+        pos = self.scene.arrays()["pos"]
+        centre = self.scene.groups[0].centre if 0 in self.scene.groups else pos.mean(axis=0)
+        self.radius = np.linalg.norm((pos - centre)[:, [0, 2]], axis=1)
+
+    def rba_frame(self, k: int):
+        return read_rba(self.rba[min(k, len(self.rba) - 1)])
+
+
+def check_head(build: Path, *, rays: int, failures: list, per_frame=None) -> Head:
+    """Print the shared report of a head build, appending what fails to ``failures``.
+
+    ``rays``: the ray florets the species has; ``per_frame(i, mesh)``: called on every canopy frame
+    (for a species' own per-frame checks). Returns the :class:`Head` for the species' further
+    checks (:func:`check_phase` and its own).
+    """
+    head = Head(build)
+    scene, types, canopy, receptacle = head.scene, head.types, head.canopy, head.receptacle
+    print(f"canopy: {len(canopy)} frames; head: {len(scene)} placements "
+          f"({types.count('disk')} disk, {types.count('ray')} ray, {types.count('bract')} bracts)")
+
+    # intersections, within the canopy and with the receptacle: every written frame is tested (the
+    # written file is what is promised collision-free); every tenth frame, the last and any frame
+    # with an intersection are listed
+    total_pairs = total_rec = 0
+    mesh = None
+    for i, path in enumerate(canopy):
+        mesh = read_obj(path)
+        n = len(intersecting_pairs(mesh.vertices, mesh.faces))
+        rec = read_obj(receptacle[min(i, len(receptacle) - 1)])
+        nr = len(intersecting_pairs_between(mesh.vertices, mesh.faces, rec.vertices, rec.faces))
+        total_pairs += n
+        total_rec += nr
+        if n or nr or i % 10 == 0 or i == len(canopy) - 1:
+            print(f"  frame {i:3d}: {len(mesh.faces)} triangles, {len(mesh.groups)} florets, {n} intersecting pairs, "
+                  f"{nr} with the receptacle")
+        if n or nr:
+            failures.append(f"frame {i}: {n} intersecting pairs, {nr} with the receptacle")
+        if per_frame is not None:
+            per_frame(i, mesh)
+    last = mesh
+    print(f"every frame ({len(canopy)}) tested: {total_pairs} intersecting pairs, {total_rec} with the receptacle")
+
+    # shape: fccompose's per-frame stretch figures
+    with open(head.build / "canopy" / "log.csv", newline="") as fh:
+        log = list(csv.DictReader(fh))
+    lo = min(float(r["min_edge_stretch"]) for r in log)
+    hi = max(float(r["max_edge_stretch"]) for r in log)
+    out = [r["frame"] for r in log if float(r["min_edge_stretch"]) < BOUNDS[0] or float(r["max_edge_stretch"]) > BOUNDS[1]]
+    print(f"edge stretch over all frames: {lo:.3f}-{hi:.3f} x rest; frames outside [{BOUNDS[0]}, {BOUNDS[1]}]: {len(out)}")
+    if out:
+        failures.append(f"{len(out)} frames with edges outside {BOUNDS} x rest (frames {', '.join(out[:5])} ...)")
+
+    # every floret present at the end
+    present = {int(g.split("_")[1]) for g in last.groups if g.startswith("floret_")}
+    missing = sorted(set(range(len(scene))) - present)
+    print(f"florets in the last frame: {len(present)} of {len(scene)}")
+    if missing:
+        failures.append(f"{len(missing)} florets missing at the end (e.g. {missing[:5]})")
+
+    # the species' facts: its rays, on the margin
+    radius, t = head.radius, np.array(types)
+    n_rays = int((t == "ray").sum())
+    rim = float(np.quantile(radius[t == "disk"], 0.9))
+    inner_rays = int((radius[t == "ray"] < rim).sum())
+    print(f"ray florets: {n_rays} (expected {rays}); closest to the centre at {radius[t == 'ray'].min():.3f}, "
+          f"the outermost tenth of the disk florets from {rim:.3f}")
+    if n_rays != rays:
+        failures.append(f"{n_rays} ray florets, expected {rays}")
+    if inner_rays:
+        failures.append(f"{inner_rays} ray florets inside the outermost tenth of the disk florets")
+    return head
+
+
+def check_phase(head: Head, *, bud: float, failures: list) -> None:
+    """The phase effect at two thirds of the run: disk florets' heights fall from rim to centre
+    (Spearman rank correlation with the distance from the centre > 0.5), some still in bud."""
+    k = (2 * len(head.canopy)) // 3
+    heights = floret_heights(read_obj(head.canopy[k]), head.rba_frame(k), head.scene)
+    disk = [p for p in heights if head.types[p] == "disk"]
+    h = np.array([heights[p] for p in disk])
+    rho = float(spearmanr(head.radius[disk], h).statistic) if len(disk) > 2 else float("nan")
+    buds = int((h < bud).sum())
+    print(f"phase effect at frame {k}: {len(disk)} disk florets, height {h.min():.2f}-{h.max():.2f} floret units, "
+          f"rank correlation with the distance from the centre {rho:.2f}, {buds} still in bud (height < {bud})")
+    if not rho > 0.5:
+        failures.append(f"no phase effect at frame {k}: rank correlation {rho:.2f}")
+    if buds == 0:
+        failures.append(f"no disk floret in bud at frame {k}")
