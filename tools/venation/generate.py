@@ -45,8 +45,17 @@ def sim_params(p: Params, inputs: Inputs, seed: int | None = None) -> SimParams:
                      kill_distance=p.veins.kill_distance, birth_source=p.sources.birth_source,
                      birth_vein=p.sources.birth_vein, darts=p.sources.darts,
                      roots=tuple(map(tuple, inputs.roots.tolist())), settle=p.sources.settle,
+                     region=_region(p),
                      max_iterations=p.run.max_iterations, max_nodes=p.run.max_nodes,
                      seed=p.run.seed if seed is None else seed)
+
+
+def _region(p: Params) -> str:
+    """Where darts fall: ``auto`` is the thesis's choice, the margin for marginal growth."""
+    r = p.sources.region
+    if r == "auto":
+        return "margin" if p.growth.type == "marginal" else "blade"
+    return r
 
 
 def _rgb(c: str):
@@ -68,7 +77,7 @@ def _header(p: Params, sp: SimParams, inputs: Inputs) -> str:
             (f",{s1[1]:g}" if s1[1] != s1[0] else "") + f" in {g.steps} steps"
     nb = f" ({sp.neighbourhood} neighbourhood)" if sp.pattern == "closed" else ""
     return (f"venation (Runions ch. 4): {sp.pattern} pattern{nb}, growth {grow}; D {sp.step:g} d_k {sp.kill_distance:g} "
-            f"b_s {sp.birth_source:g} b_v {sp.birth_vein:g} rho {sp.darts:g}; seed {sp.seed}\n"
+            f"b_s {sp.birth_source:g} b_v {sp.birth_vein:g} rho {sp.darts:g} ({sp.region}); seed {sp.seed}\n"
             f"widths: Murray's law, tip {p.width.tip:g} exponent {p.width.exponent:g} increment {p.width.increment:g}")
 
 

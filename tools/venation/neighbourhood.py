@@ -15,21 +15,23 @@ only against the other Delaunay neighbours (Urquhart's approximation).
 
 :func:`relative_neighbourhoods` computes the same sets without a triangulation per source. The
 nodes are visited in order of distance from s, ring by ring of grid cells; each visited node u
-cuts the convex region C (initially the nodes' bounding box) by its bisector half-plane
+cuts the convex region C (initially a polygon around the nodes) by its bisector half-plane
 {x : |x - s| <= |x - u|}. A node v farther than every node already visited is excluded by some u
 exactly when it lies beyond u's bisector, so v is a relative neighbour iff it lies in C (the test
 is then repeated with the exact inequality of eq. 4.1 against every visited node, so the answer
 is the brute-force one, also under rounding). The search stops when every vertex of C is closer
 to s than the ring radius: no unvisited node can lie in C. C is then the Voronoi cell of s in A_s
-clipped to the box; for the Urquhart approximation the search goes on to twice that radius (the
+clipped to that polygon; for the Urquhart approximation the search goes on to twice that radius (the
 classical bound for a Voronoi cell), the Delaunay neighbours of s are the nodes whose bisectors
 bound C, and each is tested against the other Delaunay neighbours only. Every relative neighbour
 is a Delaunay neighbour whose Voronoi edge holds the midpoint of s and v (the Gabriel property),
-so with a box around A_s the Urquhart set of this module lies between the relative neighbourhood
+so with a polygon around A_s the Urquhart set of this module lies between the relative neighbourhood
 and the Delaunay neighbourhood, as the thesis states.
 
-Only nodes near s are visited: the run time grows with the number of sources, not with sources
-times nodes (sec. 4.4.2 reaches O(kn) with Voronoi diagrams).
+C starts as the intersection of 32 support half-planes of the nodes (:func:`hull_support`): a
+polygon around their convex hull, so a source near the margin, whose Voronoi cell opens toward the
+empty margin, still has a small C. Only nodes near s are visited: the run time grows with the
+number of sources, not with sources times nodes (sec. 4.4.2 reaches O(kn) with Voronoi diagrams).
 """
 from __future__ import annotations
 
@@ -47,7 +49,11 @@ __all__ = [
     "grid_rebuild",
     "grid_remove_cells",
     "nearest_nodes",
+    "nearest_incremental",
     "relative_neighbourhoods",
+    "neighbourhoods",
+    "hull_support",
+    "HULL_DIRECTIONS",
     "relative_neighbourhood_brute",
     "relative_neighbourhood_delaunay",
     "urquhart_delaunay",
@@ -67,6 +73,11 @@ NEAREST, RELATIVE, URQUHART = 0, 1, 2
 Urquhart approximation (closed patterns)."""
 
 _POLY = 256  # vertices of the clipped region C (a Voronoi cell has a handful)
+HULL_DIRECTIONS = 32
+"""Directions of the support half-planes around the nodes' convex hull (C's starting polygon)."""
+_HULL_DIRS = np.array([[math.cos(2 * math.pi * k / HULL_DIRECTIONS), math.sin(2 * math.pi * k / HULL_DIRECTIONS)]
+                       for k in range(HULL_DIRECTIONS)])
+_HULL_DIRS[::HULL_DIRECTIONS // 4] = np.round(_HULL_DIRS[::HULL_DIRECTIONS // 4])
 _TOL = 1e-9  # relative slack of the region tests (the exact test decides)
 
 
@@ -209,6 +220,12 @@ def _ring_limit(cx, cy, nx, ny):
 
 
 @njit(cache=True)
+def _ring_start(cx, cy, nx, ny):
+    """The first ring that holds a cell of the grid (0 when (cx, cy) is in the grid)."""
+    return max(max(-cx, cx - (nx - 1)), max(max(-cy, cy - (ny - 1)), 0))
+
+
+@njit(cache=True)
 def _nearest_one(x, y, pos, n_nodes, grid, cells):
     """Index and squared distance of the node nearest to (x, y) (lowest index among equals).
 
@@ -221,7 +238,7 @@ def _nearest_one(x, y, pos, n_nodes, grid, cells):
     best, bi = np.inf, np.int64(-1)
     limit = _ring_limit(cx, cy, nx, ny)
     scanned = 0
-    r = 0
+    r = _ring_start(cx, cy, nx, ny)
     while r <= limit:
         m = _ring_cells(cx, cy, r, nx, ny, cells)
         scanned += m
@@ -254,6 +271,30 @@ def nearest_nodes(src_pos, src_idx, pos, n_nodes, grid, out_node, out_d2):
     for j in range(src_idx.shape[0]):
         s = src_idx[j]
         out_node[j], out_d2[j] = _nearest_one(src_pos[s, 0], src_pos[s, 1], pos, n_nodes, grid, cells)
+
+
+@njit(cache=True)
+def nearest_incremental(src_pos, src_idx, near, near_d2, pos, n_from, n_nodes, grid, out, out_n):
+    """:func:`nearest_nodes` kept up to date: a source with a nearest node (``near[s]`` >= 0, found
+    among the nodes ``0:n_from``) only compares the nodes ``n_from:n_nodes`` added since (nodes do
+    not move); one without gets a full search. The same answer as a full search (the lowest index
+    among equals: older nodes have lower indices). Row j of ``out`` gets source ``src_idx[j]``'s."""
+    nx, ny = np.int64(grid.geom[3]), np.int64(grid.geom[4])
+    cells = np.empty(8 * (nx + ny) + 8, np.int64)
+    for j in range(src_idx.shape[0]):
+        s = src_idx[j]
+        x, y = src_pos[s, 0], src_pos[s, 1]
+        if near[s] < 0:
+            near[s], near_d2[s] = _nearest_one(x, y, pos, n_nodes, grid, cells)
+        else:
+            best, bi = near_d2[s], near[s]
+            for v in range(n_from, n_nodes):
+                d2 = (pos[v, 0] - x) ** 2 + (pos[v, 1] - y) ** 2
+                if d2 < best:
+                    best, bi = d2, v
+            near[s], near_d2[s] = bi, best
+        out[j, 0] = near[s]
+        out_n[j] = 1
 
 
 # --------------------------------------------------------------------------------------------
@@ -302,7 +343,14 @@ def _exact_rn(v, d2v, sx, sy, pos, cand, n_cand, cand_d2):
 
 @njit(cache=True)
 def _sort_pending(ids, d2, a, b):
-    """Sort ids[a:b], d2[a:b] by (d2, id): insertion sort (rounds are small)."""
+    """Sort ids[a:b], d2[a:b] by (d2, id): insertion sort for a ring's few nodes, a merge sort
+    (then ties by id) for many."""
+    if b - a > 48:
+        order = np.argsort(d2[a:b], kind="mergesort")
+        si = ids[a:b][order].copy()
+        sd = d2[a:b][order].copy()
+        ids[a:b] = si
+        d2[a:b] = sd
     for i in range(a + 1, b):
         ki, kd = ids[i], d2[i]
         j = i - 1
@@ -315,13 +363,14 @@ def _sort_pending(ids, d2, a, b):
 
 
 @njit(cache=True)
-def _neighbourhood_one(sx, sy, pos, n_nodes, grid, box, kind, cells, ids, dd, mark, stamp, poly, out):
+def _neighbourhood_one(sx, sy, pos, n_nodes, grid, sup, kind, cells, ids, dd, mark, stamp, poly, out):
     """V(s) (kind RELATIVE) or the Urquhart set (kind URQUHART) of the source at (sx, sy) among
     the nodes ``0:n_nodes``; into ``out`` (nearest first), returns the count.
 
-    ``box`` = (xmin, ymin, xmax, ymax) holds every node (and s, for URQUHART). ``ids``, ``dd``:
-    room for every node; ``mark``: per node, ``stamp`` once processed; ``poly``: (6, _POLY)
-    scratch. Every node lies inside the grid box.
+    ``sup`` (HULL_DIRECTIONS,): support values (:func:`hull_support`, padded; for URQUHART
+    including s) whose half-planes hold every node: C starts as their intersection. ``ids``,
+    ``dd``: room for every node; ``mark``: per node, ``stamp`` once processed; ``poly``:
+    (6, _POLY) scratch. Every node lies inside the grid box.
     """
     geom = grid.geom
     h = geom[2]
@@ -329,21 +378,25 @@ def _neighbourhood_one(sx, sy, pos, n_nodes, grid, box, kind, cells, ids, dd, ma
     cx, cy = _cell_of(sx, sy, geom)
     limit = _ring_limit(cx, cy, nx, ny)
     px, py, po, qx, qy, qo = poly[0], poly[1], poly[2], poly[3], poly[4], poly[5]
-    # C starts as the box, counter-clockwise, relative to s
-    px[0], py[0] = box[0] - sx, box[1] - sy
-    px[1], py[1] = box[2] - sx, box[1] - sy
-    px[2], py[2] = box[2] - sx, box[3] - sy
-    px[3], py[3] = box[0] - sx, box[3] - sy
+    # C starts as the polygon of the support half-planes, counter-clockwise, relative to s
+    K = sup.shape[0]
+    x0, x1 = -sup[K // 2] - sx, sup[0] - sx
+    y0, y1 = -sup[3 * K // 4] - sy, sup[K // 4] - sy
+    px[0], py[0] = x0, y0
+    px[1], py[1] = x1, y0
+    px[2], py[2] = x1, y1
+    px[3], py[3] = x0, y1
     for i in range(4):
         po[i] = -1.0
     m = 4
+    hulled = False  # the oblique support half-planes are applied when the box is not enough
+    scale = abs(x1 - x0) + abs(y1 - y0) + abs(sx) + abs(sy) + 1e-300
     n_coll = 0  # nodes collected: ids[:n_coll]; the first n_done processed, nearest first
     n_done = 0
     n_out = 0
     scanned = 0
-    r = 0
+    r = _ring_start(cx, cy, nx, ny)
     everything = False
-    scale = max(box[2] - box[0], box[3] - box[1]) + abs(sx) + abs(sy) + 1e-300
     while True:
         # collect ring r, or every node not yet processed when rings cost more than a scan
         if r > limit or scanned > 4 * n_nodes + 64:
@@ -370,6 +423,15 @@ def _neighbourhood_one(sx, sy, pos, n_nodes, grid, box, kind, cells, ids, dd, ma
         # process the collected nodes closer than that, nearest first
         _sort_pending(ids, dd, n_done, n_coll)
         while n_done < n_coll and dd[n_done] < r_safe2:
+            if everything and n_done % 16 == 0 and m >= 3:
+                # every node left is at least this far: stop once C lies inside that radius
+                rmax2 = 0.0
+                for i in range(m):
+                    rmax2 = max(rmax2, px[i] * px[i] + py[i] * py[i])
+                if kind == URQUHART:
+                    rmax2 *= 4.0
+                if rmax2 * (1.0 + 1e-6) < dd[n_done]:
+                    break
             v = ids[n_done]
             d2v = dd[n_done]
             mark[v] = stamp
@@ -402,6 +464,19 @@ def _neighbourhood_one(sx, sy, pos, n_nodes, grid, box, kind, cells, ids, dd, ma
             rmax2 = max(rmax2, px[i] * px[i] + py[i] * py[i])
         if kind == URQUHART:
             rmax2 *= 4.0
+        if not (m < 3 or rmax2 * (1.0 + 1e-6) < r_safe2) and not hulled and r >= 3:
+            hulled = True
+            for k in range(K):
+                if k % (K // 4) != 0 and m >= 3:
+                    a, b = _HULL_DIRS[k, 0], _HULL_DIRS[k, 1]
+                    m = _clip(px, py, po, m, a, b, sup[k] - a * sx - b * sy, -1.0, qx, qy, qo)
+                    for i in range(m):
+                        px[i], py[i], po[i] = qx[i], qy[i], qo[i]
+            rmax2 = 0.0
+            for i in range(m):
+                rmax2 = max(rmax2, px[i] * px[i] + py[i] * py[i])
+            if kind == URQUHART:
+                rmax2 *= 4.0
         if m < 3 or rmax2 * (1.0 + 1e-6) < r_safe2:
             break
         r += 1
@@ -457,28 +532,37 @@ def _sort_by_distance(out, n, pos, sx, sy):
 
 
 @njit(cache=True)
-def relative_neighbourhoods(src_pos, src_idx, pos, n_nodes, grid, kind, out, out_n):
+def hull_support(pos, i_from, i_to, sup):
+    """Raise ``sup`` (HULL_DIRECTIONS,) to the support values max n_k . p of points
+    ``pos[i_from:i_to]`` (start from -inf): the half-planes n_k . x <= sup_k hold every point, and
+    their intersection is a polygon around the points' convex hull."""
+    for i in range(i_from, i_to):
+        for k in range(_HULL_DIRS.shape[0]):
+            v = _HULL_DIRS[k, 0] * pos[i, 0] + _HULL_DIRS[k, 1] * pos[i, 1]
+            if v > sup[k]:
+                sup[k] = v
+
+
+@njit(cache=True)
+def relative_neighbourhoods(src_pos, src_idx, pos, n_nodes, grid, kind, support, out, out_n):
     """Neighbourhoods of the sources ``src_idx`` among the nodes ``pos[:n_nodes]``.
 
-    ``kind``: NEAREST (the closest node), RELATIVE (eq. 4.1) or URQUHART. Row ``j`` of ``out``
-    (k, MAX_NEIGHBOURS) gets the neighbours of source ``src_idx[j]`` nearest first, ``out_n[j]``
-    their count (0 when there are no nodes).
+    ``kind``: NEAREST (the closest node), RELATIVE (eq. 4.1) or URQUHART. ``support``: the nodes'
+    :func:`hull_support`. Row ``j`` of ``out`` (k, MAX_NEIGHBOURS) gets the neighbours of source
+    ``src_idx[j]`` nearest first, ``out_n[j]`` their count (0 when there are no nodes).
     """
     if n_nodes == 0:
         out_n[:] = 0
         return
-    xmin, ymin = np.inf, np.inf
-    xmax, ymax = -np.inf, -np.inf
-    for v in range(n_nodes):
-        xmin, xmax = min(xmin, pos[v, 0]), max(xmax, pos[v, 0])
-        ymin, ymax = min(ymin, pos[v, 1]), max(ymax, pos[v, 1])
     nx, ny = np.int64(grid.geom[3]), np.int64(grid.geom[4])
     cells = np.empty(8 * (nx + ny) + 8, np.int64)
     ids = np.empty(n_nodes + 8, np.int64)
     dd = np.empty(n_nodes + 8)
     mark = np.full(n_nodes, -1, np.int64)
     poly = np.empty((6, _POLY))
-    box = np.empty(4)
+    K = _HULL_DIRS.shape[0]
+    sup = np.empty(K)
+    ext = support[0] + support[K // 2] + support[K // 4] + support[3 * K // 4]
     row = np.empty(MAX_NEIGHBOURS, np.int64)
     for j in range(src_idx.shape[0]):
         s = src_idx[j]
@@ -488,21 +572,36 @@ def relative_neighbourhoods(src_pos, src_idx, pos, n_nodes, grid, kind, out, out
             out[j, 0] = v
             out_n[j] = 1
             continue
-        box[0], box[1], box[2], box[3] = xmin, ymin, xmax, ymax
-        if kind == URQUHART:
-            box[0], box[1] = min(box[0], sx), min(box[1], sy)
-            box[2], box[3] = max(box[2], sx), max(box[3], sy)
-        pad = 1e-6 * (box[2] - box[0] + box[3] - box[1]) + 1e-12
-        if kind == URQUHART:
-            pad = 0.01 * (box[2] - box[0] + box[3] - box[1]) + 1e-9
-        box[0] -= pad
-        box[1] -= pad
-        box[2] += pad
-        box[3] += pad
-        n = _neighbourhood_one(sx, sy, pos, n_nodes, grid, box, kind, cells, ids, dd, mark, j, poly, row)
+        pad = 1e-6 * (abs(ext) + abs(sx) + abs(sy)) + 1e-12
+        for k in range(K):
+            sup[k] = support[k] + pad
+            if kind == URQUHART:
+                sup[k] = max(sup[k], _HULL_DIRS[k, 0] * sx + _HULL_DIRS[k, 1] * sy + pad)
+        n = _neighbourhood_one(sx, sy, pos, n_nodes, grid, sup, kind, cells, ids, dd, mark, j, poly, row)
         out_n[j] = n
         for k in range(n):
             out[j, k] = row[k]
+
+
+def neighbourhoods(src_pos, nodes, kind=RELATIVE, h: float | None = None) -> list[np.ndarray]:
+    """Neighbourhoods of every source (k, 2) among ``nodes`` (n, 2), through a fresh grid (cells
+    of ``h``, default about the mean node spacing): a list of index arrays, nearest first."""
+    src = np.ascontiguousarray(src_pos, dtype=np.float64).reshape(-1, 2)
+    p = np.ascontiguousarray(nodes, dtype=np.float64).reshape(-1, 2)
+    n = len(p)
+    if n == 0:
+        return [np.zeros(0, np.int64) for _ in range(len(src))]
+    lo, hi = p.min(0), p.max(0)
+    if h is None:
+        h = max(float(np.max(hi - lo)) / math.sqrt(n), 1e-9 * (1.0 + float(np.abs(p).max())))
+    g = make_grid(lo - h, hi + h, h, n)
+    grid_insert(g, p, 0, n)
+    sup = np.full(HULL_DIRECTIONS, -np.inf)
+    hull_support(p, 0, n, sup)
+    out = np.zeros((len(src), MAX_NEIGHBOURS), np.int64)
+    cnt = np.zeros(len(src), np.int64)
+    relative_neighbourhoods(src, np.arange(len(src), dtype=np.int64), p, n, g, kind, sup, out, cnt)
+    return [out[j, :cnt[j]].copy() for j in range(len(src))]
 
 
 # --------------------------------------------------------------------------------------------

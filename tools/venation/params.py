@@ -39,6 +39,7 @@ __all__ = ["SCHEMA", "Params", "Run", "BladeSpec", "GrowthSpec", "Veins", "Sourc
 
 PATTERNS = ("open", "closed")
 NEIGHBOURHOODS = ("relative", "urquhart")
+REGIONS = ("auto", "blade", "margin")
 MAX_SAMPLES = 100_000
 MAX_TEXTURE = 16_384
 
@@ -109,6 +110,7 @@ class Sources:
     birth_source: float = _key("float", 2.0)
     birth_vein: float = _key("float", 2.0)
     darts: float = _key("float", 0.01)
+    region: str = _key(("choice", REGIONS), "auto")
     settle: int = _key("int", 10)
 
 
@@ -365,6 +367,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("sources", "birth_vein", "> 0 (b_v)")
     if s["darts"] <= 0:
         fail("sources", "darts", "> 0 (darts per unit leaf area per step)")
+    if s["region"] == "margin" and p["growth"]["type"] != "marginal":
+        fail("sources", "region", "'margin' only with growth.type = 'marginal' (the band the margin sweeps)")
     if s["settle"] < 0:
         fail("sources", "settle", ">= 0")
     w = p["width"]
@@ -450,7 +454,7 @@ def load_inputs(p: Params) -> Inputs:
     ------
     FormatError / InputError
         A missing or malformed file, an open contour, a margin that crosses itself or encloses no
-        area, a base or initial vein node outside the blade at its initial size, a growth function
+        area, a base or initial vein node outside the blade at its initial size (by more than D), a growth function
         that is not positive and non-decreasing.
     """
     margin = _margin(p)
@@ -461,9 +465,9 @@ def load_inputs(p: Params) -> Inputs:
         raise FormatError(p.source, _line_of(p.text, "blade", key), f"a simple closed margin for blade.{key}",
                           str(exc)) from None
     ext = float(np.ptp(blade.polygon, axis=0).max())
-    tol = 1e-6 * ext
+    tol = max(1e-6 * ext, p.veins.step)  # within D of the sampled margin counts as on it
     if p.blade.base is not None and not _in_or_on(blade, blade.base[None], 1.0, tol)[0]:
-        raise FormatError(p.source, _line_of(p.text, "blade", "base"), "blade.base inside or on the margin",
+        raise FormatError(p.source, _line_of(p.text, "blade", "base"), "blade.base inside the blade or within veins.step of its margin",
                           repr(p.blade.base))
     growth = _growth(p)
     s0 = growth.scale_at(0)
@@ -474,7 +478,7 @@ def load_inputs(p: Params) -> Inputs:
     if not ok.all():
         bad = roots[np.flatnonzero(~ok)[0]].tolist()
         raise FormatError(p.source, _line_of(p.text, "veins", "roots") if p.veins.roots else _line_of(p.text, "blade", "base"),
-                          "initial vein nodes inside the blade at its initial size", repr(bad))
+                          "initial vein nodes inside the blade at its initial size (or within veins.step of its margin)", repr(bad))
     return Inputs(blade=blade, growth=growth, roots=roots)
 
 

@@ -10,8 +10,10 @@ Every iteration runs the three processes of fig. 4.8 in turn:
    positions are base + (p - base) / lambda_t). Anisotropic growth (fig. 4.2d) moves every source
    and vein node with the blade, per axis.
 2. **Auxin sources** by dart throwing: rho darts per unit (real) leaf area per step, uniform in
-   the current blade; a dart becomes a source when it is farther than b_s from every source and
-   farther than b_v from every vein node.
+   the current blade (``region`` "blade") or only in the band of blade that marginal growth added
+   this step (``region`` "margin": "for marginal growth, new sources appear only on the margin",
+   sec. 4.2.3; the thesis includes a precomputed set as the contour reaches it); a dart becomes a
+   source when it is farther than b_s from every source and farther than b_v from every vein node.
 3. **Vein development**: each source s influences a set of vein nodes, its closest one (open
    patterns, fig. 4.10b) or its relative neighbourhood V(s) (closed patterns, eq. 4.1-4.2; or the
    Urquhart approximation); each influenced node v grows one new node v' = v + D n^ with
@@ -26,9 +28,14 @@ Every iteration runs the three processes of fig. 4.8 in turn:
 Two guards keep the graph clean. A node whose new direction repeats its last one (its sources
 unchanged) grows toward its closest source instead (branch-gen's SCA does the same); a new node
 that would come closer than D/2 to an existing node grows toward the closest source instead, and
-not at all if that is too close as well. In an open pattern the fallback always succeeds (a node
-within D/2 of v + D (s - v)/|s - v| would be nearer to s than v is, given d_k >= D); in a closed
-one a node stopped this way is within 1.5 D of its source and counts as having reached it.
+not at all if that is too close as well. In an open pattern only a node grown earlier in the same
+iteration can stop the fallback (any older node within D/2 of v + D (s - v)/|s - v| would be
+nearer to s than v is, given d_k >= D), and the next iteration gives s to that node. In a closed
+pattern a node stopped by it is within 1.5 D of its source; there a node that is influenced but
+does not grow counts, in the next iteration, as having reached its sources (so a source whose
+veins are all stopped is removed instead of waiting for ever: a vein that stepped just past its
+source, or one the Urquhart approximation keeps in V(s) although a node it did not test lies in
+the lune); such removals are counted (``sources_stalled``).
 
 The loop stops after the blade has stopped growing, when no source is left and no dart has been
 accepted for ``settle`` iterations (or at ``max_iterations`` / ``max_nodes``).
@@ -54,8 +61,11 @@ from .neighbourhood import (
     grid_insert_idx,
     grid_rebuild,
     grid_remove_cells,
+    hull_support,
     make_grid,
+    nearest_incremental,
     relative_neighbourhoods,
+    HULL_DIRECTIONS,
 )
 
 __all__ = ["SimParams", "VenationResult", "simulate", "Snapshot"]
@@ -74,6 +84,8 @@ class SimParams:
     birth_source, birth_vein : b_s, b_v
     darts : rho, darts per unit leaf area per step
     roots : (r, 2) initial vein nodes (scale-1 blade coordinates)
+    region : "blade" (darts anywhere in the blade) or "margin" (only in the blade new this step:
+        sec. 4.2.3's marginal growth, where new sources appear only on the margin)
     settle : iterations without a new source after growth before the run stops
     """
 
@@ -85,6 +97,7 @@ class SimParams:
     birth_vein: float = 2.0
     darts: float = 0.01
     roots: tuple = ()
+    region: str = "blade"
     settle: int = 10
     max_iterations: int = 100_000
     max_nodes: int = 2_000_000
@@ -102,7 +115,7 @@ class Nodes(NamedTuple):
     cnt: np.ndarray  # (cap,) int64 |S(v)| this iteration
     closest: np.ndarray  # (cap,) int64 closest source of S(v)
     closest_d2: np.ndarray  # (cap,) float64
-    collided: np.ndarray  # (cap,) int64 iteration in which the node could not grow (guard), -1
+    stalled: np.ndarray  # (cap,) int64 last iteration in which the node was influenced but did not grow, -1
 
 
 class Sources(NamedTuple):
@@ -115,6 +128,8 @@ class Sources(NamedTuple):
     tag_iter: np.ndarray  # (cap,) int64 iteration of tagging (closed), -1
     tags: np.ndarray  # (cap, MAX_NEIGHBOURS) int64 the tagged nodes V(s)
     ntag: np.ndarray  # (cap,) int64
+    near: np.ndarray  # (cap,) int64 nearest vein node (open patterns), -1 before the first search
+    near_d2: np.ndarray  # (cap,) float64 squared distance to it
 
 
 def _new_nodes(cap):
@@ -126,7 +141,8 @@ def _new_nodes(cap):
 def _new_sources(cap):
     return Sources(np.zeros((cap, 2)), np.zeros(cap, np.bool_), np.full(cap, -1, np.int64),
                    np.full(cap, -1, np.int64), np.full(cap, -1, np.int64),
-                   np.full((cap, MAX_NEIGHBOURS), -1, np.int64), np.zeros(cap, np.int64))
+                   np.full((cap, MAX_NEIGHBOURS), -1, np.int64), np.zeros(cap, np.int64),
+                   np.full(cap, -1, np.int64), np.full(cap, np.inf))
 
 
 def _grow_rows(tup, cap):
@@ -161,14 +177,19 @@ def _first_within(x, y, r2, pos, grid, skip):
 
 
 @njit(cache=True)
-def throw_darts(cand, base, scale, bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it):
+def throw_darts(cand, base, scale, prev_scale, bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it):
     """Dart throwing (sec. 4.2.3): candidates ``cand`` (c, 2) in order; one inside the blade (at
-    ``scale`` about ``base``), farther than b_s from every live source and farther than b_v from
-    every vein node becomes source ``n_src`` (inserted into ``src_grid``). Returns the new count."""
+    ``scale`` about ``base``) and, when ``prev_scale[0]`` > 0, outside the blade at ``prev_scale``
+    (new sources only on the margin), farther than b_s from every live source and farther than b_v
+    from every vein node becomes source ``n_src`` (inserted into ``src_grid``). Returns the new
+    count."""
     inside = np.zeros(cand.shape[0], np.bool_)
     inside_blade(cand, base, scale, bands, inside)
+    before = np.zeros(cand.shape[0], np.bool_)
+    if prev_scale[0] > 0.0:
+        inside_blade(cand, base, prev_scale, bands, before)
     for c in range(cand.shape[0]):
-        if not inside[c]:
+        if not inside[c] or before[c]:
             continue
         x, y = cand[c, 0], cand[c, 1]
         if _first_within(x, y, bs2, src.pos, src_grid, -1) >= 0:
@@ -182,6 +203,8 @@ def throw_darts(cand, base, scale, bands, src, n_src, src_grid, bs2, nodes, node
         src.died[s] = -1
         src.tag_iter[s] = -1
         src.ntag[s] = 0
+        src.near[s] = -1
+        src.near_d2[s] = np.inf
         grid_insert(src_grid, src.pos, s, s + 1)
         n_src += 1
     return n_src
@@ -205,9 +228,12 @@ def _tag_root(v, s, src, nodes):
 @njit(cache=True)
 def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra):
     """Source removal (open: a node within d_k; closed: sec. 4.3's tagging) after the
-    neighbourhoods ``nbr`` of the ``live`` sources were found. Joins the veins that reached a
-    removed closed-pattern source (``extra`` rows from ``n_extra``). Returns (removed, n_extra)."""
+    neighbourhoods ``nbr`` of the ``live`` sources were found. In a closed pattern a node that was
+    influenced in the previous iteration but did not grow (a guard of :func:`grow_veins` stopped
+    it) counts as having reached its sources. Joins the veins that reached a removed closed-pattern source (``extra``
+    rows from ``n_extra``). Returns (removed, removed with no node within d_k, n_extra)."""
     removed = 0
+    stalled = 0
     reps = np.empty(MAX_NEIGHBOURS, np.int64)
     roots = np.empty(MAX_NEIGHBOURS, np.int64)
     for j in range(live.shape[0]):
@@ -225,7 +251,12 @@ def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra
                 removed += 1
             continue
         if src.tag_iter[s] < 0:
-            if d0 >= dk2:
+            reached = False
+            for k in range(n):
+                v = nbr[j, k]
+                if nodes.stalled[v] == it - 1 or (nodes.pos[v, 0] - sx) ** 2 + (nodes.pos[v, 1] - sy) ** 2 < dk2:
+                    reached = True
+            if not reached:
                 continue
             src.tag_iter[s] = it
             src.ntag[s] = n
@@ -236,7 +267,7 @@ def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra
         for k in range(n):
             v = nbr[j, k]
             d2 = (nodes.pos[v, 0] - sx) ** 2 + (nodes.pos[v, 1] - sy) ** 2
-            reached = d2 < dk2 or nodes.collided[v] == it - 1
+            reached = d2 < dk2 or nodes.stalled[v] == it - 1
             t = _tag_root(v, s, src, nodes)
             if t < 0:
                 continue
@@ -261,6 +292,8 @@ def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra
         src.alive[s] = False
         src.died[s] = it
         removed += 1
+        if d0 >= dk2:
+            stalled += 1
         if nr >= 2:
             best = 0
             bd = np.inf
@@ -283,7 +316,7 @@ def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra
                     extra[n_extra, 0] = min(r, r0)
                     extra[n_extra, 1] = max(r, r0)
                     n_extra += 1
-    return removed, n_extra
+    return removed, stalled, n_extra
 
 
 @njit(cache=True)
@@ -327,7 +360,6 @@ def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, i
         c = nodes.closest[v]
         vx, vy = nodes.pos[v, 0], nodes.pos[v, 1]
         grown = False
-        hit = -1
         for attempt in range(2):
             if attempt == 0:
                 nn = math.sqrt(ax * ax + ay * ay)
@@ -345,7 +377,6 @@ def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, i
             wx, wy = vx + step * ux, vy + step * uy
             u = _first_within(wx, wy, half2, nodes.pos, grid, v)
             if u >= 0:
-                hit = u
                 continue
             w = n_nodes
             n_nodes += 1
@@ -354,13 +385,13 @@ def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, i
             nodes.iteration[w] = it
             nodes.last_dir[w, 0] = 0.0
             nodes.last_dir[w, 1] = 0.0
-            nodes.collided[w] = -1
+            nodes.stalled[w] = -1
             nodes.last_dir[v, 0], nodes.last_dir[v, 1] = ux, uy
             grid_insert(grid, nodes.pos, w, w + 1)
             grown = True
             break
-        if not grown and hit >= 0:
-            nodes.collided[v] = it
+        if not grown:
+            nodes.stalled[v] = it
     return n_nodes
 
 
@@ -402,6 +433,9 @@ class VenationResult:
     iterations, growth_steps : int
     stopped : str
         Why the loop ended: "finished", "max_iterations" or "max_nodes".
+    sources_stalled : int
+        Sources removed with no vein node within d_k, because the nodes they influenced could not
+        grow (the guards of :func:`grow_veins`).
     seconds : float
     """
 
@@ -416,6 +450,7 @@ class VenationResult:
     iterations: int
     growth_steps: int
     stopped: str
+    sources_stalled: int = 0
     seconds: float = 0.0
     timings: dict = field(default_factory=dict)
 
@@ -481,6 +516,8 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
     h = _grid_h(sp.step, sp.birth_vein, sp.kill_distance)
     node_grid = make_grid(lo, hi, h, cap)
     grid_insert(node_grid, nodes.pos, 0, n_nodes)
+    support = np.full(HULL_DIRECTIONS, -np.inf)
+    hull_support(nodes.pos, 0, n_nodes, support)
     src_grid = make_grid(lo, hi, h, scap)
     live = np.zeros(0, np.int64)
     dart_carry = 0.0
@@ -502,6 +539,8 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                         extra[:n_extra].copy(), margin, real(src.pos[live], lam_now) if len(live) else np.zeros((0, 2)))
 
     last_frame = -1
+    stalled_total = 0
+    n_searched = 0  # nodes that the sources' nearest nodes were searched among
     while True:
         if it >= sp.max_iterations:
             stopped = "max_iterations"
@@ -509,6 +548,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         if n_nodes >= sp.max_nodes:
             stopped = "max_nodes"
             break
+        prev_sc = growth.scale_at(it - 1) if it > 0 else np.zeros(2)
         sc = growth.scale_at(it)
         grid_remove_cells(src_grid, src.pos, live)
         # 1. blade growth
@@ -522,6 +562,8 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                 nodes.pos[:n_nodes] = base + (nodes.pos[:n_nodes] - base) * ratio
                 src.pos[:n_src] = base + (src.pos[:n_src] - base) * ratio
                 grid_rebuild(node_grid, nodes.pos, np.arange(n_nodes, dtype=np.int64))
+                support[:] = -np.inf
+                hull_support(nodes.pos, 0, n_nodes, support)
         elif kind == "marginal":
             blade_scale = sc
         else:
@@ -547,21 +589,30 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         n_darts = int(math.floor(want))
         dart_carry = want - n_darts
         placed = 0
+        margin_only = sp.region == "margin"
+        if margin_only and it > 0 and not np.any(sc > prev_sc):
+            n_darts = 0  # the margin did not move: no new blade
         if n_darts > 0:
-            poly_now = blade.scaled(blade_scale)
-            blo, bhi = poly_now.min(0), poly_now.max(0)
-            box_area = float(np.prod(bhi - blo))
-            area_int = blade.area * float(blade_scale[0] * blade_scale[1])
-            n_draw = int(math.ceil(n_darts * box_area / max(area_int, 1e-300)))
+            if margin_only:
+                cand = _band_darts(blade, prev_sc if it > 0 else np.zeros(2), sc, n_darts, rng)
+                n_draw = len(cand)
+            else:
+                poly_now = blade.scaled(blade_scale)
+                blo, bhi = poly_now.min(0), poly_now.max(0)
+                box_area = float(np.prod(bhi - blo))
+                area_int = blade.area * float(blade_scale[0] * blade_scale[1])
+                n_draw = int(math.ceil(n_darts * box_area / max(area_int, 1e-300)))
             if n_src + n_draw > scap:
                 scap = max(2 * scap, n_src + n_draw + 1024)
                 src = _grow_rows(src, scap)
                 src_grid = Grid(src_grid.head, np.concatenate([src_grid.nxt, np.full(scap - len(src_grid.nxt), -1, np.int64)]),
                                 src_grid.geom)
-            cand = blo + (bhi - blo) * rng.random((n_draw, 2))
+            if not margin_only:
+                cand = blo + (bhi - blo) * rng.random((n_draw, 2))
+            prev_arg = np.ascontiguousarray(prev_sc if (margin_only and it > 0) else np.zeros(2), dtype=np.float64)
             before = n_src
-            n_src = throw_darts(cand, base, np.ascontiguousarray(blade_scale, dtype=np.float64), blade.bands, src,
-                                n_src, src_grid, bs2, nodes, node_grid, bv2, it)
+            n_src = throw_darts(cand, base, np.ascontiguousarray(blade_scale, dtype=np.float64), prev_arg,
+                                blade.bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it)
             placed = n_src - before
             if placed:
                 live = np.concatenate([live, np.arange(before, n_src, dtype=np.int64)])
@@ -573,14 +624,21 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         nbr = np.full((k, MAX_NEIGHBOURS), -1, np.int64)
         nbr_n = np.zeros(k, np.int64)
         if k and n_nodes:
-            relative_neighbourhoods(src.pos, live, nodes.pos, n_nodes, node_grid, nb_kind, nbr, nbr_n)
+            if nb_kind == NEAREST and kind != "anisotropic":
+                # nodes stay where they are: a source's nearest node changes only to a new one
+                nearest_incremental(src.pos, live, src.near, src.near_d2, nodes.pos, n_searched, n_nodes,
+                                    node_grid, nbr, nbr_n)
+            else:
+                relative_neighbourhoods(src.pos, live, nodes.pos, n_nodes, node_grid, nb_kind, support, nbr, nbr_n)
+        n_searched = n_nodes
         t1 = time.perf_counter()
         timings["neighbourhoods"] += t1 - t0
         if n_extra + k > len(extra):
             extra = np.concatenate([extra, np.zeros((len(extra) + k, 2), np.int64)])
-        _, n_extra = update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra)
+        _, n_stalled, n_extra = update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra)
         t2 = time.perf_counter()
         timings["sources"] += t2 - t1
+        stalled_total += n_stalled
         need = n_nodes + int(nbr_n.sum()) + 1
         if need > cap:
             cap = max(2 * cap, need + 1024)
@@ -590,6 +648,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         n_before = n_nodes
         n_nodes = grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, D, dk2, node_grid, it)
         if n_nodes > n_before:
+            hull_support(nodes.pos, n_before, n_nodes, support)
             new = nodes.pos[n_before:n_nodes]
             if np.any(new < lo) or np.any(new > hi):
                 lo = np.minimum(lo, new.min(0) - pad)
@@ -623,7 +682,29 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         node_iter=nodes.iteration[:n_nodes].copy(), extra_edges=extra[:n_extra].copy(), blade=margin,
         source_pos=real(src.pos[:n_src], lam), source_born=src.born[:n_src].copy(),
         source_died=src.died[:n_src].copy(), iterations=it, growth_steps=n_growth, stopped=stopped,
+        sources_stalled=stalled_total,
         seconds=time.perf_counter() - t_start, timings=timings)
+
+
+def _band_darts(blade: Blade, s_prev, s_now, n: int, rng) -> np.ndarray:
+    """``n`` points uniform in the band the margin swept from scale ``s_prev`` to ``s_now`` (2,)
+    (the whole blade when ``s_prev`` is 0): fan triangles (base, m_i, m_i+1) of the margin picked
+    by area, a scale s in [s_prev, s_now] with density proportional to s, and a uniform point of the
+    scaled edge: x = base + s (m_i + u (m_i+1 - m_i) - base). Uniform for a blade star-shaped from
+    its base; :func:`throw_darts` drops points outside the band otherwise."""
+    b = blade.base
+    m = blade.polygon - b
+    q = np.roll(m, -1, axis=0)
+    area = 0.5 * (m[:, 0] * q[:, 1] - m[:, 1] * q[:, 0])
+    w = np.maximum(area, 0.0)
+    if n <= 0 or w.sum() <= 0:
+        return np.zeros((0, 2))
+    tri = rng.choice(len(m), size=n, p=w / w.sum())
+    u = rng.random(n)
+    r0 = float(s_prev[0]) / float(s_now[0])  # isotropic: marginal growth
+    f = np.sqrt(r0 ** 2 + (1.0 - r0 ** 2) * rng.random(n))  # s / s_now in [r0, 1], density ∝ s
+    edge = m[tri] + u[:, None] * (q[tri] - m[tri])
+    return np.ascontiguousarray(b + edge * np.asarray(s_now, dtype=np.float64) * f[:, None])
 
 
 def _min_h(lo, hi, max_cells=1 << 20):
