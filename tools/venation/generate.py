@@ -82,12 +82,14 @@ def _header(p: Params, sp: SimParams, inputs: Inputs) -> str:
 
 
 def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None, frame_step: int | None = None,
-                 progress=None) -> VenationRun:
-    """Simulate and write every output into ``out_dir`` (created); returns the run."""
+                 frame_textures: bool | None = None, progress=None) -> VenationRun:
+    """Simulate and write every output into ``out_dir`` (created); returns the run. ``seed``,
+    ``frame_step`` and ``frame_textures`` override the file's when given."""
     out = Path(out_dir)
     sp = sim_params(p, inputs, seed)
     header = _header(p, sp, inputs)
     step = p.output.frame_step if frame_step is None else frame_step
+    textures = p.output.frame_textures if frame_textures is None else frame_textures
     style = texture_style(p)
     g = inputs.growth
     final_margin = inputs.blade.scaled(g.final_scale if g.kind != "none" else 1.0)
@@ -104,7 +106,7 @@ def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None,
         write_graph(fdir / name, snap.node_pos, snap.node_parent, snap.extra_edges, head)
         write_widths(fdir / frame_name(snap.iteration, prefix="veins_", suffix=".widths"), w, head)
         write_margin(fdir / frame_name(snap.iteration, prefix="blade_"), snap.blade, head)
-        if p.output.frame_textures:
+        if textures:
             img = render_texture(snap.node_pos, snap.node_parent, w, snap.extra_edges, snap.blade, style, box=box)
             save_png(img, fdir / frame_name(snap.iteration, prefix="texture_", suffix=".png"))
         frames.append(snap.iteration)
@@ -140,6 +142,7 @@ def summary(run: VenationRun, out_dir) -> str:
         run.header.splitlines()[0],
         f"{r.iterations} iterations ({r.growth_steps} of growth), {r.n_nodes} vein nodes, {len(r.extra_edges)} "
         f"anastomoses, {run.loops} loops, {r.sources_placed} sources placed, {r.sources_left} left"
+        + (f" ({r.sources_stalled} removed with their veins stopped short by the guards)" if r.sources_stalled else "")
         + ("" if r.stopped == "finished" else f"; stopped at {r.stopped.replace('_', ' ')}"),
         f"vein orders (Strahler, segments per order) {orders}; widths {run.widths.min():.4g}-{run.widths.max():.4g}; "
         f"blade mesh {run.mesh[0]} vertices, {run.mesh[1]} triangles",

@@ -534,9 +534,12 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         return p.copy()
 
     def snapshot(it_now, lam_now, sc_now):
+        # the live sources of the snapshot only: the loop's own list must stay as it is (its
+        # cells are cleared from the source grid at the next iteration)
+        alive = np.flatnonzero(src.alive[:n_src])
         margin = blade.scaled(sc_now if kind != "none" else 1.0)
         return Snapshot(it_now, real(nodes.pos[:n_nodes], lam_now), nodes.parent[:n_nodes].copy(),
-                        extra[:n_extra].copy(), margin, real(src.pos[live], lam_now) if len(live) else np.zeros((0, 2)))
+                        extra[:n_extra].copy(), margin, real(src.pos[alive], lam_now))
 
     last_frame = -1
     stalled_total = 0
@@ -667,12 +670,10 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         quiet = 0 if placed else quiet + 1
         done = it >= n_growth and n_alive == 0 and quiet >= sp.settle
         if on_frame is not None and frame_step > 0 and ((it - 1) % frame_step == 0 or done):
-            live = np.flatnonzero(src.alive[:n_src]).astype(np.int64)
             on_frame(snapshot(it - 1, lam, sc))
             last_frame = it - 1
         if done:
             break
-    live = np.flatnonzero(src.alive[:n_src]).astype(np.int64)
     if on_frame is not None and frame_step > 0 and last_frame != it - 1:
         on_frame(snapshot(it - 1, lam, growth.scale_at(max(it - 1, 0))))
     sc_end = growth.scale_at(max(it - 1, 0))

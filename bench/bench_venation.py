@@ -1,0 +1,77 @@
+"""venation (issue 23; Runions ch. 4): open and closed leaf venation patterns of about 10,000 vein
+nodes in a growing leaf, and how the run time grows with the node count.
+
+- ``venation_closed_10k``: the poplar-like closed pattern of pipelines/examples/venation/poplar.toml
+  (exact relative neighbourhoods, isogonic growth from 0.15 to 1) with the leaf 250 D long;
+- ``venation_closed_urquhart_10k``: the same with the Urquhart approximation;
+- ``venation_open_10k``: the open pattern of open_marginal.toml (marginal growth, sources on the
+  margin) with the leaf 440 D long;
+- ``..._exponent_in_nodes``: the fitted exponent a of t ~ n^a over leaves of about 1/4, 1/2, 1
+  and 2 times that area (1.0 = linear).
+
+Anchor: issue 23's goal of 5 s for 10,000 nodes (Runions sec. 4.5: two hours for the exact
+poplar of fig. 4.23, two minutes with the Urquhart approximation). Times are the simulation's
+(``VenationResult.seconds``: darts, neighbourhoods, growth), best of ``repeat`` runs, kernels
+compiled before.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from inflo.tools.venation.generate import sim_params
+from inflo.tools.venation.params import load_inputs, parse_params
+from inflo.tools.venation.simulate import simulate
+
+from .harness import REPO, BenchContext, Result
+
+EXAMPLES = REPO / "pipelines" / "examples" / "venation"
+
+def _inputs(name: str, size: float, neighbourhood: str | None = None):
+    text = (EXAMPLES / f"{name}.toml").read_text()
+    text = text.replace("size = 400.0", f"size = {size!r}", 1)
+    if neighbourhood:
+        text = text.replace('neighbourhood = "relative"', f'neighbourhood = "{neighbourhood}"', 1)
+    p = parse_params(text, EXAMPLES / f"{name}.toml")
+    inp = load_inputs(p)
+    return inp, sim_params(p, inp)
+
+def _run(name, size, neighbourhood=None, repeat=1):
+    inp, sp = _inputs(name, size, neighbourhood)
+    best = None
+    for _ in range(repeat):
+        r = simulate(inp.blade, inp.growth, sp)
+        if best is None or r.seconds < best.seconds:
+            best = r
+    return best
+
+def _pattern(ctx: BenchContext, label: str, name: str, size: float, neighbourhood=None) -> list[Result]:
+    _run(name, size * 0.2, neighbourhood)  # compile
+    repeat = 1 if ctx.quick else 3
+    r = _run(name, size, neighbourhood, repeat)
+    per = r.seconds / r.n_nodes
+    note = (f"{r.n_nodes} vein nodes, {len(r.extra_edges)} anastomoses, {r.iterations} iterations, "
+            f"{r.sources_placed} sources; {per * 1e6:.1f} us per node; "
+            + ", ".join(f"{k} {v:.2f} s" for k, v in r.timings.items()))
+    out = [Result(f"venation_{label}_10k", r.seconds, "s", "issue 23 goal 5 s for 10k vein nodes", 5.0, note)]
+    factors = [0.5, 1.0] if ctx.quick else [0.5, 0.71, 1.0, 1.41]
+    ns, ts = [], []
+    for f in factors:
+        rf = r if f == 1.0 else _run(name, size * f, neighbourhood, 1 if ctx.quick else 2)
+        ns.append(rf.n_nodes)
+        ts.append(rf.seconds)
+    slope = float(np.polyfit(np.log(ns), np.log(ts), 1)[0])
+    out.append(Result(f"venation_{label}_exponent_in_nodes", slope, "", "1.0 = linear", 1.0,
+                      "t ~ n^a over n = " + ", ".join(map(str, ns)) + "; times "
+                      + ", ".join(f"{t:.3f}" for t in ts) + " s"))
+    return out
+
+def closed(ctx: BenchContext) -> list[Result]:
+    return _pattern(ctx, "closed", "poplar", 250.0)
+
+def closed_urquhart(ctx: BenchContext) -> list[Result]:
+    return _pattern(ctx, "closed_urquhart", "poplar", 250.0, "urquhart")
+
+def open_marginal(ctx: BenchContext) -> list[Result]:
+    return _pattern(ctx, "open", "open_marginal", 440.0)
+
+BENCHMARKS = [closed, closed_urquhart, open_marginal]
