@@ -101,6 +101,24 @@ def test_nearest_is_the_closest_node():
         assert g[0] == np.argmin(((nodes - s) ** 2).sum(1))
 
 
+def test_incremental_nearest_equals_a_full_search():
+    from inflo.tools.venation.neighbourhood import grid_insert, make_grid, nearest_incremental
+
+    rng = np.random.default_rng(4)
+    nodes = rng.random((900, 2)) * 20
+    srcs = rng.random((60, 2)) * 20
+    g = make_grid([0, 0], [20, 20], 0.7, len(nodes))
+    near, near_d2 = np.full(60, -1, np.int64), np.full(60, np.inf)
+    out, cnt = np.zeros((60, 8), np.int64), np.zeros(60, np.int64)
+    done = 0
+    for n in (1, 30, 31, 400, 900):  # nodes arrive in batches
+        grid_insert(g, nodes, done, n)
+        nearest_incremental(srcs, np.arange(60), near, near_d2, nodes, done, n, g, out, cnt)
+        done = n
+        full = neighbourhoods(srcs, nodes[:n], NEAREST)
+        assert [f[0] for f in full] == out[:, 0].tolist()
+
+
 def test_relative_neighbourhood_far_and_degenerate_cases():
     """A source far outside the nodes, collinear nodes (no triangulation), a single node."""
     line = np.c_[np.arange(20.0), np.zeros(20)]

@@ -48,7 +48,6 @@ __all__ = [
     "grid_insert_idx",
     "grid_rebuild",
     "grid_remove_cells",
-    "nearest_nodes",
     "nearest_incremental",
     "relative_neighbourhoods",
     "neighbourhoods",
@@ -165,32 +164,6 @@ def grid_remove_cells(grid, pos, idx):
 
 
 @njit(cache=True)
-def any_within(x, y, r2, pos, grid):
-    """True when some point of ``grid`` is closer than sqrt(r2) to (x, y) (strictly)."""
-    geom = grid.geom
-    h = geom[2]
-    nx, ny = np.int64(geom[3]), np.int64(geom[4])
-    reach = np.int64(math.ceil(math.sqrt(r2) / h))
-    cx, cy = _cell_of(x, y, geom)
-    x0, x1 = max(cx - reach, 0), min(cx + reach, nx - 1)
-    y0, y1 = max(cy - reach, 0), min(cy + reach, ny - 1)
-    # a point outside the grid box sits in a border cell: widen the scan to the border
-    if cx - reach <= 0:
-        x0 = 0
-    if cy - reach <= 0:
-        y0 = 0
-    for iy in range(y0, y1 + 1):
-        for ix in range(x0, x1 + 1):
-            v = grid.head[ix + nx * iy]
-            while v >= 0:
-                d2 = (pos[v, 0] - x) ** 2 + (pos[v, 1] - y) ** 2
-                if d2 < r2:
-                    return True
-                v = grid.nxt[v]
-    return False
-
-
-@njit(cache=True)
 def _ring_cells(cx, cy, r, nx, ny, out):
     """Cells at Chebyshev distance ``r`` from (cx, cy) inside the grid, into ``out``; returns the
     count (cells in x-major order of the ring's rows)."""
@@ -263,19 +236,8 @@ def _nearest_one(x, y, pos, n_nodes, grid, cells):
 
 
 @njit(cache=True)
-def nearest_nodes(src_pos, src_idx, pos, n_nodes, grid, out_node, out_d2):
-    """For each source ``src_idx[j]``: its nearest node into ``out_node[j]``, squared distance into
-    ``out_d2[j]`` (open patterns: each source attracts its closest vein node, fig. 4.10b)."""
-    nx, ny = np.int64(grid.geom[3]), np.int64(grid.geom[4])
-    cells = np.empty(8 * (nx + ny) + 8, np.int64)
-    for j in range(src_idx.shape[0]):
-        s = src_idx[j]
-        out_node[j], out_d2[j] = _nearest_one(src_pos[s, 0], src_pos[s, 1], pos, n_nodes, grid, cells)
-
-
-@njit(cache=True)
 def nearest_incremental(src_pos, src_idx, near, near_d2, pos, n_from, n_nodes, grid, out, out_n):
-    """:func:`nearest_nodes` kept up to date: a source with a nearest node (``near[s]`` >= 0, found
+    """The nearest node of each source (open patterns, fig. 4.10b), kept up to date: a source with a nearest node (``near[s]`` >= 0, found
     among the nodes ``0:n_from``) only compares the nodes ``n_from:n_nodes`` added since (nodes do
     not move); one without gets a full search. The same answer as a full search (the lowest index
     among equals: older nodes have lower indices). Row j of ``out`` gets source ``src_idx[j]``'s."""

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from inflo.formats.errors import FormatError, InputError, did_you_mean, read_bytes, shorten
+from inflo.formats.errors import FormatError, did_you_mean, read_bytes, shorten
 
 from .blade import GROWTH_TYPES, Blade, Growth, blade_from_points
 
