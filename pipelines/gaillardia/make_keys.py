@@ -43,6 +43,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from floret_keys import blade_net, cylinder_net, fmt_rows, organ, ring_net  # noqa: E402,F401  (pipelines/floret_keys.py)
+
 HERE = Path(__file__).resolve().parent
 
 # polygonization per quality: (lambda, eta) of each organ; a .func name is written as is (relative
@@ -186,56 +189,6 @@ BRACT = {
 }
 
 
-def fmt_rows(pts):
-    return "\n".join("  " + "   ".join(f"{x:.4f} {y:.4f} {z:.4f}" for x, y, z in row) for row in pts)
-
-
-def ring_net(r, y, half):
-    """Half petal of a five-fold whorl: row j is an arc of radius r[j] at height y[j]."""
-    nv = len(r)
-    pts = np.zeros((nv, DISK_NU, 3))
-    for j in range(nv):
-        a = np.radians(np.linspace(0.0, half[j], DISK_NU))
-        pts[j, :, 0] = r[j] * np.cos(a)
-        pts[j, :, 1] = y[j]
-        pts[j, :, 2] = r[j] * np.sin(a)
-    return pts
-
-
-def cylinder_net(radius, bottom, top):
-    """Half petal of a five-fold closed cylinder (fused along its whole height), 2 x 3 points."""
-    a = np.radians([0.0, 36.0])
-    pts = np.zeros((3, 2, 3))
-    for j, y in enumerate(np.linspace(bottom, top, 3)):
-        pts[j, :, 0] = radius * np.cos(a)
-        pts[j, :, 1] = y
-        pts[j, :, 2] = radius * np.sin(a)
-    return pts
-
-
-def blade_net(p, nu, nv, u):
-    """Half blade along a midrib in the x-y plane: column i at u_i of the row's half width, cupped."""
-    mid = np.array(p["mid"], float)
-    pts = np.zeros((nv, nu, 3))
-    for j in range(nv):
-        a = mid[min(j + 1, nv - 1)] - mid[max(j - 1, 0)]
-        t = a / np.linalg.norm(a)
-        n = np.array([-t[1], t[0]])
-        w = p["half"][j]
-        for i, ui in enumerate(u):
-            lift = p["cup"] * w * ui * ui * 0.5
-            xy = mid[j] + lift * n
-            pts[j, i] = (xy[0], xy[1], ui * w)
-    return pts
-
-
-def organ(name, material, degree, grid, symmetry, fused, res, pts, bilateral=True):
-    lam, eta = res
-    return (f"organ: {name}\nmaterial: {material}\ndegree: {degree}\ngrid: {grid}\nsymmetry: {symmetry}\n"
-            f"bilateral: {'on' if bilateral else 'off'}\nfused: {fused}\nlambda: {lam}\neta: {eta}\n"
-            f"points:\n{fmt_rows(pts)}\n")
-
-
 # material ids (colors.toml)
 M_TUBE, M_COROLLA, M_ANTHERS, M_PISTIL, M_BRACT, M_LIMB = 0, 1, 2, 3, 4, 6
 
@@ -247,7 +200,7 @@ def write(out: Path, quality: str) -> None:
     for key, p in DISK.items():
         text = head.format(what="disk floret", key=key, q=quality, name="disk", t=p["time"])
         text += organ("corolla", M_COROLLA, "3 3", f"{DISK_NU} {DISK_NV}", "5 0", DISK_FUSED, res["corolla"],
-                      ring_net(p["r"], p["y"], p["half"])) + "\n"
+                      ring_net(p["r"], p["y"], p["half"], DISK_NU)) + "\n"
         text += organ("anthers", M_ANTHERS, "1 2", "2 3", "5 0", 3, res["anthers"], cylinder_net(*p["anthers"])) + "\n"
         text += organ("pistil", M_PISTIL, "1 2", "2 3", "5 0", 3, res["pistil"], cylinder_net(*p["pistil"]))
         (out / f"disk_{key}.floret").write_text(text)
