@@ -396,7 +396,10 @@ class _StepBroadPhase:
         self.origin = origin
         self.slack = BROAD_SLACK * cell
         self.x1_ref = x1.copy()
-        self.vb, self.tb, self.eb = (_grown(b, self.slack) for b in (vb, tb, eb))
+        grow = pad + self.slack
+        self.vb = vertex_boxes(x0, x1, grow)
+        self.tb = triangle_boxes(x0, x1, tri, grow)
+        self.eb = edge_boxes(x0, x1, edges, grow)
         self.vid = np.arange(len(x0), dtype=np.int32)[:, None]
         self.grid_t = BoxGrid(self.tb, cell, self.origin, tri)
         self.grid_e = BoxGrid(self.eb, cell, self.origin, edges)
@@ -462,14 +465,6 @@ class _StepBroadPhase:
             ee.append(_merge_ee(small_e.query(eb_a, vertices=edges[ae]), ae, me, active_e))
         return (np.ascontiguousarray(np.concatenate(vt), dtype=np.int32),
                 np.ascontiguousarray(np.concatenate(ee), dtype=np.int32))
-
-
-def _grown(boxes, by):
-    """(n, 6) boxes grown by ``by`` on every side (a copy)."""
-    out = boxes.copy()
-    out[:, :3] -= by
-    out[:, 3:] += by
-    return out
 
 
 @njit(cache=True)

@@ -320,6 +320,7 @@ class Model:
         rba_ids, rba_mats = self._rba_matrices(frame)
         carried = np.zeros(nf, bool)
         carried[rba_ids] = True
+        fixed = self._fixed_matrices()
         for k, fl in enumerate(self.florets):
             tpl = fl.template
             nfr = tpl.frames.shape[0]
@@ -330,10 +331,20 @@ class Model:
             base_a[k] = off + a * tpl.n_vertices
             base_b[k] = off + b * tpl.n_vertices
             alpha[k] = pos - a if b != a else 0.0
-            if not carried[k]:
+            if fixed[k] is not None:
+                mats[k] = fixed[k]
+            elif not carried[k]:
                 mats[k] = self.matrix(fl, frame)[:3]
         mats[rba_ids] = rba_mats
         return Schedule(base_a, base_b, alpha, mats)
+
+    def _fixed_matrices(self) -> list:
+        """Per floret its (3, 4) matrix where that does not depend on the frame (placements other
+        than ``ta``, ``ra`` and ``rba``), else None; computed once."""
+        if getattr(self, "_fixed", None) is None:
+            self._fixed = [None if fl.placement.kind in ("ta", "ra", "rba") else self.matrix(fl, 0.0)[:3]
+                           for fl in self.florets]
+        return self._fixed
 
     # -- kernel launches (keyword arguments; the kernels take the arrays positionally) ----------
 
