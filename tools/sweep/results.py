@@ -141,14 +141,13 @@ def write_heatmap(path, sweep: Sweep, results: list[dict]) -> bool:
     finite = grid[np.isfinite(grid)]
     is_int = bool(np.all(finite == np.round(finite)))
 
-    def edges(vals):
-        v = np.asarray(vals, dtype=float)
-        if len(v) == 1:
-            return np.array([v[0] - 0.5, v[0] + 0.5])
-        mid = (v[1:] + v[:-1]) / 2
-        return np.concatenate([[v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]])
+    # cells on the grid's indices, labelled by the values (uneven steps stay one cell each)
+    ex, ey = np.arange(len(xs) + 1) - 0.5, np.arange(len(ys) + 1) - 0.5
 
-    ex, ey = edges(xs), edges(ys)
+    def ticks(axis_set, vals):
+        step = max(1, math.ceil(len(vals) / 12))
+        idx = list(range(0, len(vals), step))
+        axis_set(idx, [f"{vals[i]:g}" for i in idx])
     cmap = plt.get_cmap("viridis").copy()
     cmap.set_bad((0.85, 0.85, 0.85))
     fibs = [f for f in FIBONACCI if finite.min() <= f <= finite.max()]
@@ -176,6 +175,8 @@ def write_heatmap(path, sweep: Sweep, results: list[dict]) -> bool:
                                            edgecolor="white", lw=0.6))
                 if small:
                     ax.text(xc, yc, f"{int(v)}", ha="center", va="center", fontsize=6, color="white")
+    ticks(ax.set_xticks, xs)
+    ticks(ax.set_yticks, ys)
     ax.set_xlabel(ax_x.name)
     ax.set_ylabel(ax_y.name)
     n_fib = int(sum(1 for v in finite if is_int and int(v) in fibset))
