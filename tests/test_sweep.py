@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO, cli_path, run_cli
+from conftest import REPO, run_cli
 
 from inflo.formats.errors import FormatError, InputError
 from inflo.tools.sweep.overrides import set_fcc_key, set_flag, set_toml_key

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import os
 import shutil
+import sys
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from pathlib import Path
@@ -47,7 +48,7 @@ def check_runnable(sweep: Sweep) -> None:
     check_placeholders(sweep)
     for st in sweep.stages:
         if st.subprocess:
-            path = os.pathsep.join([os.path.dirname(os.sys.executable), os.environ.get("PATH", "")])
+            path = os.pathsep.join([os.path.dirname(sys.executable), os.environ.get("PATH", "")])
             if shutil.which(st.cli, path=path) is None:
                 raise InputError(f"{sweep.path}: [[stage]] {st.name}: expected a command on PATH, found no {st.cli!r}")
         elif not list(entry_points(group="console_scripts", name=st.cli)):

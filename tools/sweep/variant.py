@@ -431,8 +431,8 @@ def run_variant(sweep: Sweep, out_dir, v: Variant, fingerprint: str) -> dict:
                 logs[st.name] = text
                 peak = max(peak, pk)
                 if code != 0:
-                    error = f"{st.name}: {one_line_error(text, code)}" if not one_line_error(text, code).startswith(
-                        st.cli) else one_line_error(text, code)
+                    line = one_line_error(text, code)
+                    error = line if line.startswith(st.cli) else f"{st.name}: {line}"
                     break
     except Exception as exc:  # noqa: BLE001 - recorded on the variant
         code = code or 1
