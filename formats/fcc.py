@@ -250,6 +250,10 @@ class CanopyParams:
     relax_iterations : int
         ``relax iterations``: internal-constraint sweeps of the florets a collision round moved,
         between the rounds (0: none). 5.
+    collisions : bool
+        ``collisions``: off runs the florets' growth without collision detection or response
+        (florets emerge without testing for room; intersections are only counted, at the sanity
+        checks: the comparison of thesis fig. 4.9). True.
     emergence_scales : tuple of float
         ``emergence scales``: sizes (fractions of its own, in (0, 1], decreasing) at which an
         emerging floret is tried until one finds room. (1, 0.75, 0.5, 0.35, 0.25).
@@ -300,6 +304,7 @@ class CanopyParams:
     max_substeps: int = 3
     stretch_bounds: tuple = (0.5, 1.5)
     relax_iterations: int = 5
+    collisions: bool = True
     emergence_scales: tuple = (1.0, 0.75, 0.5, 0.35, 0.25)
     emergence_growth_frames: float = 10.0
     output_frames_number: int | None = None
@@ -443,6 +448,7 @@ KEYS: Mapping[str, KeySpec] = MappingProxyType({
     "edge stretch bounds": KeySpec("float", 2, low=0, strict=True, check="lo ≤ 1 ≤ hi",
                                    field="stretch_bounds"),
     "relax iterations": replace(_COUNT0, field="relax_iterations"),
+    "collisions": KeySpec("bool", field="collisions"),
     "emergence scales": KeySpec("scales", field="emergence_scales"),
     "emergence growth frames": KeySpec("float", low=0, strict=True, field="emergence_growth_frames"),
     "output animation frames number": replace(_COUNT1, field="output_frames_number"),
@@ -934,6 +940,7 @@ def format_fcc(params: CanopyParams) -> str:
     add(f"max substeps: {int(p.max_substeps)}")
     add(f"edge stretch bounds: {_num(p.stretch_bounds[0])} {_num(p.stretch_bounds[1])}")
     add(f"relax iterations: {int(p.relax_iterations)}")
+    add(f"collisions: {_bool(p.collisions)}")
     add("emergence scales: " + " ".join(_num(x) for x in p.emergence_scales))
     add(f"emergence growth frames: {_num(p.emergence_growth_frames)}")
     opt("output animation frames number",

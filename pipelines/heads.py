@@ -50,11 +50,12 @@ def floret_heights(mesh, frame_rba, scene) -> dict:
 class Head:
     """The build of one head: its typed scene, canopy frames, receptacle meshes and RBA frames."""
 
-    def __init__(self, build: Path):
+    def __init__(self, build: Path, canopy: str = "canopy", scene: str = "typed.scn"):
         self.build = Path(build)
-        self.scene = read_scn(self.build / "head" / "typed.scn")
+        self.scene = read_scn(self.build / "head" / scene)
         self.types = [p.type for p in self.scene.placements]
-        self.canopy = list_obj_sequence(self.build / "canopy")
+        self.canopy_dir = self.build / canopy
+        self.canopy = list_obj_sequence(self.canopy_dir)
         self.receptacle = list_obj_sequence(self.build / "head" / "receptacle")
         self.rba = sorted((self.build / "head" / "rba").glob("*.rba"))
         pos = self.scene.arrays()["pos"]
@@ -65,14 +66,17 @@ class Head:
         return read_rba(self.rba[min(k, len(self.rba) - 1)])
 
 
-def check_head(build: Path, *, rays: int, failures: list, per_frame=None) -> Head:
+def check_head(build: Path, *, rays: int | None, failures: list, per_frame=None, canopy: str = "canopy",
+               scene: str = "typed.scn") -> Head:
     """Print the shared report of a head build, appending what fails to ``failures``.
 
-    ``rays``: the ray florets the species has; ``per_frame(i, mesh)``: called on every canopy frame
-    (for a species' own per-frame checks). Returns the :class:`Head` for the species' further
-    checks (:func:`check_phase` and its own).
+    ``rays``: the ray florets the species has (None: no ray facts to check, e.g. a head of ray
+    florets only); ``per_frame(i, mesh)``: called on every canopy frame (for a species' own
+    per-frame checks); ``canopy``, ``scene``: the build's canopy folder and typed scene (under
+    ``head/``). Returns the :class:`Head` for the species' further checks (:func:`check_phase` and
+    its own).
     """
-    head = Head(build)
+    head = Head(build, canopy, scene)
     scene, types, canopy, receptacle = head.scene, head.types, head.canopy, head.receptacle
     print(f"canopy: {len(canopy)} frames; head: {len(scene)} placements "
           f"({types.count('disk')} disk, {types.count('ray')} ray, {types.count('bract')} bracts)")
@@ -100,7 +104,7 @@ def check_head(build: Path, *, rays: int, failures: list, per_frame=None) -> Hea
     print(f"every frame ({len(canopy)}) tested: {total_pairs} intersecting pairs, {total_rec} with the receptacle")
 
     # shape: fccompose's per-frame stretch figures
-    with open(head.build / "canopy" / "log.csv", newline="") as fh:
+    with open(head.canopy_dir / "log.csv", newline="") as fh:
         log = list(csv.DictReader(fh))
     lo = min(float(r["min_edge_stretch"]) for r in log)
     hi = max(float(r["max_edge_stretch"]) for r in log)
@@ -116,6 +120,8 @@ def check_head(build: Path, *, rays: int, failures: list, per_frame=None) -> Hea
     if missing:
         failures.append(f"{len(missing)} florets missing at the end (e.g. {missing[:5]})")
 
+    if rays is None:
+        return head
     # the species' facts: its rays, on the margin
     radius, t = head.radius, np.array(types)
     n_rays = int((t == "ray").sum())

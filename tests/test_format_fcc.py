@@ -132,6 +132,7 @@ far plane: 100
 camera fov: 30
 light position: 4, 5, 6
 shadow frustrum: -2, 2, -3, 3, -4, 4
+collisions: off
 """
 
 
@@ -179,6 +180,7 @@ def test_every_key_of_the_list(write, tmp_path):
         max_substeps=2,
         stretch_bounds=(0.6, 1.4),
         relax_iterations=3,
+        collisions=False,
         emergence_scales=(1, 0.5, 0.2),
         emergence_growth_frames=4.5,
         output_frames_number=5,

@@ -282,6 +282,11 @@ class Simulation:
         cand = np.nonzero(due)[0]
         born = st.born.copy()
         out: list = []
+        if not self.params.collisions:  # no room needed: every due floret emerges at its own size
+            born[cand] = True
+            self._sched = None
+            self.set_born(born)
+            return cand.tolist(), []
         for size in self.params.emergence_scales:
             if not len(cand):
                 break
@@ -469,6 +474,12 @@ class Simulation:
             timing["sweeps"] = timing.get("sweeps", 0) + int(self.sweeps.sum())
         self.check_whole(xp, frame_to)  # a diverged solve: stop before detecting collisions on it
         t2 = time.perf_counter()
+        if not p.collisions:  # the growth alone (fcc key ``collisions: off``)
+            t3 = time.perf_counter()
+            timing["rest"] = timing.get("rest", 0.0) + (t1 - t0)
+            timing["internal"] = timing.get("internal", 0.0) + (t2 - t1)
+            timing["collide"] = timing.get("collide", 0.0) + (t3 - t2)
+            return xp, CollisionResult()
         kw = dict(thickness=p.spacing, stiffness=p.k_collision, iterations=p.collision_iterations,
                   max_retries=p.max_collision_retries, tolerance=default_tolerance(x, p.spacing),
                   cell_size=self._cell(x), fallback="parts")
@@ -815,9 +826,10 @@ def _first_frame(run: _Run, allow_initial_intersections: bool) -> None:
                f"{len(pairs)} intersecting triangle pairs between florets {_florets_text(fl[:20])}"
                + (" ..." if len(fl) > 20 else "")
                + " (placement indices; --allow-initial-intersections to go on)")
-        if not allow_initial_intersections:
+        if not allow_initial_intersections and run.sim.params.collisions:
             raise InitialIntersectionError(msg)
-        run.warn(msg)
+        if run.sim.params.collisions:
+            run.warn(msg)
     _record(run, row, write=True)
 
 
@@ -874,7 +886,7 @@ def _run_frames(run: _Run, bar) -> None:
         run.result.waiting = waiting
         check = bool(params.sanity_check_every) and k % params.sanity_check_every == 0
         pairs = _end_of_frame(run, row, check=check)
-        if pairs is not None and len(pairs):
+        if pairs is not None and len(pairs) and params.collisions:  # off: only counted (log.csv)
             fl = _pairs_by_floret(model, pairs)
             msg = (f"frame {k}: sanity check found {len(pairs)} intersecting triangle pairs "
                    f"between florets {_florets_text(fl[:20])}")

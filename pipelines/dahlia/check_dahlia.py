@@ -1,0 +1,113 @@
+"""Checks of the dahlia build (the `check` stage of the Makefile).
+
+Usage: python check_dahlia.py BUILD_DIR   (BUILD_DIR = build/dahlia)
+
+Prints, and fails (exit 1) on any of, for both runs with collision handling (``canopy/``, the
+ball; ``packed/``, the tightly packed variant of fig. 9.1):
+
+- **intersections**: intersecting triangle pairs (inflo.tools.collide, exact static test; touching
+  counts) of every canopy frame, and between every frame and the receptacle under them
+  (head/receptacle/, not simulated: the florets must stand clear of it);
+- **shape**: an output frame whose edges leave [0.5, 1.5] x their rest length (fccompose's log.csv,
+  ``min_edge_stretch``/``max_edge_stretch``);
+- **florets missing**: a placement of the head that is not in the last frame;
+
+and, of the species (thesis ch. 9, figs. 9.1, 9.2):
+
+- **almost only ray florets**: every placement but the involucral bracts a ray floret;
+- **a ball**: the open head at least BALL (0.75) times as high (from the lowest bract's base to
+  the top) as it is wide, not a flat head;
+- **opening from the base to the top** (the phase effect): at two thirds of the run, the ray
+  florets' heights above the receptacle (floret units) fall with their order of formation (first
+  at the base, last at the top): Spearman rank correlation below -0.5, and the last fifth formed
+  at most LAG (0.8) times as high as the first fifth on average (still opening);
+- **florets that touch and accommodate**: the ball's florets meet (collisions found), the packed
+  variant's florets press harder (at least PRESS (2) times the ball's collisions), and without collision
+  handling (``packed_off/``) the packed florets intersect (the comparison of the picture is real).
+"""
+from __future__ import annotations
+
+import csv
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy.stats import spearmanr
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from heads import check_head, floret_heights  # noqa: E402  (pipelines/heads.py)
+
+from inflo.formats.obj import list_obj_sequence, read_obj  # noqa: E402
+from inflo.tools.collide import intersecting_pairs  # noqa: E402
+
+BALL = 0.75
+# at two thirds of the run the last fifth of the ray florets formed (the top of the ball) are at
+# most this fraction of the first fifth's height (the bud key pose is 0.70 floret units long, the
+# open one 2.2)
+LAG = 0.8
+PRESS = 2.0
+
+
+def collisions(folder: Path) -> int:
+    with open(folder / "log.csv", newline="") as fh:
+        return sum(int(r["collisions_found"]) for r in csv.DictReader(fh))
+
+
+def main(build: Path) -> int:
+    build = Path(build)
+    failures: list = []
+    heads = {}
+    for canopy, scene in (("canopy", "typed.scn"), ("packed", "packed.scn")):
+        print(f"== {canopy}/ ==")
+        fail: list = []
+        heads[canopy] = head = check_head(build, rays=None, failures=fail, canopy=canopy, scene=scene)
+        failures += [f"{canopy}: {f}" for f in fail]
+        kinds = set(head.types)
+        if kinds - {"ray", "bract"}:
+            failures.append(f"{canopy}: florets other than ray florets and bracts: {sorted(kinds)}")
+
+    head = heads["canopy"]
+    last = read_obj(head.canopy[-1])
+    v = last.vertices
+    height = float(v[:, 1].max() - v[:, 1].min())
+    width = float(max(np.ptp(v[:, 0]), np.ptp(v[:, 2])))
+    print(f"the open ball: {width:.3f} wide, {height:.3f} high ({height / width:.2f})")
+    if height < BALL * width:
+        failures.append(f"not a ball: {height:.3f} high, {width:.3f} wide (expected >= {BALL} x)")
+
+    k = (2 * len(head.canopy)) // 3
+    heights = floret_heights(read_obj(head.canopy[k]), head.rba_frame(k), head.scene)
+    rays = sorted(p for p in heights if head.types[p] == "ray")
+    h = np.array([heights[p] for p in rays])
+    rho = float(spearmanr(rays, h).statistic) if len(rays) > 2 else float("nan")
+    fifth = max(1, len(h) // 5)
+    lag = float(h[-fifth:].mean() / h[:fifth].mean()) if len(h) else float("nan")
+    print(f"phase effect at frame {k}: {len(rays)} ray florets, height {h.min():.2f}-{h.max():.2f} floret units, "
+          f"rank correlation with the order of formation {rho:.2f}; the last fifth formed {lag:.2f} x as high "
+          f"as the first fifth")
+    if not rho < -0.5:
+        failures.append(f"no phase effect at frame {k}: rank correlation {rho:.2f}")
+    if not lag <= LAG:
+        failures.append(f"the top of the ball is not behind its base at frame {k}: {lag:.2f} x (expected <= {LAG})")
+
+    ball, packed = collisions(build / "canopy"), collisions(build / "packed")
+    off = read_obj(list_obj_sequence(build / "packed_off")[-1])
+    n_off = len(intersecting_pairs(off.vertices, off.faces))
+    print(f"collisions found: ball {ball}, packed {packed} ({packed / max(ball, 1):.1f} x); packed without "
+          f"collision handling, last frame: {n_off} intersecting pairs")
+    if ball == 0:
+        failures.append("the ball's florets never touch")
+    if packed < PRESS * ball:
+        failures.append(f"the packed florets press no harder than the ball's ({packed} vs {ball} collisions)")
+    if n_off == 0:
+        failures.append("the packed florets do not intersect without collision handling")
+
+    print("OK" if not failures else "FAILED: " + "; ".join(failures))
+    return 0 if not failures else 1
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        print(__doc__.strip().splitlines()[2], file=sys.stderr)
+        sys.exit(2)
+    sys.exit(main(Path(sys.argv[1])))
