@@ -21,6 +21,8 @@ CLI_NAMES = [
     "branch-gen",
     "canopy-render",
     "canopy-export",
+    "venation",
+    "inflo-sweep",
 ]
 
 
