@@ -672,6 +672,10 @@ class CollisionResult:
     whole_step: bool = False
     repairs: int = 0
     """passes that relaxed parts left out of shape and resolved what that moved"""
+    misshapen: int = 0
+    """parts (``fallback="parts"``) still out of shape at the end: their carried shape crosses
+    something, so they keep the collision-free shape the solve gave them (fccompose redoes such a
+    step as half steps)"""
 
 
 def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarray,
@@ -888,6 +892,7 @@ def _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect) -> None:
             moved, _ = reshape_parts(x0, x1, carried, vp, bad, detect)
             retreated |= moved
             res.reverted += int(np.count_nonzero(moved[vp]))
+            res.misshapen = int(np.count_nonzero(bad & ~moved))
     res.retreated = np.nonzero(retreated)[0]
 
 
