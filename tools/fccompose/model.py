@@ -38,6 +38,12 @@ Placement kinds (SCN, app. C.2) and developmental time u in [0, 1] (template fra
   the primordium's formation in a dynamic phyllotaxis): before that it is not part of the canopy
   (no collisions, no faces in the output; :class:`inflo.tools.fccompose.compose.Simulation`).
 
+Nested scenes (formats/fcc.md): a placement whose id is a ``rigid body animation`` entry's
+instances that entry's scene (a :class:`Level`); its florets carry the chain of outer levels
+(:attr:`Floret.outer`) and read their own windows on the inner clock (``frame - shift``, the outer
+placements' ``frameStart``). Their matrices are composed in :meth:`Model.matrix` (per floret, not
+in the vectorized RBA tables of the top-level ``rba:`` florets).
+
 Weight files list fixed vertex ids: 0-based indices in the OBJ's vertex order, separated by blanks,
 commas or line breaks; ``#`` starts a comment.
 """
@@ -142,6 +148,31 @@ class Floret:
     birth_frame: int = 0  # first RBA frame listing an rba: placement (its emergence); 0 otherwise
     rba_source: np.ndarray | None = None  # per RBA frame: the frame whose row places it (nearest present)
     rba_row: np.ndarray | None = None  # per RBA frame: its row in that frame
+    outer: tuple = ()
+    """the :class:`Level` s of the placements instancing its scene inside others (nested scenes,
+    outermost first); empty for a floret of a top-level scene"""
+    shift: float = 0.0
+    """the time its own placement's clock runs behind the canopy's: the sum of the outer levels'
+    shifts (their placements' ``frameStart``)"""
+
+
+@dataclass
+class Level:
+    """A placement that instances a whole scene (a ``rigid body animation`` entry's) inside
+    another (thesis ch. 8: "a SCN file instantiates a rigid body animation of an inflorescence
+    described in another SCN file"): its own motion, and the time shift of the scene it carries
+    (its ``frameStart``, 0 for ``o:`` and ``i:``), by which the inner scene's clock runs behind its
+    own."""
+
+    placement: object
+    scene_path: Path
+    local_index: int
+    rba: object = None  # (paths, frames) when the placement is rba:, else None
+    rba_scale: np.ndarray | None = None
+    rba_source: np.ndarray | None = None
+    rba_row: np.ndarray | None = None
+    birth_frame: int = 0  # in its own clock
+    shift: float = 0.0
 
 
 def _load_template(params: CanopyParams, entry) -> Template:
@@ -271,8 +302,10 @@ class Model:
     # -- schedule ------------------------------------------------------------------------------
 
     def developmental_time(self, floret: Floret, frame: float) -> float:
-        """u in [0, 1] of ``floret`` at (fractional) ``frame`` (see the module docstring)."""
+        """u in [0, 1] of ``floret`` at (fractional) ``frame`` (see the module docstring); a
+        floret of a nested scene reads its window on its scene's clock (``frame - shift``)."""
         p = floret.placement
+        frame = frame - floret.shift
         if p.kind == "i":
             return float(min(max(p.interpolation, 0.0), 1.0))
         if p.kind == "o":
@@ -280,25 +313,16 @@ class Model:
         return _ramp(frame, p.frame_start, p.frame_end)
 
     def matrix(self, floret: Floret, frame: float) -> np.ndarray:
-        """(4, 4) local-to-scene matrix of ``floret`` at ``frame``, scene scale included."""
-        p = floret.placement
-        if p.kind == "rba":
-            m = _rba_matrix(floret, frame)
-        else:
-            m = placement_matrix(p.pos, p.scale, p.up, p.right)
-            if p.kind == "ta":
-                s = _ramp(frame, p.frame_start, p.frame_end)
-                m = m.copy()
-                m[:3, 3] += s * np.asarray(p.translate, float)
-            elif p.kind == "ra":
-                s = _ramp(frame, p.frame_start, p.frame_end)
-                r = np.eye(4)
-                r[:3, :3] = _rotation(p.axis, math.radians(s * p.angle))
-                t1 = np.eye(4)
-                t1[:3, 3] = p.pos
-                t0 = np.eye(4)
-                t0[:3, 3] = -np.asarray(p.pos, float)
-                m = t1 @ r @ t0 @ m
+        """(4, 4) local-to-scene matrix of ``floret`` at ``frame``, scene scale included: the
+        matrices of its outer levels (nested scenes), each at its own clock, times its own."""
+        m = _level_matrix(floret, frame - floret.shift)
+        t = frame
+        outer = np.eye(4)
+        for lv in floret.outer:
+            outer = outer @ _level_matrix(lv, t)
+            t -= lv.shift
+        if floret.outer:
+            m = outer @ m
         scale = np.diag(list(self.params.scene_scale) + [1.0])
         return scale @ m
 
@@ -340,10 +364,11 @@ class Model:
 
     def _fixed_matrices(self) -> list:
         """Per floret its (3, 4) matrix where that does not depend on the frame (placements other
-        than ``ta``, ``ra`` and ``rba``), else None; computed once."""
+        than ``ta``, ``ra`` and ``rba``, at every level), else None; computed once."""
         if getattr(self, "_fixed", None) is None:
-            self._fixed = [None if fl.placement.kind in ("ta", "ra", "rba") else self.matrix(fl, 0.0)[:3]
-                           for fl in self.florets]
+            moving = ("ta", "ra", "rba")
+            self._fixed = [None if fl.placement.kind in moving or any(lv.placement.kind in moving for lv in fl.outer)
+                           else self.matrix(fl, 0.0)[:3] for fl in self.florets]
         return self._fixed
 
     # -- kernel launches (keyword arguments; the kernels take the arrays positionally) ----------
@@ -375,7 +400,7 @@ class Model:
         each frame (its nearest present row), (n, 3) scale factors: the entry's and the SCN's)."""
         groups: dict = {}
         for fl in self.florets:
-            if fl.placement.kind == "rba":
+            if fl.placement.kind == "rba" and not fl.outer:  # nested ones: Model.matrix
                 groups.setdefault(id(fl.rba[1]), []).append(fl)
         out = []
         for members in groups.values():
@@ -492,6 +517,29 @@ def _nearest_present(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     src = np.where(np.abs(i - lo) <= np.abs(hi - i), lo, hi)
     src = np.where(rows >= 0, i, src)
     return src, rows[src]
+
+
+def _level_matrix(level, frame: float) -> np.ndarray:
+    """(4, 4) matrix of one placement (a :class:`Floret`'s own or a :class:`Level`) at ``frame``
+    of its own clock, without the scene scale."""
+    p = level.placement
+    if p.kind == "rba":
+        return _rba_matrix(level, frame)
+    m = placement_matrix(p.pos, p.scale, p.up, p.right)
+    if p.kind == "ta":
+        s = _ramp(frame, p.frame_start, p.frame_end)
+        m = m.copy()
+        m[:3, 3] += s * np.asarray(p.translate, float)
+    elif p.kind == "ra":
+        s = _ramp(frame, p.frame_start, p.frame_end)
+        r = np.eye(4)
+        r[:3, :3] = _rotation(p.axis, math.radians(s * p.angle))
+        t1 = np.eye(4)
+        t1[:3, 3] = p.pos
+        t0 = np.eye(4)
+        t0[:3, 3] = -np.asarray(p.pos, float)
+        m = t1 @ r @ t0 @ m
+    return m
 
 
 def _rba_matrix(floret: Floret, frame: float) -> np.ndarray:
@@ -628,30 +676,61 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
     """
     rbas = {} if rbas is None else rbas
     rba_rows = {sp: _rba_rows(seq.frames, len(scenes[sp].placements)) for sp, seq in rbas.items()}
+    # nested scenes: a placement whose id names a rigid body animation entry instances that
+    # entry's scene (recursively); such scenes are not top-level unless listed as scene files
+    nested = {r.id: r.scene_path.resolved for r in params.rigid_body_animations}
+    referenced = {nested[p.id] for sc in scenes.values() for p in sc.placements
+                  if p.id in nested and p.id not in templates}
+    listed = {f.resolved for f in params.scene_files}
+    top = [sp for sp in scenes if sp in listed or sp not in referenced]
 
     florets: list[Floret] = []
     placed: dict = {}
-    for sp, scene in scenes.items():
-        for k, p in enumerate(scene.placements):
-            if p.id not in templates:
-                raise FormatError(sp, None, f"placement ids naming an 'animation' or 'obj' entry of {params.source}",
-                                  f"id {p.id} (placement {k}, '{p.kind}:')")
-            if p.id not in placed:
-                placed[p.id] = templates[p.id]
-            fl = Floret(len(florets), p, placed[p.id], sp, k, p.material)
-            if p.kind == "rba":
-                if sp not in rbas:
-                    raise FormatError(sp, None, "a 'rigid body animation' line for this scene's 'rba:' placements",
-                                      f"placement {k} and no such line")
-                paths, frames, scale = rbas[sp]
-                rows = rba_rows[sp][k]
-                if not (rows >= 0).any():
-                    raise FormatError(paths[0].parent, None, f"placement {k} in at least one RBA file", "none")
-                fl.rba = (paths, frames)
-                fl.rba_scale = scale
-                fl.birth_frame = int(np.argmax(rows >= 0))
-                fl.rba_source, fl.rba_row = _nearest_present(rows)
-            florets.append(fl)
+
+    def moved_by_rba(target, sp, k, p):
+        if sp not in rbas:
+            raise FormatError(sp, None, "a 'rigid body animation' line for this scene's 'rba:' placements",
+                              f"placement {k} and no such line")
+        paths, frames, scale = rbas[sp]
+        rows = rba_rows[sp][k]
+        if not (rows >= 0).any():
+            raise FormatError(paths[0].parent, None, f"placement {k} in at least one RBA file", "none")
+        target.rba = (paths, frames)
+        target.rba_scale = scale
+        target.birth_frame = int(np.argmax(rows >= 0))
+        target.rba_source, target.rba_row = _nearest_present(rows)
+
+    def instance(sp, outer, chain):
+        shift = float(sum(lv.shift for lv in outer))
+        # the frame (canopy clock) at which the outer levels have all emerged
+        born, t = 0.0, 0.0
+        for lv in outer:
+            born = max(born, t + lv.birth_frame)
+            t += lv.shift
+        for k, p in enumerate(scenes[sp].placements):
+            if p.id in templates:
+                if p.id not in placed:
+                    placed[p.id] = templates[p.id]
+                fl = Floret(len(florets), p, placed[p.id], sp, k, p.material, outer=tuple(outer), shift=shift)
+                if p.kind == "rba":
+                    moved_by_rba(fl, sp, k, p)
+                fl.birth_frame = int(math.ceil(max(born, fl.birth_frame + shift) - 1e-9))
+                florets.append(fl)
+            elif p.id in nested:
+                inner = nested[p.id]
+                if inner in chain:
+                    raise FormatError(sp, None, "nested scenes that do not contain themselves",
+                                      f"placement {k} (id {p.id}) instancing {Path(inner).name} inside itself")
+                lv = Level(p, sp, k, shift=float(p.frame_start or 0))
+                if p.kind == "rba":
+                    moved_by_rba(lv, sp, k, p)
+                instance(inner, outer + [lv], chain + [inner])
+            else:
+                raise FormatError(sp, None, f"placement ids naming an 'animation', 'obj' or 'rigid body "
+                                  f"animation' entry of {params.source}", f"id {p.id} (placement {k}, '{p.kind}:')")
+
+    for sp in top:
+        instance(sp, [], [sp])
     if not florets:
         raise InputError(f"{params.source}: expected placements in the scene files, found none")
 
@@ -690,7 +769,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
         ends = [0]
         for fl in florets:
             if fl.placement.frame_end is not None:
-                ends.append(int(fl.placement.frame_end))
+                ends.append(int(math.ceil(fl.placement.frame_end + fl.shift)))
         for seq in rbas.values():
             ends.append(len(seq.paths) - 1)
         n_frames = max(ends)
