@@ -412,6 +412,27 @@ def test_initial_intersections_are_refused_then_allowed(inputs, tmp_path):
     assert res.returncode == 0, res.stderr
 
 
+def test_collisions_off_counts_intersections_and_moves_nothing_apart(inputs, tmp_path):
+    """``collisions: off`` (the comparison of thesis fig. 4.9): the two florets that start
+    intersecting, refused with collisions on, run to the end (even with --strict); every frame's
+    sanity check counts the intersections in log.csv, nothing is detected or moved apart, and each
+    floret is its template carried by its placement (as the single-floret run gives it)."""
+    pl = two_floret_scene(N_FRAMES, distance=0.3)
+    res, out = bad_case(inputs, tmp_path, scene=pl, fcc_extra="collisions: off\n")
+    assert res.returncode == 0, res.stderr
+    rows = read_log(out)
+    assert len(rows) == N_FRAMES
+    assert all(int(r["intersecting_pairs"]) > 0 for r in rows)
+    assert all(int(r["collisions_found"]) == 0 and int(r["florets_retreated"]) == 0 for r in rows)
+    res2 = run_cli("fccompose", "-q", "--strict", tmp_path / "case" / "p.fcc", "-o", tmp_path / "strict")
+    assert res2.returncode == 0, res2.stderr
+    on = tmp_path / "on"
+    shutil.copytree(tmp_path / "case", on)
+    write_fcc_text(on / "p.fcc")
+    res3 = run_cli("fccompose", "-q", on / "p.fcc", "-o", tmp_path / "on_out")
+    assert res3.returncode == 2 and "collision-free" in res3.stderr
+
+
 def test_rba_rows_and_nearest_present_frame_match_a_plain_search():
     """A floret absent from an RBA frame takes the nearest frame where it is present (the earlier on
     a tie); the tables fccompose builds once give the same frame and row as searching every frame."""

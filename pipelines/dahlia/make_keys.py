@@ -41,7 +41,7 @@ HERE = Path(__file__).resolve().parent
 # its arc (it does not narrow to a point), the bract's eta falls to 1 vertex at its tip
 RES = {
     "draft": {"ligule": ("0.1", "6"), "bract": ("0.34", "../bract_eta_draft.func")},
-    "final": {"ligule": ("0.08", "8"), "bract": ("0.2", "../bract_eta_final.func")},
+    "final": {"ligule": ("0.09", "7"), "bract": ("0.2", "../bract_eta_final.func")},
 }
 
 # ---- ray floret: a rolled, incurved ligule -----------------------------------------------------------

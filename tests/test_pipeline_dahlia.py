@@ -1,0 +1,155 @@
+"""The dahlia pipeline (issue 17, pipelines/dahlia): its inputs, its head at both qualities, the
+sizes along the ball, the collisions-off run, and the draft build's check.
+
+- the committed key poses are what make_keys.py writes, compatible pose to pose, the two
+  qualities differing only in resolution;
+- the ray floret is a rolled tube (its half cross-sections arcs round the centre line, open in a
+  slit on the inner side), short and erect in bud, long and cupped when open, and its base row
+  (the only vertices on the receptacle) stays put through the development;
+- the head at both qualities (phyllotaxis + dimorph as the Makefile runs them): florets round a
+  spherical cap well beyond the equator (a ball), bracts the lowest, every other floret a ray
+  floret, developing from the base to the top;
+- size_along.py: the later florets larger by 1 + gain f^power, the bracts untouched;
+- if the draft build exists (the golden test builds it): check_dahlia.py's report says OK.
+"""
+from __future__ import annotations
+
+import importlib.util
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from inflo.formats.floret import check_compatible, read_floret
+from inflo.formats.scn import read_scn
+
+from conftest import REPO, run_cli
+
+DAH = REPO / "pipelines" / "dahlia"
+BUILD = REPO / "build" / "dahlia"
+KEYS = {"ray": ("bud", "early", "mid", "late", "open"), "bract": ("bud", "open")}
+
+
+def _make_keys():
+    spec = importlib.util.spec_from_file_location("dahlia_make_keys", DAH / "make_keys.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _make_var(quality: str, name: str) -> str:
+    text = (DAH / "Makefile").read_text()
+    block = re.search(rf"ifeq \(\$\(QUALITY\),{quality}\)(.*?)(?:else ifeq|else\n)", text, re.S)
+    m = re.search(rf"^{name} := (\S+)", block.group(1), re.M) or re.search(rf"^{name} := (\S+)", text, re.M)
+    return m.group(1)
+
+
+@pytest.fixture(scope="module", params=["draft", "final"])
+def head(request, tmp_path_factory):
+    q = request.param
+    out = tmp_path_factory.mktemp(f"dahlia_{q}")
+    r = run_cli("phyllotaxis", "-q", DAH / q / "head.toml", "-o", out)
+    assert r.returncode == 0, r.stderr
+    bracts = int(_make_var(q, "BRACTS"))
+    r = run_cli("dimorph", "-q", out / "scene.scn", "--alpha", "90", "--threshold", "0", "--bracts", bracts,
+                "--bract-id", "2", "--ray-id", "1", "--disk-id", "1", "-o", out / "types.scn")
+    assert r.returncode == 0, r.stderr
+    return q, out, bracts
+
+
+def test_inputs_are_what_make_keys_writes(tmp_path):
+    r = subprocess.run([sys.executable, str(DAH / "make_keys.py"), str(tmp_path)], capture_output=True, text=True,
+                       timeout=60)
+    assert r.returncode == 0, r.stderr
+    for q in ("draft", "final"):
+        written = sorted(p.name for p in (tmp_path / q).iterdir())
+        assert written == sorted(p.name for p in (DAH / q).glob("*.floret"))
+        for name in written:
+            assert (tmp_path / q / name).read_text() == (DAH / q / name).read_text(), \
+                f"pipelines/dahlia/{q}/{name} differs from what make_keys.py writes: rerun it"
+
+
+def test_key_poses_compatible_and_qualities_differ_only_in_resolution():
+    for kind, poses in KEYS.items():
+        for q in ("draft", "final"):
+            florets = [read_floret(DAH / q / f"{kind}_{p}.floret") for p in poses]
+            for a, b in zip(florets, florets[1:]):
+                check_compatible(a, b, kind, kind)
+            assert florets[0].key_time == 0.0 and florets[-1].key_time == 1.0
+        for p in poses:
+            d, f = (read_floret(DAH / q / f"{kind}_{p}.floret") for q in ("draft", "final"))
+            for od, of in zip(d.organs, f.organs):
+                np.testing.assert_array_equal(od.control_points, of.control_points)
+
+
+def test_ray_floret_is_a_rolled_incurved_tube_growing_from_a_fixed_base():
+    mk = _make_keys()
+    bud, open_ = mk.ray_pose(0.0), mk.ray_pose(1.0)
+    assert open_["length"] > 2.5 * bud["length"]
+    assert open_["r_mouth"] > 2.0 * open_["r_base"]  # the cup
+    for s in (0.0, 0.5, 1.0):
+        p = mk.ray_pose(s)
+        assert 90.0 < p["arc"] < 180.0  # rolled past a half tube, a slit left open
+        net = mk.ray_net(s)
+        c, h = mk.centre_line(p["length"], p["lean"], p["incurve"], mk.RAY_NV)
+        # every row but the rim's is an arc round the centre line's point (the rim is cut obliquely)
+        for j in range(mk.RAY_NV - 2):
+            d = np.linalg.norm(net[j, :, :2] - c[j], axis=1) ** 2 + net[j, :, 2] ** 2
+            np.testing.assert_allclose(np.sqrt(d), d[0] ** 0.5, rtol=1e-9)
+        # the base row lies on the receptacle (y = 0) in every pose (fixed there: it follows the
+        # template as it widens)
+        np.testing.assert_allclose(net[0, :, 1], 0.0, atol=1e-12)
+    # incurved: the tip's heading turns back toward the axis from the lean
+    p = mk.ray_pose(1.0)
+    _, h = mk.centre_line(p["length"], p["lean"], p["incurve"], 50)
+    assert np.degrees(h.max()) == pytest.approx(p["lean"], abs=0.5)
+    assert np.degrees(h[-1]) < p["lean"] - 0.8 * p["incurve"]
+
+
+def test_head_is_a_ball_of_ray_florets_bracts_lowest_developing_base_to_top(head):
+    q, out, bracts = head
+    scene = read_scn(out / "types.scn")
+    types = [p.type for p in scene.placements]
+    assert types.count("bract") == bracts
+    assert set(types) == {"ray", "bract"}
+    pos = scene.arrays()["pos"]
+    # the apex at the origin, the sphere's centre below: florets reach well below the equator
+    radius = float(re.search(r"^radius = (\S+)", (DAH / q / "head.toml").read_text(), re.M).group(1))
+    angle = float(re.search(r"^angle = (\S+)", (DAH / q / "head.toml").read_text(), re.M).group(1))
+    assert angle > 120
+    centre = np.array([0.0, pos[:, 1].min() / (1 - np.cos(np.radians(angle))), 0.0])
+    polar = np.degrees(np.arccos(np.clip((pos - centre)[:, 1] / np.linalg.norm(pos - centre, axis=1), -1, 1)))
+    assert polar.max() > 110 and polar.min() < 25
+    assert radius > 0
+    # bracts: the first formed, the lowest
+    assert all(t == "bract" for t in types[:bracts])
+    assert np.median(polar[:bracts]) > np.median(polar[bracts:])
+    # each floret's window starts at its emergence: later florets (higher up) start later
+    starts = np.array([p.frame_start for p in scene.placements])
+    assert np.all(np.diff(starts) >= 0) and starts[-1] > starts[0] + 10
+
+
+def test_size_along_the_ball(head, tmp_path):
+    _, out, bracts = head
+    r = subprocess.run([sys.executable, str(DAH / "size_along.py"), str(out / "types.scn"), str(tmp_path / "s.scn"),
+                        "0.5", "2"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    a, b = read_scn(out / "types.scn"), read_scn(tmp_path / "s.scn")
+    rays = [k for k, p in enumerate(a.placements) if p.type == "ray"]
+    for k, p in enumerate(a.placements):
+        gain = b.placements[k].scale / p.scale
+        if p.type == "bract":
+            np.testing.assert_allclose(gain, 1.0)
+        else:
+            f = rays.index(k) / (len(rays) - 1)
+            np.testing.assert_allclose(gain, 1.0 + 0.5 * f ** 2, rtol=1e-5)
+
+
+def test_draft_build_check_says_ok():
+    report = BUILD / "check.txt"
+    if not report.is_file() or (BUILD / "quality.txt").read_text().strip() != "draft":
+        pytest.skip("no draft dahlia build (make dahlia, or the golden test, makes one)")
+    text = report.read_text()
+    assert text.rstrip().endswith("OK"), text[-2000:]
