@@ -15,6 +15,22 @@ distance, :func:`segment_segment_distance`).
 and the first time of impact. An even number of crossings in a step leaves the pair on the side
 it started on and needs no response (4.2.2.3); callers respond to odd counts.
 
+Coplanar motion (issue 14). When the four points stay (nearly) coplanar over the whole step the
+cubic vanishes identically (or is rounding noise) and its roots say nothing. Contact is then
+decided exactly as in the plane: the first moment of contact is t = 0 or a moment when a vertex
+lies on an edge of the other element (a point can only enter a triangle through its boundary, two
+segments can only start to touch with an endpoint on the other), i.e. a root of a component of
+the quadratic ``(w - u)(t) x (p - u)(t)`` (p on the line uw), or the moment two vertices pass
+closest. :func:`_vt_coplanar` / :func:`_ee_coplanar` collect these candidate instants (roots by
+the stable quadratic formula plus the parabola's vertex, so a double root lost to rounding is
+still tried) and run the inside test at each, earliest first. The same test is the fallback of
+the cubic path when the cubic is ill-conditioned (coefficients below ``_ILL_REL L^3``) and it
+found nothing. A hit is only ever reported at an instant where the distance is <= tol.
+
+Degenerate elements (issue 14): a triangle with coincident vertices, collinear corners or a
+zero-length edge is its longest edge (or its point) for :func:`point_triangle_distance`; no
+kernel here divides by zero.
+
 Every function is a pure numba kernel on (3,) float64 points.
 """
 from __future__ import annotations
@@ -39,8 +55,11 @@ __all__ = [
 _COPLANAR_REL = 1e-13
 # relative |f| at a critical point that counts as a double root (tangential touch)
 _TOUCH_REL = 1e-12
-# samples used when the four points stay coplanar over the whole step (degenerate cubic)
-_COPLANAR_SAMPLES = 33
+# relative size of the cubic below which its roots are ill-conditioned: when the cubic path finds
+# no contact, the coplanar candidate test runs as well (issue 14)
+_ILL_REL = 1e-9
+# |ab x ac|^2 <= _DEGEN_REL * (longest edge)^4: the triangle is a segment or a point
+_DEGEN_REL = 1e-28
 
 
 @njit(cache=True, inline="always")
@@ -275,6 +294,43 @@ def cubic_roots_01(k0, k1, k2, k3, roots):
     return n
 
 
+@njit(cache=True, inline="always")
+def _point_segment_param(px, py, pz, ux, uy, uz, wx, wy, wz):
+    """Parameter s in [0, 1] of the point of segment uw closest to p (0 for a zero-length one)."""
+    ex = wx - ux
+    ey = wy - uy
+    ez = wz - uz
+    ee = ex * ex + ey * ey + ez * ez
+    if not ee > 0.0:
+        return 0.0
+    s = ((px - ux) * ex + (py - uy) * ey + (pz - uz) * ez) / ee
+    return min(max(s, 0.0), 1.0)
+
+
+@njit(cache=True)
+def _degenerate_triangle_bary(p, a, b, c, bary):
+    """Barycentric weights of the point closest to p on the longest edge of abc (issue 14: a
+    collapsed triangle, collinear corners or coincident vertices, is that segment or point)."""
+    lab = (b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2 + (b[2] - a[2]) ** 2
+    lbc = (c[0] - b[0]) ** 2 + (c[1] - b[1]) ** 2 + (c[2] - b[2]) ** 2
+    lca = (a[0] - c[0]) ** 2 + (a[1] - c[1]) ** 2 + (a[2] - c[2]) ** 2
+    if lab >= lbc and lab >= lca:
+        s = _point_segment_param(p[0], p[1], p[2], a[0], a[1], a[2], b[0], b[1], b[2])
+        bary[0] = 1.0 - s
+        bary[1] = s
+        bary[2] = 0.0
+    elif lbc >= lca:
+        s = _point_segment_param(p[0], p[1], p[2], b[0], b[1], b[2], c[0], c[1], c[2])
+        bary[0] = 0.0
+        bary[1] = 1.0 - s
+        bary[2] = s
+    else:
+        s = _point_segment_param(p[0], p[1], p[2], c[0], c[1], c[2], a[0], a[1], a[2])
+        bary[0] = s
+        bary[1] = 0.0
+        bary[2] = 1.0 - s
+
+
 @njit(cache=True)
 def point_triangle_distance(p, a, b, c, bary):
     """Distance from point p to triangle abc (appendix B.2, "is p in the triangle", with tolerance).
@@ -282,7 +338,9 @@ def point_triangle_distance(p, a, b, c, bary):
     The thesis writes the coplanar point as ``a + r (b - a) + s (c - a)`` and tests
     ``r, s >= 0, r + s <= 1``; with a tolerance that becomes "closest point of the triangle within
     tol". The closest point is found by Voronoi regions (Ericson, Real-Time Collision Detection
-    5.1.5), which stays defined for collapsed (degenerate) triangles.
+    5.1.5). A degenerate triangle (``|ab x ac|^2 <= 1e-28`` times its longest edge to the fourth:
+    coincident vertices, collinear corners, a zero-length edge) is its longest edge, or its point
+    when all three corners coincide (issue 14); no division by zero on any input.
 
     Parameters
     ----------
@@ -300,51 +358,68 @@ def point_triangle_distance(p, a, b, c, bary):
     acx = c[0] - a[0]
     acy = c[1] - a[1]
     acz = c[2] - a[2]
-    apx = p[0] - a[0]
-    apy = p[1] - a[1]
-    apz = p[2] - a[2]
-    d1 = abx * apx + aby * apy + abz * apz
-    d2 = acx * apx + acy * apy + acz * apz
-    u = 0.0
+    nx = aby * acz - abz * acy
+    ny = abz * acx - abx * acz
+    nz = abx * acy - aby * acx
+    lab = abx * abx + aby * aby + abz * abz
+    lac = acx * acx + acy * acy + acz * acz
+    lbc = (c[0] - b[0]) ** 2 + (c[1] - b[1]) ** 2 + (c[2] - b[2]) ** 2
+    emax = max(lab, lac, lbc)
+    degenerate = not (nx * nx + ny * ny + nz * nz > _DEGEN_REL * emax * emax)
+    u = 1.0
     v = 0.0
     w = 0.0
-    if d1 <= 0.0 and d2 <= 0.0:
-        u, v, w = 1.0, 0.0, 0.0
-    else:
-        bpx = p[0] - b[0]
-        bpy = p[1] - b[1]
-        bpz = p[2] - b[2]
-        d3 = abx * bpx + aby * bpy + abz * bpz
-        d4 = acx * bpx + acy * bpy + acz * bpz
-        cpx = p[0] - c[0]
-        cpy = p[1] - c[1]
-        cpz = p[2] - c[2]
-        d5 = abx * cpx + aby * cpy + abz * cpz
-        d6 = acx * cpx + acy * cpy + acz * cpz
-        vc = d1 * d4 - d3 * d2
-        vb = d5 * d2 - d1 * d6
-        va = d3 * d6 - d5 * d4
-        if d3 >= 0.0 and d4 <= d3:
-            u, v, w = 0.0, 1.0, 0.0
-        elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-            t = d1 / (d1 - d3)
-            u, v, w = 1.0 - t, t, 0.0
-        elif d6 >= 0.0 and d5 <= d6:
-            u, v, w = 0.0, 0.0, 1.0
-        elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-            t = d2 / (d2 - d6)
-            u, v, w = 1.0 - t, 0.0, t
-        elif va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
-            t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-            u, v, w = 0.0, 1.0 - t, t
+    if not degenerate:
+        apx = p[0] - a[0]
+        apy = p[1] - a[1]
+        apz = p[2] - a[2]
+        d1 = abx * apx + aby * apy + abz * apz
+        d2 = acx * apx + acy * apy + acz * apz
+        if d1 <= 0.0 and d2 <= 0.0:
+            u, v, w = 1.0, 0.0, 0.0
         else:
-            den = va + vb + vc
-            if den == 0.0:  # collapsed triangle seen as interior: fall back to the vertex a
-                u, v, w = 1.0, 0.0, 0.0
+            bpx = p[0] - b[0]
+            bpy = p[1] - b[1]
+            bpz = p[2] - b[2]
+            d3 = abx * bpx + aby * bpy + abz * bpz
+            d4 = acx * bpx + acy * bpy + acz * bpz
+            cpx = p[0] - c[0]
+            cpy = p[1] - c[1]
+            cpz = p[2] - c[2]
+            d5 = abx * cpx + aby * cpy + abz * cpz
+            d6 = acx * cpx + acy * cpy + acz * cpz
+            vc = d1 * d4 - d3 * d2
+            vb = d5 * d2 - d1 * d6
+            va = d3 * d6 - d5 * d4
+            if d3 >= 0.0 and d4 <= d3:
+                u, v, w = 0.0, 1.0, 0.0
+            elif vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+                den = d1 - d3  # |ab|^2 > 0 for a non-degenerate triangle, guarded all the same
+                t = min(max(d1 / den, 0.0), 1.0) if den > 0.0 else 0.0
+                u, v, w = 1.0 - t, t, 0.0
+            elif d6 >= 0.0 and d5 <= d6:
+                u, v, w = 0.0, 0.0, 1.0
+            elif vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+                den = d2 - d6  # |ac|^2
+                t = min(max(d2 / den, 0.0), 1.0) if den > 0.0 else 0.0
+                u, v, w = 1.0 - t, 0.0, t
+            elif va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+                den = (d4 - d3) + (d5 - d6)  # |bc|^2
+                t = min(max((d4 - d3) / den, 0.0), 1.0) if den > 0.0 else 0.0
+                u, v, w = 0.0, 1.0 - t, t
             else:
-                v = vb / den
-                w = vc / den
-                u = 1.0 - v - w
+                den = va + vb + vc
+                if den > 0.0:
+                    v = vb / den
+                    w = vc / den
+                    u = 1.0 - v - w
+                else:  # rounding in a near-sliver: take it as its longest edge
+                    degenerate = True
+    if degenerate:
+        _degenerate_triangle_bary(p, a, b, c, bary)
+        u = bary[0]
+        v = bary[1]
+        w = bary[2]
     bary[0] = u
     bary[1] = v
     bary[2] = w
@@ -430,6 +505,179 @@ def _max_extent(a0, b0, c0, d0, a1, b1, c1, d1):
     return m
 
 
+@njit(cache=True, inline="always")
+def _push_time(cand, n, t):
+    """Append t to the candidate instants when it lies in [0, 1] (NaN and inf never do)."""
+    if t >= 0.0 and t <= 1.0:
+        cand[n] = t
+        return n + 1
+    return n
+
+
+@njit(cache=True, inline="always")
+def _quadratic_times(qa, qb, qc, cand, n):
+    """Append the real roots in [0, 1] of ``qa t^2 + qb t + qc`` and the parabola's vertex.
+
+    Roots by the stable formula (no cancellation between ``-qb`` and the square root); the vertex
+    ``-qb / (2 qa)`` is the double root when rounding has made a touching parabola's discriminant
+    slightly negative. No division by zero: each quotient is guarded.
+    """
+    if qa != 0.0:
+        n = _push_time(cand, n, -qb / (2.0 * qa))
+        disc = qb * qb - 4.0 * qa * qc
+        if disc >= 0.0:
+            qq = -0.5 * (qb + math.copysign(math.sqrt(disc), qb))
+            n = _push_time(cand, n, qq / qa)
+            if qq != 0.0:
+                n = _push_time(cand, n, qc / qq)
+    elif qb != 0.0:
+        n = _push_time(cand, n, -qc / qb)
+    return n
+
+
+@njit(cache=True, inline="always")
+def _on_line_times(p0, p1, u0, u1, w0, w1, cand, n):
+    """Append the instants in [0, 1] when the moving point p may lie on the moving line uw.
+
+    ``(w - u)(t) x (p - u)(t) = Q t^2 + R t + S`` vanishes exactly then; every component does, and
+    the roots of the component with the largest coefficients (the plane normal's, when the motion
+    stays in one plane) are the best conditioned. Spurious roots are harmless: every candidate
+    instant goes through the inside test.
+    """
+    e0x = w0[0] - u0[0]
+    e0y = w0[1] - u0[1]
+    e0z = w0[2] - u0[2]
+    evx = (w1[0] - u1[0]) - e0x
+    evy = (w1[1] - u1[1]) - e0y
+    evz = (w1[2] - u1[2]) - e0z
+    r0x = p0[0] - u0[0]
+    r0y = p0[1] - u0[1]
+    r0z = p0[2] - u0[2]
+    rvx = (p1[0] - u1[0]) - r0x
+    rvy = (p1[1] - u1[1]) - r0y
+    rvz = (p1[2] - u1[2]) - r0z
+    sx = e0y * r0z - e0z * r0y
+    sy = e0z * r0x - e0x * r0z
+    sz = e0x * r0y - e0y * r0x
+    rx = (evy * r0z - evz * r0y) + (e0y * rvz - e0z * rvy)
+    ry = (evz * r0x - evx * r0z) + (e0z * rvx - e0x * rvz)
+    rz = (evx * r0y - evy * r0x) + (e0x * rvy - e0y * rvx)
+    qx = evy * rvz - evz * rvy
+    qy = evz * rvx - evx * rvz
+    qz = evx * rvy - evy * rvx
+    mx = abs(qx) + abs(rx) + abs(sx)
+    my = abs(qy) + abs(ry) + abs(sy)
+    mz = abs(qz) + abs(rz) + abs(sz)
+    if mx >= my and mx >= mz:
+        return _quadratic_times(qx, rx, sx, cand, n)
+    if my >= mz:
+        return _quadratic_times(qy, ry, sy, cand, n)
+    return _quadratic_times(qz, rz, sz, cand, n)
+
+
+@njit(cache=True, inline="always")
+def _closest_pass_time(p0, p1, u0, u1, cand, n):
+    """Append the instant in [0, 1] when the moving points p and u are closest (vertex-vertex)."""
+    dv = 0.0
+    vv = 0.0
+    for i in range(3):
+        d0 = p0[i] - u0[i]
+        dd = (p1[i] - u1[i]) - d0
+        dv += d0 * dd
+        vv += dd * dd
+    if vv > 0.0:
+        n = _push_time(cand, n, -dv / vv)
+    return n
+
+
+@njit(cache=True, inline="always")
+def _sort_times(cand, n):
+    for i in range(1, n):
+        x = cand[i]
+        j = i - 1
+        while j >= 0 and cand[j] > x:
+            cand[j + 1] = cand[j]
+            j -= 1
+        cand[j + 1] = x
+
+
+@njit(cache=True)
+def _vt_coplanar(p0, a0, b0, c0, p1, a1, b1, c1, tol, out):
+    """Vertex-triangle contact when the four points stay (nearly) coplanar over the step (issue 14).
+
+    The first moment p is within the (closed) triangle is t = 0 or a moment it lies on an edge,
+    a root of :func:`_on_line_times` for the edges ab, bc, ca; passing a corner is also a root of
+    :func:`_closest_pass_time`. The inside test (:func:`point_triangle_distance` <= tol) runs at
+    t = 0, 1 and every candidate instant, earliest first; the first hit is the time of impact.
+
+    Returns
+    -------
+    int
+        1 (a contact; ``out`` as :func:`vertex_triangle_ccd`) or 0.
+    """
+    cand = np.empty(16)
+    cand[0] = 0.0
+    cand[1] = 1.0
+    n = 2
+    n = _on_line_times(p0, p1, a0, a1, b0, b1, cand, n)
+    n = _on_line_times(p0, p1, b0, b1, c0, c1, cand, n)
+    n = _on_line_times(p0, p1, c0, c1, a0, a1, cand, n)
+    n = _closest_pass_time(p0, p1, a0, a1, cand, n)
+    n = _closest_pass_time(p0, p1, b0, b1, cand, n)
+    n = _closest_pass_time(p0, p1, c0, c1, cand, n)
+    _sort_times(cand, n)
+    tmp = np.empty(4)
+    for r in range(n):
+        if r > 0 and cand[r] == cand[r - 1]:
+            continue
+        if _vt_inside(p0, a0, b0, c0, p1, a1, b1, c1, cand[r], tol, tmp):
+            out[0] = cand[r]
+            out[1] = tmp[1]
+            out[2] = tmp[2]
+            out[3] = tmp[3]
+            return 1
+    return 0
+
+
+@njit(cache=True)
+def _ee_coplanar(a0, b0, c0, d0, a1, b1, c1, d1, tol, out):
+    """Edge-edge contact when the four points stay (nearly) coplanar over the step (issue 14).
+
+    Two segments in a plane start to touch at t = 0 or when an endpoint of one lies on the other
+    (a crossing of interiors persists backwards in time): the roots of :func:`_on_line_times` for
+    a, b on cd and c, d on ab, and the closest passes of the endpoint pairs. The inside test
+    (:func:`segment_segment_distance` <= tol) runs at each, earliest first.
+
+    Returns
+    -------
+    int
+        1 (a contact; ``out`` as :func:`edge_edge_ccd`) or 0.
+    """
+    cand = np.empty(20)
+    cand[0] = 0.0
+    cand[1] = 1.0
+    n = 2
+    n = _on_line_times(a0, a1, c0, c1, d0, d1, cand, n)
+    n = _on_line_times(b0, b1, c0, c1, d0, d1, cand, n)
+    n = _on_line_times(c0, c1, a0, a1, b0, b1, cand, n)
+    n = _on_line_times(d0, d1, a0, a1, b0, b1, cand, n)
+    n = _closest_pass_time(a0, a1, c0, c1, cand, n)
+    n = _closest_pass_time(a0, a1, d0, d1, cand, n)
+    n = _closest_pass_time(b0, b1, c0, c1, cand, n)
+    n = _closest_pass_time(b0, b1, d0, d1, cand, n)
+    _sort_times(cand, n)
+    tmp = np.empty(4)
+    for r in range(n):
+        if r > 0 and cand[r] == cand[r - 1]:
+            continue
+        if _ee_inside(a0, b0, c0, d0, a1, b1, c1, d1, cand[r], tol, tmp):
+            out[0] = cand[r]
+            out[1] = tmp[1]
+            out[2] = tmp[2]
+            return 1
+    return 0
+
+
 @njit(cache=True)
 def vertex_triangle_ccd(p0, a0, b0, c0, p1, a1, b1, c1, tol, out):
     """Continuous vertex-triangle test over one step (4.2.2.1, eqs. 4.2-4.3).
@@ -451,25 +699,24 @@ def vertex_triangle_ccd(p0, a0, b0, c0, p1, a1, b1, c1, tol, out):
     int
         Number of verified crossings (coplanar moments with p on the triangle). Odd: p ends on the
         other side and needs a response; even (enter and leave within the step): none (4.2.2.3).
+        When the four points stay coplanar over the step (the cubic vanishes) the exact in-plane
+        test :func:`_vt_coplanar` decides: 1 for a contact, else 0; it also runs when an
+        ill-conditioned cubic (below ``_ILL_REL L^3``) gave no verified crossing (issue 14).
     """
     k0, k1, k2, k3 = cubic_vertex_triangle(p0, a0, b0, c0, p1, a1, b1, c1)
     L = _max_extent(p0, a0, b0, c0, p1, a1, b1, c1)
     if L == 0.0:
+        # all eight positions coincide: p is on the (point) triangle for the whole step
+        return _vt_coplanar(p0, a0, b0, c0, p1, a1, b1, c1, tol, out)
+    big = abs(k0) + abs(k1) + abs(k2) + abs(k3)
+    L3 = L * L * L
+    if big <= _COPLANAR_REL * L3:
+        return _vt_coplanar(p0, a0, b0, c0, p1, a1, b1, c1, tol, out)
+    if cull_cubic(k0, k1, k2, k3):
+        if big <= _ILL_REL * L3:
+            return _vt_coplanar(p0, a0, b0, c0, p1, a1, b1, c1, tol, out)
         return 0
     roots = np.empty(6)
-    big = abs(k0) + abs(k1) + abs(k2) + abs(k3)
-    nr = 0
-    if big <= _COPLANAR_REL * L * L * L:
-        # the four points stay (nearly) coplanar over the whole step: sample it
-        for s in range(_COPLANAR_SAMPLES):
-            roots[0] = s / (_COPLANAR_SAMPLES - 1.0)
-            nr = 1
-            if _vt_inside(p0, a0, b0, c0, p1, a1, b1, c1, roots[0], tol, out):
-                out[0] = roots[0]
-                return 1
-        return 0
-    if cull_cubic(k0, k1, k2, k3):
-        return 0
     nr = cubic_roots_01(k0, k1, k2, k3, roots)
     hits = 0
     tmp = np.empty(4)
@@ -481,6 +728,8 @@ def vertex_triangle_ccd(p0, a0, b0, c0, p1, a1, b1, c1, tol, out):
                 out[2] = tmp[2]
                 out[3] = tmp[3]
             hits += 1
+    if hits == 0 and big <= _ILL_REL * L3:
+        return _vt_coplanar(p0, a0, b0, c0, p1, a1, b1, c1, tol, out)
     return hits
 
 
@@ -537,23 +786,22 @@ def edge_edge_ccd(a0, b0, c0, d0, a1, b1, c1, d1, tol, out):
     Returns
     -------
     int
-        Number of verified crossings (odd: needs a response, 4.2.2.3).
+        Number of verified crossings (odd: needs a response, 4.2.2.3). Coplanar motion and an
+        ill-conditioned cubic that gave nothing: :func:`_ee_coplanar` decides, 1 or 0 (issue 14).
     """
     k0, k1, k2, k3 = cubic_edge_edge(a0, b0, c0, d0, a1, b1, c1, d1)
     L = _max_extent(a0, b0, c0, d0, a1, b1, c1, d1)
     if L == 0.0:
+        return _ee_coplanar(a0, b0, c0, d0, a1, b1, c1, d1, tol, out)
+    big = abs(k0) + abs(k1) + abs(k2) + abs(k3)
+    L3 = L * L * L
+    if big <= _COPLANAR_REL * L3:
+        return _ee_coplanar(a0, b0, c0, d0, a1, b1, c1, d1, tol, out)
+    if cull_cubic(k0, k1, k2, k3):
+        if big <= _ILL_REL * L3:
+            return _ee_coplanar(a0, b0, c0, d0, a1, b1, c1, d1, tol, out)
         return 0
     roots = np.empty(6)
-    big = abs(k0) + abs(k1) + abs(k2) + abs(k3)
-    if big <= _COPLANAR_REL * L * L * L:
-        for s in range(_COPLANAR_SAMPLES):
-            t = s / (_COPLANAR_SAMPLES - 1.0)
-            if _ee_inside(a0, b0, c0, d0, a1, b1, c1, d1, t, tol, out):
-                out[0] = t
-                return 1
-        return 0
-    if cull_cubic(k0, k1, k2, k3):
-        return 0
     nr = cubic_roots_01(k0, k1, k2, k3, roots)
     hits = 0
     tmp = np.empty(4)
@@ -564,4 +812,6 @@ def edge_edge_ccd(a0, b0, c0, d0, a1, b1, c1, d1, tol, out):
                 out[1] = tmp[1]
                 out[2] = tmp[2]
             hits += 1
+    if hits == 0 and big <= _ILL_REL * L3:
+        return _ee_coplanar(a0, b0, c0, d0, a1, b1, c1, d1, tol, out)
     return hits
