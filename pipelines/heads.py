@@ -50,13 +50,13 @@ def floret_heights(mesh, frame_rba, scene) -> dict:
 class Head:
     """The build of one head: its typed scene, canopy frames, receptacle meshes and RBA frames."""
 
-    def __init__(self, build: Path, canopy: str = "canopy", scene: str = "typed.scn"):
+    def __init__(self, build: Path, canopy: str = "canopy", scene: str = "typed.scn", receptacle: str = "receptacle"):
         self.build = Path(build)
         self.scene = read_scn(self.build / "head" / scene)
         self.types = [p.type for p in self.scene.placements]
         self.canopy_dir = self.build / canopy
         self.canopy = list_obj_sequence(self.canopy_dir)
-        self.receptacle = list_obj_sequence(self.build / "head" / "receptacle")
+        self.receptacle = list_obj_sequence(self.build / "head" / receptacle)
         self.rba = sorted((self.build / "head" / "rba").glob("*.rba"))
         pos = self.scene.arrays()["pos"]
         centre = self.scene.groups[0].centre if 0 in self.scene.groups else pos.mean(axis=0)
@@ -67,16 +67,16 @@ class Head:
 
 
 def check_head(build: Path, *, rays: int | None, failures: list, per_frame=None, canopy: str = "canopy",
-               scene: str = "typed.scn") -> Head:
+               scene: str = "typed.scn", receptacle: str = "receptacle") -> Head:
     """Print the shared report of a head build, appending what fails to ``failures``.
 
     ``rays``: the ray florets the species has (None: no ray facts to check, e.g. a head of ray
     florets only); ``per_frame(i, mesh)``: called on every canopy frame (for a species' own
-    per-frame checks); ``canopy``, ``scene``: the build's canopy folder and typed scene (under
-    ``head/``). Returns the :class:`Head` for the species' further checks (:func:`check_phase` and
+    per-frame checks); ``canopy``, ``scene``, ``receptacle``: the build's canopy folder, its typed
+    scene and its receptacle (a sequence folder or one OBJ; both under ``head/``). Returns the :class:`Head` for the species' further checks (:func:`check_phase` and
     its own).
     """
-    head = Head(build, canopy, scene)
+    head = Head(build, canopy, scene, receptacle)
     scene, types, canopy, receptacle = head.scene, head.types, head.canopy, head.receptacle
     print(f"canopy: {len(canopy)} frames; head: {len(scene)} placements "
           f"({types.count('disk')} disk, {types.count('ray')} ray, {types.count('bract')} bracts)")

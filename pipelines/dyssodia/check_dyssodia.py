@@ -1,0 +1,114 @@
+"""Checks of the Dyssodia build (the `check` stage of the Makefile).
+
+Usage: python check_dyssodia.py BUILD_DIR   (BUILD_DIR = build/dyssodia)
+
+Prints, and fails (exit 1) on any of:
+
+- **intersections**: intersecting triangle pairs (inflo.tools.collide, exact static test; touching
+  counts) of every canopy frame, and between every frame and the six receptacles
+  (head/receptacles.obj, not simulated);
+- **shape**: an output frame whose edges leave [0.5, 1.5] x their rest length (fccompose's log);
+- **florets missing**: a placement that is not in the last frame;
+- **the species' facts** (thesis ch. 9, figs. 9.7, 9.8, 6.4b): six heads; ray florets decided at
+  the level of the whole inflorescence, so on its outer margin: none on the central head, every
+  one on the outer side of its own head (farther from the inflorescence's centre than its head's
+  centre) and at least 4 of the 5 outer heads with some; the disk florets pressed by their
+  neighbours (collisions found between florets of one head, in at least half the frames after
+  the first third); the phase effect in every head: at two thirds of the run, its disk florets'
+  heights above their bases (floret units) fall from its rim to its centre (Spearman rank
+  correlation with the distance from the head's centre > 0.5).
+"""
+from __future__ import annotations
+
+import csv
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy.stats import spearmanr
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from heads import check_head, floret_faces  # noqa: E402  (pipelines/heads.py)
+
+from inflo.formats.obj import read_obj  # noqa: E402
+
+HEADS = 6
+
+
+def heights(mesh, scene) -> dict:
+    """Height of each floret's highest vertex above its base along its axis, in floret units."""
+    out = {}
+    for pid, faces in floret_faces(mesh).items():
+        p = scene.placements[pid]
+        v = mesh.vertices[np.unique(mesh.faces[faces])]
+        up = p.up / np.linalg.norm(p.up)
+        out[pid] = float(((v - p.pos) @ up).max()) / float(p.scale[1])
+    return out
+
+
+def main(build: Path) -> int:
+    build = Path(build)
+    failures: list = []
+    head = check_head(build, rays=None, failures=failures, scene="typed.scn", receptacle="receptacles.obj")
+    scene = head.scene
+    groups = np.array([p.group for p in scene.placements])
+    types = np.array(head.types)
+    pos = scene.arrays()["pos"]
+    centre = scene.groups[0].centre
+    ids = sorted(g for g in scene.groups if g != 0)
+    print(f"heads: {len(ids)}; florets per head: {[int((groups == g).sum()) for g in ids]}")
+    if len(ids) != HEADS:
+        failures.append(f"{len(ids)} heads, expected {HEADS}")
+
+    # rays on the outer margin of the whole inflorescence
+    rays_per_head = {}
+    outer_side = 0
+    for g in ids:
+        hc = scene.groups[g].centre
+        r = np.nonzero((groups == g) & (types == "ray"))[0]
+        rays_per_head[g] = len(r)
+        d_ray = np.linalg.norm((pos[r] - centre)[:, [0, 2]], axis=1)
+        outer_side += int((d_ray > np.linalg.norm((hc - centre)[[0, 2]])).sum())
+    n_rays = int((types == "ray").sum())
+    central = min(ids, key=lambda g: np.linalg.norm(scene.groups[g].centre - centre))
+    print(f"ray florets: {n_rays}, per head {[rays_per_head[g] for g in ids]} (central head {central}); "
+          f"{outer_side} on the outer side of their heads")
+    if rays_per_head[central]:
+        failures.append(f"{rays_per_head[central]} ray florets on the central head")
+    if outer_side != n_rays:
+        failures.append(f"{n_rays - outer_side} ray florets on the inner side of their heads")
+    if sum(1 for g in ids if g != central and rays_per_head[g]) < HEADS - 2:
+        failures.append("fewer than 4 outer heads with ray florets")
+
+    # neighbours press on each other
+    with open(build / "canopy" / "log.csv", newline="") as fh:
+        log = list(csv.DictReader(fh))
+    late = log[len(log) // 3:]
+    pressed = sum(1 for r in late if int(r["collisions_found"]) > 0)
+    print(f"frames with contacts after the first third: {pressed} of {len(late)}; "
+          f"contacts over the run: {sum(int(r['collisions_found']) for r in log)}")
+    if pressed < len(late) // 2:
+        failures.append(f"the florets touch in only {pressed} of the last {len(late)} frames")
+
+    # the phase effect in every head
+    k = (2 * len(head.canopy)) // 3
+    h = heights(read_obj(head.canopy[k]), scene)
+    for g in ids:
+        disk = [p for p in h if groups[p] == g and types[p] == "disk"]
+        d = np.linalg.norm(pos[disk] - scene.groups[g].centre, axis=1)
+        rho = float(spearmanr(d, [h[p] for p in disk]).statistic) if len(disk) > 2 else float("nan")
+        print(f"  head {g} at frame {k}: {len(disk)} disk florets, heights "
+              f"{min(h[p] for p in disk):.2f}-{max(h[p] for p in disk):.2f} floret units, rank correlation "
+              f"with the distance from its centre {rho:.2f}")
+        if not rho > 0.5:
+            failures.append(f"no phase effect in head {g} at frame {k}: rank correlation {rho:.2f}")
+
+    print("OK" if not failures else "FAILED: " + "; ".join(failures))
+    return 0 if not failures else 1
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        print(__doc__.strip().splitlines()[2], file=sys.stderr)
+        sys.exit(2)
+    sys.exit(main(Path(sys.argv[1])))

@@ -1,0 +1,84 @@
+"""Place six copies of one head as the Dyssodia inflorescence (the `head` stage's last step).
+
+Usage: python compose_heads.py HEAD.scn RECEPTACLE.obj RING TILT OUT.scn OUT_RECEPTACLES.obj
+
+*Dyssodia decipiens* (thesis ch. 9, fig. 9.7): "a central head surrounded by 5 other heads". The
+central copy stands at the origin; five copies stand on a ring of radius RING (scene units) at
+72-degree steps, each tilted outward by TILT degrees about the tangent of the ring (the heads of
+a corymb-like cluster lean away from its centre) and turned about its own axis so that the
+pattern faces the same way relative to the inflorescence's centre (Hofmeister's rule: the first,
+outermost floret away from the centre). The output is one flat scene (so that `dimorph --centre
+top` decides the ray florets at the level of the whole inflorescence, fig. 6.4b): group 0 the
+inflorescence (its centre the origin), group k + 1 head k (its centre where its apex is), every
+placement keeping its window; and the head's receptacle (phyllotaxis ``[receptacle]``) placed the
+same way under each head, as one OBJ. Both written atomically.
+"""
+from __future__ import annotations
+
+import copy
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from inflo.formats.obj import ObjMesh, read_obj, write_obj
+from inflo.formats.scn import Group, Scene, read_scn, write_scn
+
+HEADS = 6
+
+
+def _rot(axis, angle):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    x, y, z = axis
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
+                     [y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s],
+                     [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)]])
+
+
+def heads(ring: float, tilt: float):
+    """(centre (3,), rotation (3, 3)) of each head: the central one, then five round it."""
+    out = [(np.zeros(3), np.eye(3))]
+    for k in range(HEADS - 1):
+        phi = 2 * np.pi * k / (HEADS - 1)
+        radial = np.array([np.sin(phi), 0.0, np.cos(phi)])
+        tangent = np.array([np.cos(phi), 0.0, -np.sin(phi)])
+        spin = _rot([0, 1, 0], phi)  # the pattern faces the same way relative to the centre
+        lean = _rot(tangent, np.radians(tilt))
+        centre = ring * radial - np.array([0.0, ring * np.sin(np.radians(tilt)) * 0.5, 0.0])
+        out.append((centre, lean @ spin))
+    return out
+
+
+def main(src: Path, receptacle: Path, ring: float, tilt: float, dst: Path, dst_receptacles: Path) -> int:
+    head = read_scn(src)
+    rec = read_obj(receptacle)
+    scene = Scene()
+    scene.groups[0] = Group(0, np.zeros(3), -1)
+    verts, faces = [], []
+    for k, (centre, rot) in enumerate(heads(ring, tilt)):
+        scene.groups[k + 1] = Group(k + 1, centre.copy(), 0)
+        for p in head.placements:
+            q = copy.deepcopy(p)
+            q.pos = rot @ p.pos + centre
+            q.up = rot @ p.up
+            q.right = rot @ p.right
+            q.group = k + 1
+            scene.placements.append(q)
+        faces.append(rec.faces + k * len(rec.vertices))
+        verts.append(rec.vertices @ rot.T + centre)
+    write_scn(dst, scene, header=f"{HEADS} copies of {src.name} (compose_heads.py, ring {ring:g}, tilt {tilt:g})")
+    n = len(rec.faces)
+    mesh = ObjMesh(np.concatenate(verts), np.concatenate(faces), groups=[f"receptacle_{k}" for k in range(HEADS)],
+                   face_group=np.repeat(np.arange(HEADS), n), materials=rec.materials,
+                   face_material=None if rec.face_material is None else np.tile(rec.face_material, HEADS))
+    write_obj(dst_receptacles, mesh)
+    return 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 7:
+        print(__doc__.strip().splitlines()[2], file=sys.stderr)
+        sys.exit(2)
+    a = sys.argv
+    sys.exit(main(Path(a[1]), Path(a[2]), float(a[3]), float(a[4]), Path(a[5]), Path(a[6])))

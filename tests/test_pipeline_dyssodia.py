@@ -1,0 +1,109 @@
+"""The Dyssodia pipeline (issue 18, pipelines/dyssodia): six heads composed from one, rays decided
+over the whole inflorescence, and the draft build's check.
+
+- compose_heads.py: a central head and five on a ring at 72-degree steps, each a rigid copy of
+  the head (distances between its florets kept), leaning outward, with its receptacle under it;
+  groups 0 (the inflorescence) and 1-6 (the heads);
+- at both qualities (phyllotaxis + compose_heads.py + dimorph as the Makefile runs them): the ray
+  florets on the outer margin of the group (none on the central head, every one on the outer side
+  of its head), the windows of each head centripetal (its rim first);
+- if the draft build exists (the golden test builds it): check_dyssodia.py's report says OK.
+"""
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from inflo.formats.obj import read_obj
+from inflo.formats.scn import read_scn
+
+from conftest import REPO, run_cli
+
+DYS = REPO / "pipelines" / "dyssodia"
+BUILD = REPO / "build" / "dyssodia"
+
+
+def _make_var(quality: str, name: str) -> str:
+    text = (DYS / "Makefile").read_text()
+    block = re.search(rf"ifeq \(\$\(QUALITY\),{quality}\)(.*?)(?:else ifeq|else\n)", text, re.S)
+    return re.search(rf"^{name} := (\S+)", block.group(1), re.M).group(1)
+
+
+@pytest.fixture(scope="module", params=["draft", "final"])
+def group(request, tmp_path_factory):
+    q = request.param
+    out = tmp_path_factory.mktemp(f"dyssodia_{q}")
+    r = run_cli("phyllotaxis", "-q", DYS / q / "head.toml", "-o", out / "head")
+    assert r.returncode == 0, r.stderr
+    ring, tilt = _make_var(q, "RING"), _make_var(q, "TILT")
+    r = subprocess.run([sys.executable, str(DYS / "compose_heads.py"), str(out / "head" / "scene.scn"),
+                        str(out / "head" / "receptacle.obj"), ring, tilt, str(out / "group.scn"),
+                        str(out / "receptacles.obj")], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    r = run_cli("dimorph", "-q", out / "group.scn", "--alpha", _make_var(q, "ALPHA"), "--centre", "top",
+                "--ray-id", "1", "--disk-id", "0", "-o", out / "typed.scn")
+    assert r.returncode == 0, r.stderr
+    return q, out, float(ring), float(tilt)
+
+
+def test_six_rigid_copies_of_the_head_with_their_receptacles(group):
+    q, out, ring, tilt = group
+    head = read_scn(out / "head" / "scene.scn")
+    comp = read_scn(out / "group.scn")
+    n = len(head)
+    assert len(comp) == 6 * n
+    assert sorted(comp.groups) == list(range(7)) and comp.groups[0].parent == -1
+    hp = head.arrays()["pos"]
+    cp = comp.arrays()["pos"]
+    d0 = np.linalg.norm(hp[:, None] - hp[None], axis=2)
+    centres = []
+    for k in range(6):
+        block = cp[k * n:(k + 1) * n]
+        np.testing.assert_allclose(np.linalg.norm(block[:, None] - block[None], axis=2), d0, atol=1e-5)
+        assert all(p.group == k + 1 for p in comp.placements[k * n:(k + 1) * n])
+        centres.append(comp.groups[k + 1].centre)
+    centres = np.array(centres)
+    np.testing.assert_allclose(centres[0], 0.0, atol=1e-6)
+    r = np.linalg.norm(centres[1:, [0, 2]], axis=1)
+    np.testing.assert_allclose(r, ring, atol=1e-5)  # the SCN writes 6 decimals
+    ang = np.degrees(np.arctan2(centres[1:, 0], centres[1:, 2])) % 360
+    np.testing.assert_allclose(np.diff(np.sort(ang)), 72.0, atol=1e-3)
+    # the outer heads lean outward: their apex florets' axes point away from the centre
+    for k in range(1, 6):
+        up = comp.placements[k * n].up
+        assert np.dot(up[[0, 2]], centres[k, [0, 2]]) > 0
+        assert np.degrees(np.arccos(up[1] / np.linalg.norm(up))) == pytest.approx(tilt, abs=8)
+    rec, recs = read_obj(out / "head" / "receptacle.obj"), read_obj(out / "receptacles.obj")
+    assert len(recs.faces) == 6 * len(rec.faces) and len(recs.vertices) == 6 * len(rec.vertices)
+
+
+def test_rays_on_the_outer_margin_of_the_group_and_heads_develop_from_their_rims(group):
+    q, out, *_ = group
+    sc = read_scn(out / "typed.scn")
+    types = np.array([p.type for p in sc.placements])
+    groups = np.array([p.group for p in sc.placements])
+    pos = sc.arrays()["pos"]
+    assert (types == "ray").sum() >= 15
+    assert not ((groups == 1) & (types == "ray")).any()  # the central head has none
+    for g in range(2, 7):
+        hc = sc.groups[g].centre
+        r = (groups == g) & (types == "ray")
+        assert r.any()
+        assert (np.linalg.norm(pos[r][:, [0, 2]], axis=1) > np.linalg.norm(hc[[0, 2]])).all()
+    for g in range(1, 7):
+        m = groups == g
+        d = np.linalg.norm(pos[m] - sc.groups[g].centre, axis=1)
+        starts = np.array([p.frame_start for p in sc.placements])[m]
+        assert np.corrcoef(d, starts)[0, 1] < -0.9  # the rim first
+
+
+def test_draft_build_check_says_ok():
+    report = BUILD / "check.txt"
+    if not report.is_file() or (BUILD / "quality.txt").read_text().strip() != "draft":
+        pytest.skip("no draft dyssodia build (make dyssodia, or the golden test, makes one)")
+    text = report.read_text()
+    assert text.rstrip().endswith("OK"), text[-2000:]
