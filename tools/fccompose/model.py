@@ -687,7 +687,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
     florets: list[Floret] = []
     placed: dict = {}
 
-    def moved_by_rba(target, sp, k, p):
+    def moved_by_rba(target, sp, k):
         if sp not in rbas:
             raise FormatError(sp, None, "a 'rigid body animation' line for this scene's 'rba:' placements",
                               f"placement {k} and no such line")
@@ -713,7 +713,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
                     placed[p.id] = templates[p.id]
                 fl = Floret(len(florets), p, placed[p.id], sp, k, p.material, outer=tuple(outer), shift=shift)
                 if p.kind == "rba":
-                    moved_by_rba(fl, sp, k, p)
+                    moved_by_rba(fl, sp, k)
                 fl.birth_frame = int(math.ceil(max(born, fl.birth_frame + shift) - 1e-9))
                 florets.append(fl)
             elif p.id in nested:
@@ -723,7 +723,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
                                       f"placement {k} (id {p.id}) instancing {Path(inner).name} inside itself")
                 lv = Level(p, sp, k, shift=float(p.frame_start or 0))
                 if p.kind == "rba":
-                    moved_by_rba(lv, sp, k, p)
+                    moved_by_rba(lv, sp, k)
                 instance(inner, outer + [lv], chain + [inner])
             else:
                 raise FormatError(sp, None, f"placement ids naming an 'animation', 'obj' or 'rigid body "
