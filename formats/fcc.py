@@ -276,6 +276,11 @@ class CanopyParams:
         ``rigid body animation`` lines in file order. Empty.
     weights : mapping of int to FilePath
         ``weight`` lines: id of an animation/obj entry -> file of fixed vertex ids. Empty.
+    petal_weights : mapping of int to FilePath
+        ``petal weight`` lines: id of an animation/obj entry -> file of per-vertex petal weights
+        in [0, 1] (formats/weights.md): a placement's ``#@ petal: f`` scales vertex v of that
+        template by ``1 + w_v (f - 1)`` about the floret's origin (the petals grow, not the whole
+        floret; thesis fig. 6.4c). Empty.
     bending_stiffness, distance_stiffness : mapping of int to float
         Per-id stiffness in [0, 1] replacing ``k_bend`` / ``k_stretch``. Empty.
     animation_output_folder : FilePath or None
@@ -316,6 +321,7 @@ class CanopyParams:
     animations: tuple[AnimationEntry, ...] = ()
     rigid_body_animations: tuple[RigidBodyAnimationEntry, ...] = ()
     weights: Mapping[int, FilePath] = field(default_factory=dict)
+    petal_weights: Mapping[int, FilePath] = field(default_factory=dict)
     bending_stiffness: Mapping[int, float] = field(default_factory=dict)
     distance_stiffness: Mapping[int, float] = field(default_factory=dict)
     animation_output_folder: FilePath | None = None
@@ -327,7 +333,7 @@ class CanopyParams:
     def __post_init__(self):
         for name in ("scene_files", "animations", "rigid_body_animations"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
-        for name in ("weights", "bending_stiffness", "distance_stiffness", "lines"):
+        for name in ("weights", "petal_weights", "bending_stiffness", "distance_stiffness", "lines"):
             object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
         object.__setattr__(self, "scene_scale", tuple(float(v) for v in self.scene_scale))
         object.__setattr__(self, "stretch_bounds", tuple(float(v) for v in self.stretch_bounds))
@@ -466,6 +472,7 @@ KEYS: Mapping[str, KeySpec] = MappingProxyType({
     "obj": KeySpec("entry", repeatable=True),
     "rigid body animation": KeySpec("rba", repeatable=True),
     "weight": KeySpec("weight", repeatable=True),
+    "petal weight": KeySpec("weight", repeatable=True),
     "bending stiffness": KeySpec("id stiffness", repeatable=True),
     "distance stiffness": KeySpec("id stiffness", repeatable=True),
     "animation output folder location": KeySpec("path", field="animation_output_folder"),
@@ -537,6 +544,7 @@ class _Reader:
         self.rbas: list[RigidBodyAnimationEntry] = []
         self.id_lines: dict[int, tuple[str, int]] = {}
         self.weights: dict[int, FilePath] = {}
+        self.petal_weights: dict[int, FilePath] = {}
         self.bending: dict[int, float] = {}
         self.distance: dict[int, float] = {}
         self.per_id_lines: dict[tuple[str, int], int] = {}
@@ -734,11 +742,12 @@ class _Reader:
         parts = _SEP.split(value.strip(), maxsplit=1)
         if len(parts) < 2 or not parts[1].strip():
             raise self.err(
-                n, "'weight: id path'", shorten(value) if value.strip() else "nothing"
+                n, f"'{key}: id path'", shorten(value) if value.strip() else "nothing"
             )
         id_ = self.ident(key, parts[0], n)
         self.per_id(key, id_, parts[0], n)
-        self.weights[id_] = self.filepath(key, parts[1], n)
+        table = self.weights if key == "weight" else self.petal_weights
+        table[id_] = self.filepath(key, parts[1], n)
 
     def read_id_stiffness(self, key, spec, value, n):
         toks = self.count_tokens(key, value, n, 2, "an id and a stiffness in [0, 1]")
@@ -762,6 +771,7 @@ class _Reader:
         geometry_ids = {e.id for e in self.animations}
         for key, table in (
             ("weight", self.weights),
+            ("petal weight", self.petal_weights),
             ("bending stiffness", self.bending),
             ("distance stiffness", self.distance),
         ):
@@ -797,6 +807,7 @@ class _Reader:
             animations=tuple(self.animations),
             rigid_body_animations=tuple(self.rbas),
             weights=self.weights,
+            petal_weights=self.petal_weights,
             bending_stiffness=self.bending,
             distance_stiffness=self.distance,
             camera=CameraParams(**cam),
@@ -979,6 +990,8 @@ def format_fcc(params: CanopyParams) -> str:
             f"{_check_raw(r.scene_path.raw, key, no_space=True)}")
     for id_ in sorted(p.weights):
         add(f"weight: {int(id_)} {_check_raw(p.weights[id_].raw, 'weight')}")
+    for id_ in sorted(p.petal_weights):
+        add(f"petal weight: {int(id_)} {_check_raw(p.petal_weights[id_].raw, 'petal weight')}")
     for id_ in sorted(p.bending_stiffness):
         add(f"bending stiffness: {int(id_)} {_num(p.bending_stiffness[id_])}")
     for id_ in sorted(p.distance_stiffness):
@@ -1093,6 +1106,8 @@ def check_references(params: CanopyParams) -> None:
         need("rigid body animation", r.scene_path, "file", Path.is_file)
     for id_ in sorted(params.weights):
         need("weight", params.weights[id_], "file", Path.is_file)
+    for id_ in sorted(params.petal_weights):
+        need("petal weight", params.petal_weights[id_], "file", Path.is_file)
     if missing:
         missing.sort(key=lambda m: (m[0] is None, m[0] or 0))
         raise MissingReferenceError(params.source, missing)

@@ -23,7 +23,9 @@ skips them as comments:
 - ``#@ groupdef: G cx cy cz P`` declares hierarchy group G (a head or umbellet, thesis 5.4/6.2)
   with centre (cx, cy, cz) and parent group P (-1 for none), before its first use;
 - after a placement: ``#@ group: G`` (the floret's group), ``#@ emergence: t`` (frame at which
-  the floret emerges, for branch-gen), ``#@ type: label`` (floret type set by dimorph, e.g. ray).
+  the floret emerges, for branch-gen), ``#@ type: label`` (floret type set by dimorph, e.g. ray),
+  ``#@ petal: f`` (petal factor set by dimorph ``--petal-size``: fccompose grows the vertices of
+  the template's ``petal weight`` file by ``1 + w (f - 1)``, thesis fig. 6.4c).
   Other ``#@ key: value`` lines are kept verbatim (``extra``) and written back.
 """
 from __future__ import annotations
@@ -78,6 +80,9 @@ class Placement:
         Extension: frame at which the floret emerges.
     type : str or None
         Extension: floret type label (dimorph).
+    petal : float or None
+        Extension: petal factor f (dimorph ``--petal-size``): fccompose scales the vertices of the
+        template's ``petal weight`` file by ``1 + w (f - 1)`` (only the petals grow, fig. 6.4c).
     extra : dict of str -> str
         Other ``#@`` extension lines after this placement, kept verbatim.
     """
@@ -98,6 +103,7 @@ class Placement:
     group: int | None = None
     emergence: float | None = None
     type: str | None = None
+    petal: float | None = None
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -276,6 +282,13 @@ def _parse_extension(scene: Scene, text: str, path, lineno) -> None:
         if len(toks) != 1:
             raise FormatError(path, lineno, "'#@ type: label' (one word)", shorten(value))
         p.type = toks[0]
+    elif key == "petal":
+        if len(toks) != 1:
+            raise FormatError(path, lineno, "'#@ petal: factor'", shorten(value))
+        f = parse_float(toks[0], path, lineno, "a petal factor")
+        if not 1e-6 <= f <= 1e6:
+            raise FormatError(path, lineno, "a petal factor in [1e-06, 1e+06]", shorten(toks[0]))
+        p.petal = f
     else:
         p.extra[key] = value.strip()
 
@@ -321,6 +334,8 @@ def write_scn(path, scene: Scene, *, header: str | None = None, fmt: str = FLOAT
             out.append(f"#@ emergence: {_fmt(p.emergence, fmt)}\n")
         if p.type is not None:
             out.append(f"#@ type: {p.type}\n")
+        if p.petal is not None:
+            out.append(f"#@ petal: {_fmt(p.petal, fmt)}\n")
         for key, value in p.extra.items():
             out.append(f"#@ {key}: {value}\n")
     with atomic_write(path) as fh:

@@ -50,14 +50,15 @@ def floret_heights(mesh, frame_rba, scene) -> dict:
 class Head:
     """The build of one head: its typed scene, canopy frames, receptacle meshes and RBA frames."""
 
-    def __init__(self, build: Path, canopy: str = "canopy", scene: str = "typed.scn", receptacle: str = "receptacle"):
+    def __init__(self, build: Path, canopy: str = "canopy", scene: str = "typed.scn", receptacle: str = "receptacle",
+                 folder: str = "head"):
         self.build = Path(build)
-        self.scene = read_scn(self.build / "head" / scene)
+        self.scene = read_scn(self.build / folder / scene)
         self.types = [p.type for p in self.scene.placements]
         self.canopy_dir = self.build / canopy
         self.canopy = list_obj_sequence(self.canopy_dir)
-        self.receptacle = list_obj_sequence(self.build / "head" / receptacle)
-        self.rba = sorted((self.build / "head" / "rba").glob("*.rba"))
+        self.receptacle = list_obj_sequence(self.build / folder / receptacle)
+        self.rba = sorted((self.build / folder / "rba").glob("*.rba"))
         pos = self.scene.arrays()["pos"]
         centre = self.scene.groups[0].centre if 0 in self.scene.groups else pos.mean(axis=0)
         self.radius = np.linalg.norm((pos - centre)[:, [0, 2]], axis=1)
@@ -67,16 +68,17 @@ class Head:
 
 
 def check_head(build: Path, *, rays: int | None, failures: list, per_frame=None, canopy: str = "canopy",
-               scene: str = "typed.scn", receptacle: str = "receptacle") -> Head:
+               scene: str = "typed.scn", receptacle: str = "receptacle", folder: str = "head") -> Head:
     """Print the shared report of a head build, appending what fails to ``failures``.
 
     ``rays``: the ray florets the species has (None: no ray facts to check, e.g. a head of ray
     florets only); ``per_frame(i, mesh)``: called on every canopy frame (for a species' own
     per-frame checks); ``canopy``, ``scene``, ``receptacle``: the build's canopy folder, its typed
-    scene and its receptacle (a sequence folder or one OBJ; both under ``head/``). Returns the :class:`Head` for the species' further checks (:func:`check_phase` and
+    scene and its receptacle (a sequence folder or one OBJ; both relative to ``folder``, default
+    ``head/``; an absolute path is taken as it is, e.g. the orlaya's branches). Returns the :class:`Head` for the species' further checks (:func:`check_phase` and
     its own).
     """
-    head = Head(build, canopy, scene, receptacle)
+    head = Head(build, canopy, scene, receptacle, folder)
     scene, types, canopy, receptacle = head.scene, head.types, head.canopy, head.receptacle
     print(f"canopy: {len(canopy)} frames; head: {len(scene)} placements "
           f"({types.count('disk')} disk, {types.count('ray')} ray, {types.count('bract')} bracts)")

@@ -46,9 +46,15 @@ from .sweep import write_sweep
                    "--bract-id), left out of the other florets' cone tests.")
 @click.option("--bract-id", type=int, default=2, show_default=True, help="Type id of involucral bracts.")
 @click.option("--bract-scale", type=float, default=1.0, show_default=True, help="Scale factor of bracts.")
+@click.option("--petal-size", is_flag=True,
+              help="Ray and small ray size factors grow the petals only ('#@ petal: f'; fccompose scales the "
+                   "template's 'petal weight' vertices), not the whole floret (fig. 6.4c).")
+@click.option("--orient-rays", type=click.Choice(["none", "group", "top"]), default="none", show_default=True,
+              help="Turn each ray floret about its axis so that its local +X (a zygomorphic floret's outward "
+                   "petal) points away from its group's or top-level group's centre.")
 def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, disk_scale, centre,
         half_angle, ray_lead, ray_development_frames, disk_development_frames, bracts, bract_id, bract_scale,
-        quiet, debug):
+        petal_size, orient_rays, quiet, debug):
     from inflo.formats.errors import InputError
 
     if len(thresholds) > 2:
@@ -64,7 +70,7 @@ def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_sca
             raise InputError(f"{name} must be in [1e-06, 1e+06], found {v:g}")
     opts = DimorphOptions(alpha, tuple(thresholds), ray_id, disk_id, small_ray_id, ray_scale, disk_scale,
                           centre, half_angle, ray_lead, ray_development_frames, disk_development_frames,
-                          bracts, bract_id, bract_scale)
+                          bracts, bract_id, bract_scale, petal_size, orient_rays)
     check_window_options(opts)
     sc = read_scn(scene)
     out, counts = dimorph_scene(sc, opts)

@@ -40,6 +40,14 @@ class DimorphOptions:
         test (eq. 6.1) of the other placements ignores them, so the florets just inside the
         involucre are the ones whose cones can be empty (the bracts of a capitulum are its first,
         outermost primordia, formed in the same phyllotactic sequence as the florets)
+    petal_size : the ray and small ray florets' size factors (``ray_scale``, ``ray_scale * d_min /
+        Th_b``) go to their ``#@ petal:`` factor instead of their scale: fccompose grows only the
+        template's petals (its ``petal weight`` file) by it, not the whole floret (fig. 6.4c:
+        "the size of the enlarged petals is proportional to the amount of available space")
+    orient_rays : ``none``, ``group`` or ``top``: turn each (large) ray floret about its ``up`` axis
+        so that its local +X (the outward petal of a zygomorphic floret) points away from its
+        group's or its top-level group's centre (the periphery of the whole inflorescence, fig.
+        6.4c); placements whose orientation comes from RBA files (``rba``) are refused
     Windows are changed only on placements that have one (``ca``, ``ta``, ``ra``, ``rba``).
     """
 
@@ -58,6 +66,21 @@ class DimorphOptions:
     bracts: int = 0
     bract_id: int = 2
     bract_scale: float = 1.0
+    petal_size: bool = False
+    orient_rays: str = "none"
+
+
+def orient_outward(p, centre) -> bool:
+    """Turn placement ``p`` about its ``up`` so that ``right`` points away from ``centre`` (the
+    component of ``pos - centre`` orthogonal to ``up``); False (unchanged) where that is ~0."""
+    up = np.asarray(p.up, float) / np.linalg.norm(p.up)
+    d = np.asarray(p.pos, float) - np.asarray(centre, float)
+    d = d - np.dot(d, up) * up
+    n = float(np.linalg.norm(d))
+    if n <= 1e-12 * max(1.0, float(np.linalg.norm(p.pos))):
+        return False
+    p.right = d / n
+    return True
 
 
 def group_centres(scene: Scene, how: str = "group") -> np.ndarray:
@@ -141,7 +164,7 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
     factor on every RBA row's scale, it becomes that factor). Windows: see :class:`DimorphOptions`.
     Placement order (each floret's identity) is kept. Returns the new scene and counts
     ``{"ray": N, "small_ray": M, "disk": K, "bract": B}``, ``windows`` (placements whose window was
-    set) plus ``d_min`` (n,) float64 (inf for bracts).
+    set), ``oriented`` (ray florets turned by ``orient_rays``) plus ``d_min`` (n,) float64 (inf for bracts).
     """
     top = 90.0 if opts.half_angle else 180.0
     if not 0.0 < opts.alpha <= top:
@@ -153,6 +176,8 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
         if not 1e-6 <= v <= 1e6:
             raise InputError(f"{name} must be in [1e-06, 1e+06], found {v:g}")
     check_window_options(opts)
+    if opts.orient_rays not in ("none", "group", "top"):
+        raise InputError(f"--orient-rays must be none, group or top, found {opts.orient_rays!r}")
     th = tuple(sorted(float(t) for t in opts.thresholds))
     if any(t < 0 or not math.isfinite(t) for t in th) or len(th) > 2:
         raise InputError(f"thresholds must be one or two finite numbers >= 0, found {opts.thresholds}")
@@ -169,8 +194,9 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
     fate = fates(dmin, th)
     fate[bract] = FATE_BRACT
     small_id = opts.ray_id if opts.small_ray_id is None else opts.small_ray_id
+    orient_centre = None if opts.orient_rays == "none" else group_centres(scene, opts.orient_rays)
     out = copy.deepcopy(scene)
-    windows = 0
+    windows = oriented = 0
     for k, p in enumerate(out.placements):
         f = int(fate[k])
         if f == FATE_BRACT:
@@ -183,7 +209,15 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
             p.id, factor = small_id, opts.ray_scale * dmin[k] / th[1]
         else:
             p.id, factor = opts.disk_id, opts.disk_scale
-        p.scale = p.scale * factor
+        if opts.petal_size and f != FATE_DISK:
+            p.petal = (1.0 if p.petal is None else p.petal) * float(factor)
+        else:
+            p.scale = p.scale * factor
+        if f == FATE_RAY and orient_centre is not None:
+            if p.kind == "rba":
+                raise InputError(f"--orient-rays: placement {k} is 'rba:' (its orientation comes from the RBA "
+                                 "files); orient the rays of a static scene")
+            oriented += orient_outward(p, orient_centre[k])
         p.type = TYPE_LABELS[f]
         if f == FATE_DISK:
             n_frames, lead = opts.disk_development_frames, 0.0
@@ -193,4 +227,4 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
             windows += 1
     counts = {TYPE_LABELS[c]: int(np.sum(fate == c)) for c in TYPE_LABELS}
     counts["bract"] = int(bract.sum())
-    return out, {**counts, "windows": windows, "d_min": dmin}
+    return out, {**counts, "windows": windows, "oriented": oriented, "d_min": dmin}

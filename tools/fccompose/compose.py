@@ -618,7 +618,7 @@ def _merged(failed: CollisionResult, a: CollisionResult, b: CollisionResult) -> 
 
 def _input_hashes(params: CanopyParams) -> dict:
     """sha256 of every file the run reads besides the templates (scene files, RBA frames, weight
-    files), keyed by the path as the ``.fcc`` names it (an RBA folder: ``folder/NNNN.rba`` each),
+    and petal weight files), keyed by the path as the ``.fcc`` names it (an RBA folder: ``folder/NNNN.rba`` each),
     so that ``--resume`` can name the input that changed (issue 14)."""
     out = {}
     paths = [(f.raw, f.resolved) for f in params.scene_files]
@@ -628,6 +628,7 @@ def _input_hashes(params: CanopyParams) -> dict:
         if folder.is_dir():
             paths += [(f"{r.rba_folder.raw.rstrip('/')}/{p.name}", p) for p in sorted(folder.glob("*.rba"))]
     paths += [(f.raw, f.resolved) for f in params.weights.values()]
+    paths += [(f.raw, f.resolved) for f in params.petal_weights.values()]
     for raw, path in paths:
         path = Path(path)
         if path.is_file() and raw not in out:

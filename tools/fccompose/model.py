@@ -49,6 +49,7 @@ commas or line breaks; ``#`` starts a comment.
 """
 from __future__ import annotations
 
+import copy
 import math
 import functools
 from collections.abc import Mapping
@@ -66,7 +67,7 @@ from inflo.formats.obj import read_obj, read_obj_sequence
 from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import read_scn
-from inflo.formats.weights import read_weight_file
+from inflo.formats.weights import read_petal_weight_file, read_weight_file
 from inflo.tools.pbd.constraints import signed_dihedral_angle, wrap_angle
 from inflo.tools.pbd.solver import mesh_edges, mesh_hinges
 
@@ -96,6 +97,12 @@ class Template:
         ``usemtl`` names of the template's OBJ (first frame), e.g. one per organ.
     face_material : (m,) int32 or None
         Index into ``materials`` per triangle (-1: none), None when the OBJ uses no ``usemtl``.
+    petal_weight : (nv,) float64 or None
+        Per-vertex petal weights in [0, 1] (``petal weight`` file), None without one.
+    petal : float
+        The petal factor f this template's frames were grown by (:meth:`with_petals`; 1: as read).
+    key : hashable
+        Identifies the frames in ``Model.template_x``: ``id`` as read, ``(id, f)`` once grown.
     """
 
     id: int
@@ -109,6 +116,28 @@ class Template:
     source: str = ""
     materials: list = None
     face_material: np.ndarray | None = None
+    petal_weight: np.ndarray | None = None
+    petal: float = 1.0
+    key: object = None
+
+    def __post_init__(self):
+        if self.key is None:
+            self.key = self.id
+
+    def with_petals(self, factor: float) -> "Template":
+        """This template with its petals grown by ``factor`` (thesis fig. 6.4c: a small ray
+        floret's enlarged petals sized by the available space, the rest of the floret as it is):
+        local vertex v of every frame scaled by ``1 + w_v (factor - 1)`` about the floret's origin
+        (its attachment point), ``w`` the petal weights. Edges and hinges are shared; rest values
+        follow from the grown frames. Returns ``self`` for a factor of 1 or a template without
+        petal weights."""
+        if self.petal_weight is None or factor == 1.0:
+            return self
+        grow = 1.0 + self.petal_weight * (float(factor) - 1.0)
+        out = copy.copy(self)
+        out.frames = np.ascontiguousarray(self.frames * grow[None, :, None])
+        out.petal, out.key = float(factor), (self.id, float(factor))
+        return out
 
     @property
     def n_vertices(self) -> int:
@@ -196,9 +225,12 @@ def _load_template(params: CanopyParams, entry) -> Template:
     if entry.id in params.weights:
         fixed = read_weight_file(params.weights[entry.id].resolved, nv)
     k_stretch, k_bend = params.stiffness(entry.id)
-    return Template.from_frames(entry.id, frames, faces, fixed=fixed, k_stretch=k_stretch, k_bend=k_bend,
-                                source=str(entry.path.raw), materials=mesh.materials,
-                                face_material=mesh.face_material)
+    t = Template.from_frames(entry.id, frames, faces, fixed=fixed, k_stretch=k_stretch, k_bend=k_bend,
+                             source=str(entry.path.raw), materials=mesh.materials,
+                             face_material=mesh.face_material)
+    if entry.id in params.petal_weights:
+        t.petal_weight = read_petal_weight_file(params.petal_weights[entry.id].resolved, nv)
+    return t
 
 
 class Schedule(NamedTuple):
@@ -221,7 +253,8 @@ class Model:
     Attributes
     ----------
     florets : list of Floret
-    templates : dict of int -> Template
+    templates : dict of key -> Template
+        By :attr:`Template.key` (the id; ``(id, f)`` for a copy grown by a petal factor f).
     vertex_inv_mass : (n,) float64
     vertex_floret : (n,) int32
     vertex_fixed : (k,) int32
@@ -234,8 +267,8 @@ class Model:
     hinge_stiffness : (h,) float64
     template_x : (T, 3) float64
         All template frames of all templates, concatenated.
-    template_offset : dict of int -> int
-        Row of ``template_x`` where template id's frame 0 starts.
+    template_offset : dict of key -> int
+        Row of ``template_x`` where the template's (by :attr:`Template.key`) frame 0 starts.
     floret_vertex_offset : (nf + 1,) int64
     n_frames : int
         Frames to simulate.
@@ -351,7 +384,7 @@ class Model:
             pos = self.developmental_time(fl, frame) * (nfr - 1)
             a = min(int(math.floor(pos)), nfr - 1)
             b = min(a + 1, nfr - 1)
-            off = self.template_offset[tpl.id]
+            off = self.template_offset[tpl.key]
             base_a[k] = off + a * tpl.n_vertices
             base_b[k] = off + b * tpl.n_vertices
             alpha[k] = pos - a if b != a else 0.0
@@ -709,9 +742,13 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
             t += lv.shift
         for k, p in enumerate(scenes[sp].placements):
             if p.id in templates:
-                if p.id not in placed:
-                    placed[p.id] = templates[p.id]
-                fl = Floret(len(florets), p, placed[p.id], sp, k, p.material, outer=tuple(outer), shift=shift)
+                # a placement's '#@ petal: f' grows the petals of its own copy of the template
+                # (one copy per distinct factor; fig. 6.4c)
+                key = (p.id, 1.0 if p.petal is None else float(p.petal))
+                if key not in placed:
+                    base = placed.setdefault((p.id, 1.0), templates[p.id])
+                    placed[key] = base.with_petals(key[1])
+                fl = Floret(len(florets), p, placed[key], sp, k, p.material, outer=tuple(outer), shift=shift)
                 if p.kind == "rba":
                     moved_by_rba(fl, sp, k)
                 fl.birth_frame = int(math.ceil(max(born, fl.birth_frame + shift) - 1e-9))
@@ -735,10 +772,18 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
         raise InputError(f"{params.source}: expected placements in the scene files, found none")
 
     # concatenate
-    used = [placed[i] for i in templates if i in placed]
+    # templates in entry order, each id's grown copies after it by factor (a stable layout)
+    order = {i: n for n, i in enumerate(templates)}
+    in_use = {id(fl.template) for fl in florets}
+    seen, used = set(), []
+    for key in sorted(placed, key=lambda kf: (order[kf[0]], kf[1])):
+        t = placed[key]
+        if t.key not in seen and id(t) in in_use:
+            seen.add(t.key)
+            used.append(t)
     template_offset, rows = {}, 0
     for t in used:
-        template_offset[t.id] = rows
+        template_offset[t.key] = rows
         rows += t.frames.shape[0] * t.n_vertices
     template_x = np.concatenate([t.frames.reshape(-1, 3) for t in used]) if used else np.zeros((0, 3))
 
@@ -778,7 +823,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
                                  if xs else np.zeros(shape, dt))
     return Model(
         florets=florets,
-        templates={t.id: t for t in used},
+        templates={t.key: t for t in used},
         vertex_inv_mass=inv_mass,
         vertex_floret=vertex_floret,
         vertex_fixed=cat(fixed, np.int32, (0,)),
