@@ -1,4 +1,4 @@
-# inflo top-level Makefile: make lily | make yarrow | make sunflower | make gaillardia | make dahlia | make dyssodia | make test | make bench | make golden | make clean
+# inflo top-level Makefile: make lily | make yarrow | make sunflower | make gaillardia | make dahlia | make dyssodia | make orlaya | make test | make bench | make golden | make clean
 # The first target run on a fresh clone creates .venv and installs inflo with its test extras.
 
 QUALITY ?= draft
@@ -12,7 +12,7 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: all venv test bench golden golden-check lily yarrow sunflower gaillardia dahlia dyssodia clean distclean
+.PHONY: all venv test bench golden golden-check lily yarrow sunflower gaillardia dahlia dyssodia orlaya clean distclean
 
 all: lily
 
@@ -60,6 +60,9 @@ dahlia: $(STAMP)
 
 dyssodia: $(STAMP)
 	$(MAKE) -C pipelines/dyssodia QUALITY=$(QUALITY)
+
+orlaya: $(STAMP)
+	$(MAKE) -C pipelines/orlaya QUALITY=$(QUALITY)
 
 clean:
 	rm -rf build bench/out .pytest_cache .hypothesis

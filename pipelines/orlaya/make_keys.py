@@ -20,7 +20,9 @@ zygomorphic ones (the outward petal largest). Only the petals grow, not the flor
 
 - ``petal`` (symmetry 5, bilateral): a blade along a midrib in the x-y plane; ``bud`` incurved
   over the stylopodium, ``mid`` a cup, ``open`` spreading nearly flat. Row 0 (the claw) sits at
-  radius 0.11 on y = 0, fixed on the pedicel (weights.py base).
+  radius 0.11 on y = 0 (not cupped), all of it fixed on the pedicel (weights.py base): a claw
+  vertex left free between fixed ones has edges of a few hundredths of a floret, which contacts
+  would stretch many times over.
 - ``stylopodium`` (symmetry 5, fused: a closed ring): a low cone, radius 0.09 at its base.
 """
 from __future__ import annotations
@@ -38,7 +40,7 @@ HERE = Path(__file__).resolve().parent
 # polygonization per quality: (lambda, eta) of each organ
 RES = {
     "draft": {"petal": ("0.25", "3"), "stylopodium": ("0.5", "2")},
-    "final": {"petal": ("0.125", "5"), "stylopodium": ("0.34", "3")},
+    "final": {"petal": ("0.125", "6"), "stylopodium": ("0.34", "3")},
 }
 
 PETAL_NU, PETAL_NV = 4, 6
@@ -75,8 +77,9 @@ def write(out: Path, quality: str) -> None:
                   ring_net(STYLO["r"], STYLO["y"], STYLO["half"], 3))
     for key, p in PETAL.items():
         text = head.format(key=key, q=quality, t=p["time"])
-        text += organ("petal", M_PETAL, "2 3", f"{PETAL_NU} {PETAL_NV}", "5 0", 0, res["petal"],
-                      blade_net(p, PETAL_NU, PETAL_NV, U_PETAL, TIP_RECESS)) + "\n" + stylo
+        net = blade_net(p, PETAL_NU, PETAL_NV, U_PETAL, TIP_RECESS)
+        net[0, :, 1] = 0.0  # the claw's row flat on y = 0: all of it fixed (weights.py base)
+        text += organ("petal", M_PETAL, "2 3", f"{PETAL_NU} {PETAL_NV}", "5 0", 0, res["petal"], net) + "\n" + stylo
         (out / f"floret_{key}.floret").write_text(text)
 
 

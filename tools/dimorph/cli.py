@@ -28,6 +28,8 @@ from .sweep import write_sweep
 @click.option("--disk-id", type=int, default=0, show_default=True, help="Floret type id of disk florets.")
 @click.option("--small-ray-id", type=int, default=None, help="Type id of small ray florets (default: --ray-id).")
 @click.option("--ray-scale", type=float, default=1.0, show_default=True, help="Scale factor of ray florets.")
+@click.option("--small-ray-scale", type=float, default=None,
+              help="With two thresholds: a small ray floret's factor is this x d_min / Th_b (default: --ray-scale).")
 @click.option("--disk-scale", type=float, default=1.0, show_default=True, help="Scale factor of disk florets.")
 @click.option("--centre", type=click.Choice(["group", "top"]), default="group", show_default=True,
               help="Cone axis away from the floret's own head/umbellet centre, or its top-level group's.")
@@ -52,7 +54,7 @@ from .sweep import write_sweep
 @click.option("--orient-rays", type=click.Choice(["none", "group", "top"]), default="none", show_default=True,
               help="Turn each ray floret about its axis so that its local +X (a zygomorphic floret's outward "
                    "petal) points away from its group's or top-level group's centre.")
-def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, disk_scale, centre,
+def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, small_ray_scale, disk_scale, centre,
         half_angle, ray_lead, ray_development_frames, disk_development_frames, bracts, bract_id, bract_scale,
         petal_size, orient_rays, quiet, debug):
     from inflo.formats.errors import InputError
@@ -63,14 +65,15 @@ def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_sca
                     ("--bracts", bracts), ("--bract-id", bract_id)):
         if v is not None and v < 0:
             raise InputError(f"{name} must be >= 0, found {v}")
-    for name, v in (("--ray-scale", ray_scale), ("--disk-scale", disk_scale), ("--bract-scale", bract_scale)):
+    for name, v in (("--ray-scale", ray_scale), ("--disk-scale", disk_scale), ("--bract-scale", bract_scale),
+                    ("--small-ray-scale", ray_scale if small_ray_scale is None else small_ray_scale)):
         if not v > 0:
             raise InputError(f"{name} must be > 0, found {v}")
         if not 1e-6 <= v <= 1e6:
             raise InputError(f"{name} must be in [1e-06, 1e+06], found {v:g}")
     opts = DimorphOptions(alpha, tuple(thresholds), ray_id, disk_id, small_ray_id, ray_scale, disk_scale,
                           centre, half_angle, ray_lead, ray_development_frames, disk_development_frames,
-                          bracts, bract_id, bract_scale, petal_size, orient_rays)
+                          bracts, bract_id, bract_scale, petal_size, orient_rays, small_ray_scale)
     check_window_options(opts)
     sc = read_scn(scene)
     out, counts = dimorph_scene(sc, opts)

@@ -27,7 +27,9 @@ class DimorphOptions:
         iff d_min > Th_b, small ray iff Th_a < d_min <= Th_b (fig. 6.4c)
     ray_id, disk_id, small_ray_id : floret type ids written into the placements
     ray_scale, disk_scale : factors applied to each placement's scale by fate; a small ray floret
-        gets ``ray_scale * d_min / Th_b`` (size proportional to the available space, fig. 6.4c)
+        gets ``small_ray_scale * d_min / Th_b`` (size proportional to the available space, fig.
+        6.4c; ``small_ray_scale`` None: ``ray_scale``, so the small rays' sizes run up to the large
+        ones')
     centre : ``group`` (the floret's own head/umbellet) or ``top`` (its top-level group)
     ray_lead : frames by which ray and small ray florets develop ahead of the others: their
         ``frameStart`` and ``frameEnd`` both move that much earlier (negative: later), rounded to
@@ -68,6 +70,7 @@ class DimorphOptions:
     bract_scale: float = 1.0
     petal_size: bool = False
     orient_rays: str = "none"
+    small_ray_scale: float | None = None
 
 
 def orient_outward(p, centre) -> bool:
@@ -171,8 +174,9 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
         what = "half-angle" if opts.half_angle else "opening angle"
         raise InputError(f"--alpha {opts.alpha} outside (0, {top:g}] degrees (the cone's {what}; a wider "
                          "'cone' would hold the directions towards the head's centre)")
+    small_scale = opts.ray_scale if opts.small_ray_scale is None else float(opts.small_ray_scale)
     for name, v in (("--ray-scale", opts.ray_scale), ("--disk-scale", opts.disk_scale),
-                    ("--bract-scale", opts.bract_scale)):
+                    ("--bract-scale", opts.bract_scale), ("--small-ray-scale", small_scale)):
         if not 1e-6 <= v <= 1e6:
             raise InputError(f"{name} must be in [1e-06, 1e+06], found {v:g}")
     check_window_options(opts)
@@ -206,7 +210,7 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
         if f == FATE_RAY:
             p.id, factor = opts.ray_id, opts.ray_scale
         elif f == FATE_SMALL_RAY:
-            p.id, factor = small_id, opts.ray_scale * dmin[k] / th[1]
+            p.id, factor = small_id, small_scale * dmin[k] / th[1]
         else:
             p.id, factor = opts.disk_id, opts.disk_scale
         if opts.petal_size and f != FATE_DISK:
