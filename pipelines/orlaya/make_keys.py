@@ -46,8 +46,10 @@ RES = {
 PETAL_NU, PETAL_NV = 4, 6
 U_PETAL = np.linspace(0.0, 1.0, PETAL_NU)
 # how far each column of the tip row falls short of the midrib's tip, as a fraction of the tip
-# row's half width: the notch of an obcordate petal (deepest on the midrib)
-TIP_RECESS = np.array([0.9, 0.55, 0.1, 0.35])
+# row's half width: the notch of an obcordate petal (deepest on the midrib). Kept shallower than the
+# last rows' spacing: a notch that folds the tip row back past the row before it leaves slivers and
+# edges of a few thousandths of a floret there, which contacts stretch many times over
+TIP_RECESS = np.array([0.45, 0.3, 0.05, 0.2])
 PETAL = {
     "bud": dict(time=0.0,
                 mid=[(0.11, 0.00), (0.15, 0.06), (0.17, 0.12), (0.16, 0.18), (0.13, 0.23), (0.09, 0.26)],

@@ -51,9 +51,14 @@ class Compound:
 
 def compound_pattern(profile: Profile, head_area: AreaFunction, *, head_curve: str = "cone",
                      head_height: float = 0.5, head_fill: float = 1.0, floret_fraction: float = 0.03,
-                     divergence: float = 137.50776405003785, start: float = 0.0, count: int = 0,
+                     head_start: float = 0.0, divergence: float = 137.50776405003785, start: float = 0.0, count: int = 0,
                      max_count: int = 1_000_000) -> Compound:
-    """Place heads by eq. 5.2 on ``profile``, then florets by eq. 5.2 on each head (fig. 5.4)."""
+    """Place heads by eq. 5.2 on ``profile``, then florets by eq. 5.2 on each head (fig. 5.4).
+
+    ``head_start``: the arc length, as a fraction of the head's generating curve (its radius when
+    flat), at which each head's first floret forms (as
+    ``start`` for the heads): 0 puts one on the head's apex and the next about half a floret
+    diameter from it (eq. 5.2 near the apex), whose open florets then overlap."""
     heads = static_pattern(profile, head_area, divergence=divergence, start=start, count=count,
                            max_count=max_count)
     unit = load_curve(head_curve, radius=1.0, height=head_height, angle=90.0, samples=1024)
@@ -64,7 +69,7 @@ def compound_pattern(profile: Profile, head_area: AreaFunction, *, head_curve: s
         scale = math.sqrt(head_fill * A / unit.total_area)
         prof = unit.scaled(scale)
         sub = static_pattern(prof, AreaFunction(floret_fraction * A, prof.length), divergence=divergence,
-                             max_count=max_count)
+                             start=head_start, max_count=max_count)
         # local frame of the head: x = right (away from the centre), y = up (normal), z = x cross y
         x, y = heads.right[k], heads.up[k]
         z = np.cross(x, y)

@@ -104,7 +104,7 @@ def generate(params: Params, out_dir, *, progress=None, header: str | None = Non
         c = params.compound
         comp = compound_pattern(profile, area, head_curve=c.head_curve, head_height=c.head_height,
                                 head_fill=c.head_fill, floret_fraction=c.floret_fraction,
-                                divergence=pr.divergence, start=pr.start, count=pr.count,
+                                head_start=c.head_start, divergence=pr.divergence, start=pr.start, count=pr.count,
                                 max_count=pr.max_count)
         scene = compound_scene(comp, floret_id=pr.floret_id, size_factor=pr.size_factor,
                                kind=pr.placement, frame_start=pr.frame_start, frame_end=pr.frame_end)

@@ -112,6 +112,7 @@ class Compound:
     head_height: float = _key("float", 0.5)
     head_fill: float = _key("float", 1.0)
     floret_fraction: float = _key("float", 0.03)
+    head_start: float = _key("float", 0.0)
 
 
 @dataclass(frozen=True)
@@ -363,6 +364,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
             fail("compound", "head_fill", "> 0")
         if not 0 < c["floret_fraction"] < 1:
             fail("compound", "floret_fraction", "in (0, 1)")
+        if not 0 <= c["head_start"] < 1:
+            fail("compound", "head_start", "in [0, 1) (head radii)")
     if "hierarchy" in p:
         h = p["hierarchy"]
         if h["levels"] < 1:

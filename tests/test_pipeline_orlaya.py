@@ -1,0 +1,123 @@
+"""The Orlaya pipeline (issue 18, pipelines/orlaya): the compound umbel, the three forms of fig.
+6.4c with petals that grow alone, the key poses, and the draft build's check.
+
+- make_keys.py writes the committed key poses (both qualities);
+- petal_weights.py: 0 on the stylopodium and the claws, 1 at the outward petal's tip; the outward
+  petal weighs more than the inner ones when zygomorphic, all five alike with exponent 0;
+- at both qualities (phyllotaxis + dimorph as the Makefile runs them): at least 5 umbellets, the
+  florets in one plane; three forms; large rays turned away from the umbel's centre with petal
+  factor RAY_SCALE, small rays' factors SMALL_RAY_SCALE * d_min / TH_B in (1, SMALL_RAY_SCALE],
+  every floret's scale its primordium's (only the petals carry the factor);
+- umbel_centres.py lowers the group centres below the canopy, the florets unmoved;
+- if the draft build exists (the golden test builds it): check_orlaya.py's report says OK.
+"""
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from inflo.formats.scn import read_scn
+
+from conftest import REPO, run_cli
+
+ORL = REPO / "pipelines" / "orlaya"
+BUILD = REPO / "build" / "orlaya"
+sys.path.insert(0, str(ORL))
+from petal_weights import petal_weights  # noqa: E402
+from umbel_centres import lower_centres  # noqa: E402
+
+
+def _make_var(name: str, quality: str | None = None) -> str:
+    text = (ORL / "Makefile").read_text()
+    if quality is not None:
+        block = re.search(rf"ifeq \(\$\(QUALITY\),{quality}\)(.*?)(?:else ifeq|else\n)", text, re.S).group(1)
+        m = re.search(rf"^{name} := (\S+)", block, re.M)
+        if m:
+            return m.group(1)
+    return re.search(rf"^{name} := (\S+)", text, re.M).group(1)
+
+
+def test_key_poses_are_up_to_date(tmp_path):
+    r = subprocess.run([sys.executable, str(ORL / "make_keys.py"), str(tmp_path)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    for q in ("draft", "final"):
+        for f in sorted((tmp_path / q).glob("*.floret")):
+            assert f.read_text() == (ORL / q / f.name).read_text(), f"{q}/{f.name}: rerun make_keys.py"
+
+
+def test_petal_weights_grow_the_blades_not_the_centre():
+    # a stylopodium vertex, a claw vertex, the outward / lateral / inward petal tips
+    v = np.array([[0.08, 0.05, 0.0], [0.11, 0.0, 0.0], [0.48, 0.05, 0.0],
+                  [0.48 * np.cos(np.radians(72)), 0.05, 0.48 * np.sin(np.radians(72))],
+                  [0.48 * np.cos(np.radians(144)), 0.05, 0.48 * np.sin(np.radians(144))]])
+    w = petal_weights(v, 2)
+    assert w[0] == 0 and w[1] == 0 and w[2] == pytest.approx(1.0)
+    assert w[2] > w[3] > w[4] > 0
+    np.testing.assert_allclose(petal_weights(v, 0)[2:], 1.0)
+
+
+@pytest.fixture(scope="module", params=["draft", "final"])
+def umbel(request, tmp_path_factory):
+    q = request.param
+    out = tmp_path_factory.mktemp(f"orlaya_{q}")
+    r = run_cli("phyllotaxis", "-q", ORL / q / "umbel.toml", "-o", out)
+    assert r.returncode == 0, r.stderr
+    args = ["--alpha", _make_var("ALPHA"), "--half-angle", "--threshold", _make_var("TH_A", q),
+            "--threshold", _make_var("TH_B", q), "--ray-id", "1", "--small-ray-id", "2", "--disk-id", "0",
+            "--ray-scale", _make_var("RAY_SCALE"), "--small-ray-scale", _make_var("SMALL_RAY_SCALE"),
+            "--petal-size", "--orient-rays", "top"]
+    r = run_cli("dimorph", "-q", out / "scene.scn", *args, "-o", out / "typed.scn")
+    assert r.returncode == 0, r.stderr
+    return q, out
+
+
+def test_three_forms_with_petal_factors_where_fig_6_4c_puts_them(umbel):
+    q, out = umbel
+    plain, sc = read_scn(out / "scene.scn"), read_scn(out / "typed.scn")
+    assert len(sc.groups) - 1 >= 5
+    pos = sc.arrays()["pos"]
+    assert np.ptp(pos[:, 1]) < 1e-9
+    types = np.array([p.type for p in sc.placements])
+    for t, id_ in (("disk", 0), ("ray", 1), ("small_ray", 2)):
+        assert (types == t).sum() > 0
+        assert all(p.id == id_ for p in sc.placements if p.type == t)
+    big, small = float(_make_var("RAY_SCALE")), float(_make_var("SMALL_RAY_SCALE"))
+    centre = sc.groups[0].centre
+    for a, b in zip(plain.placements, sc.placements):
+        np.testing.assert_array_equal(a.scale, b.scale)  # only the petals carry the factor
+        if b.type == "ray":
+            assert b.petal == pytest.approx(big)
+            away = (b.pos - centre)[[0, 2]]
+            assert np.dot(away / np.linalg.norm(away), b.right[[0, 2]]) > 0.999
+        elif b.type == "small_ray":
+            assert 1.0 < b.petal <= small + 1e-9
+        else:
+            assert b.petal is None
+    # the large rays lie towards the periphery of the whole umbel
+    r = np.linalg.norm((pos - centre)[:, [0, 2]], axis=1)
+    assert np.median(r[types == "ray"]) > max(np.median(r[types == "disk"]), np.median(r[types == "small_ray"]))
+
+
+def test_umbel_centres_go_below_the_canopy(umbel):
+    q, out = umbel
+    sc = read_scn(out / "typed.scn")
+    before = {g: c.centre.copy() for g, c in sc.groups.items()}
+    pos = sc.arrays()["pos"].copy()
+    low = lower_centres(sc, 1.6, 1.1)
+    np.testing.assert_array_equal(low.arrays()["pos"], pos)
+    for g, grp in low.groups.items():
+        np.testing.assert_array_equal(grp.centre[[0, 2]], before[g][[0, 2]])
+        assert grp.centre[1] < before[g][1] - 0.05
+    assert low.groups[0].centre[1] < min(grp.centre[1] for g, grp in low.groups.items() if g)
+
+
+def test_draft_build_check_says_ok():
+    report = BUILD / "check.txt"
+    if not report.is_file() or (BUILD / "quality.txt").read_text().strip() != "draft":
+        pytest.skip("no draft orlaya build (make orlaya, or the golden test, makes one)")
+    text = report.read_text()
+    assert text.rstrip().endswith("OK"), text[-2000:]
