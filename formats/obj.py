@@ -25,6 +25,7 @@ __all__ = [
     "read_obj_sequence",
     "write_obj_sequence",
     "list_obj_sequence",
+    "as_written",
     "FLOAT_FMT",
 ]
 
@@ -327,6 +328,14 @@ def _fmt_rows(arr: np.ndarray, prefix: str, fmt: str, block: int = 4096) -> str:
         n = min(block, len(arr) - k)
         out.append((row * n) % tuple(flat[k * c:(k + n) * c]))
     return "".join(out)
+
+
+def as_written(arr: np.ndarray, fmt: str = FLOAT_FMT) -> np.ndarray:
+    """``arr`` (n, c) as :func:`write_obj` writes it with ``fmt`` and a reader reads it back."""
+    arr = np.asarray(arr, dtype=np.float64)
+    if arr.size == 0:
+        return arr.copy()
+    return np.array(_fmt_rows(arr, "", fmt).split(), dtype=np.float64).reshape(arr.shape)
 
 
 def write_obj(path, mesh: ObjMesh, *, header: str | None = None, fmt: str = FLOAT_FMT) -> None:

@@ -696,3 +696,16 @@ def test_a_gap_in_an_input_sequence_is_refused(inputs, tmp_path):
     res = run_cli("fccompose", d / "dense.fcc", "-o", tmp_path / "out", "-q")
     assert res.returncode == 2 and f"{frames[5].name} missing" in res.stderr, res.stderr
     assert not (tmp_path / "out").exists() or not list((tmp_path / "out").glob("*.obj"))
+
+
+def test_written_frames_get_the_digits_that_keep_them_collision_free():
+    """Two flat triangles 2e-7 apart (closer than 6 decimals): written with 6 decimals they would
+    touch, so the frame is written with 9; far apart, with 6; crossing in the state, with 6."""
+    from inflo.tools.fccompose.compose import written_format
+    faces = np.array([[0, 1, 2], [3, 4, 5]])
+    low = np.array([[0.1, 0.0000001, 0.1], [0.9, 0.0000001, 0.1], [0.5, 0.0000001, 0.9]])
+    for gap, expected in ((2e-7, "%.9f"), (0.01, "%.6f")):
+        x = np.vstack([low, low + [0.0, gap, 0.0]])
+        assert written_format(x, faces) == expected
+    crossing = np.vstack([low, [[0.5, -0.5, 0.5], [0.6, 0.5, 0.5], [0.4, 0.5, 0.45]]])
+    assert written_format(crossing, faces) == "%.6f"

@@ -198,3 +198,40 @@ def test_dimorph_cli_writes_petal_factors(tmp_path):
     assert res.returncode == 0, res.stderr
     text = (tmp_path / "t.scn").read_text()
     assert "#@ petal: 2" in text
+
+
+def test_dimorph_small_ray_scale_sizes_small_rays_by_the_space():
+    """Two thresholds (fig. 6.4c): a small ray floret's factor is small_ray_scale * d_min / Th_b
+    (ray_scale without it); the large rays keep ray_scale."""
+    sc = _umbel_scene()
+    th = (1.0, 2.0)  # d_min: 0 at the centres, 1.40 towards the other umbellet, inf outward
+    a, ca = dimorph_scene(sc, DimorphOptions(alpha=120, thresholds=th, ray_scale=5.0, petal_size=True))
+    b, cb = dimorph_scene(sc, DimorphOptions(alpha=120, thresholds=th, ray_scale=5.0, small_ray_scale=2.0,
+                                             petal_size=True))
+    assert ca["small_ray"] == cb["small_ray"] > 0 and ca["ray"] == cb["ray"] > 0
+    for k, (p, q) in enumerate(zip(a.placements, b.placements)):
+        if p.type == "small_ray":
+            assert p.petal == pytest.approx(5.0 * cb["d_min"][k] / th[1])
+            assert q.petal == pytest.approx(2.0 * cb["d_min"][k] / th[1])
+        elif p.type == "ray":
+            assert p.petal == q.petal == pytest.approx(5.0)
+    with pytest.raises(InputError, match="small-ray-scale"):
+        dimorph_scene(sc, DimorphOptions(alpha=120, thresholds=th, small_ray_scale=0.0))
+
+
+def test_dimorph_orient_rays_top_keeps_a_ray_facing_an_inner_gap_along_its_cone():
+    """A ray floret on the inner side of its umbellet (its free space a gap inside the umbel: here
+    d_min 1.40 > Th = 1 towards the other umbellet) points its +X along its cone axis, away from its
+    umbellet's centre, not outward into its own umbellet."""
+    sc = _umbel_scene()
+    out, counts = dimorph_scene(sc, DimorphOptions(alpha=120, thresholds=(1.0,), orient_rays="top"))
+    inner = 0
+    for p in out.placements:
+        if p.type != "ray":
+            continue
+        own = np.array(p.pos) - sc.groups[p.group].centre
+        top = np.array(p.pos)
+        expect = own if np.dot(own, top) < 0 else top
+        np.testing.assert_allclose(p.right, expect / np.linalg.norm(expect), atol=1e-12)
+        inner += np.dot(own, top) < 0
+    assert inner == 2  # one in each umbellet faces the other

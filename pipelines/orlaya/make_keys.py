@@ -40,7 +40,7 @@ HERE = Path(__file__).resolve().parent
 # polygonization per quality: (lambda, eta) of each organ
 RES = {
     "draft": {"petal": ("0.25", "3"), "stylopodium": ("0.5", "2")},
-    "final": {"petal": ("0.125", "6"), "stylopodium": ("0.34", "3")},
+    "final": {"petal": ("0.125", "../petal_eta_final.func"), "stylopodium": ("0.34", "3")},
 }
 
 PETAL_NU, PETAL_NV = 4, 6

@@ -49,7 +49,10 @@ class DimorphOptions:
     orient_rays : ``none``, ``group`` or ``top``: turn each (large) ray floret about its ``up`` axis
         so that its local +X (the outward petal of a zygomorphic floret) points away from its
         group's or its top-level group's centre (the periphery of the whole inflorescence, fig.
-        6.4c); placements whose orientation comes from RBA files (``rba``) are refused
+        6.4c). With ``top``, a ray floret whose cone axis (away from its own group's centre: where
+        its free space is) points towards the top-level centre, e.g. one facing a gap inside the
+        inflorescence, is turned along its cone axis instead. Placements whose orientation comes
+        from RBA files (``rba``) are refused
     Windows are changed only on placements that have one (``ca``, ``ta``, ``ra``, ``rba``).
     """
 
@@ -199,6 +202,7 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
     fate[bract] = FATE_BRACT
     small_id = opts.ray_id if opts.small_ray_id is None else opts.small_ray_id
     orient_centre = None if opts.orient_rays == "none" else group_centres(scene, opts.orient_rays)
+    own_centre = centre if opts.centre == "group" else group_centres(scene, "group")
     out = copy.deepcopy(scene)
     windows = oriented = 0
     for k, p in enumerate(out.placements):
@@ -221,7 +225,10 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
             if p.kind == "rba":
                 raise InputError(f"--orient-rays: placement {k} is 'rba:' (its orientation comes from the RBA "
                                  "files); orient the rays of a static scene")
-            oriented += orient_outward(p, orient_centre[k])
+            target = orient_centre[k]
+            if opts.orient_rays == "top" and np.dot(arr["pos"][k] - own_centre[k], arr["pos"][k] - target) < 0:
+                target = own_centre[k]  # its free space faces the inflorescence's inside
+            oriented += orient_outward(p, target)
         p.type = TYPE_LABELS[f]
         if f == FATE_DISK:
             n_frames, lead = opts.disk_development_frames, 0.0

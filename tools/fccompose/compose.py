@@ -70,7 +70,7 @@ import numpy as np
 from inflo.formats.atomic import frame_name, remove_stale_frames, write_bytes_atomic, write_text_atomic
 from inflo.formats.errors import InputError
 from inflo.formats.fcc import CanopyParams, check_references
-from inflo.formats.obj import ObjMesh, write_obj
+from inflo.formats.obj import ObjMesh, as_written, write_obj
 from inflo.tools.collide.broad import lattice_cell_size, triangle_boxes
 from inflo.tools.collide.resolve import CollisionResult, default_tolerance, resolve_collisions
 from inflo.tools.collide.tritri import intersecting_pairs, intersecting_pairs_with
@@ -649,15 +649,44 @@ def _fingerprint(params: CanopyParams, model: Model, inputs: dict | None = None)
     return h.hexdigest()
 
 
-def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndarray | None = None) -> Path:
+#: Coordinate formats of the written frames, tried in turn (:func:`written_format`).
+WRITE_FORMATS = ("%.6f", "%.9f", "%.12f", "%.17g")
+
+
+def written_format(x: np.ndarray, faces: np.ndarray, formats=WRITE_FORMATS) -> str:
+    """The first of ``formats`` whose written coordinates keep the canopy as collision-free as
+    ``x`` is: rounding to 6 decimals can make two petals that lie flat on each other, closer than
+    the rounding, cross (a written-frame guarantee, issue 14). The written numbers are parsed back
+    and tested exactly (:func:`intersecting_pairs`, touching counts); where ``x`` itself has
+    intersecting pairs (the sanity check reports them), more digits cannot help and the first
+    format is kept."""
+    n = None
+    for fmt in formats:
+        if fmt == formats[-1]:
+            return fmt
+        xr = as_written(x, fmt)
+        found = len(intersecting_pairs(xr, faces))
+        if found == 0:
+            return fmt
+        if n is None:
+            n = len(intersecting_pairs(x, faces))
+            if n >= found:
+                return formats[0]
+    return formats[-1]
+
+
+def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndarray | None = None,
+                 exact: bool = True) -> Path:
     """The canopy at frame ``k``: every vertex (stable numbering), the faces of the florets
-    present (``tri_on``: a mask over the model's triangles; None: all)."""
+    present (``tri_on``: a mask over the model's triangles; None: all). ``exact``: the coordinates
+    with as many digits as keep the written frame collision-free (:func:`written_format`)."""
     mats, face_material = model.face_materials
     faces, face_group = model.tri_indices, model.tri_floret.copy()
     if tri_on is not None:
         faces, face_group = faces[tri_on], face_group[tri_on]
         if face_material is not None:
             face_material = face_material[tri_on]
+    fmt = written_format(x, faces) if exact else WRITE_FORMATS[0]
     present = len(np.unique(face_group))
     mesh = ObjMesh(
         vertices=x,
@@ -670,7 +699,7 @@ def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndar
     path = out / frame_name(k, "frame_", ".obj", 4)
     florets = (f"{len(model.florets)} florets" if tri_on is None
                else f"{present} of {len(model.florets)} florets emerged")
-    write_obj(path, mesh, header=f"fccompose canopy, frame {k}: {florets}, {len(faces)} triangles")
+    write_obj(path, mesh, header=f"fccompose canopy, frame {k}: {florets}, {len(faces)} triangles", fmt=fmt)
     return path
 
 
@@ -929,7 +958,7 @@ def _record(run: _Run, row: FrameLog, *, write: bool) -> None:
         sim = run.sim
         t0 = time.perf_counter()
         run.result.frames_written.append(_write_frame(run.out, sim.model, sim.state.vertex_x, sim.state.frame,
-                                                      sim.present.tri_on))
+                                                      sim.present.tri_on, exact=sim.params.collisions))
         _save_state(run.out, sim.state, run.fingerprint, run.inputs)
         row["t_write_s"] = time.perf_counter() - t0
         write_log(run.out / "log.csv", run.log_rows)
