@@ -830,6 +830,9 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
         run.log_rows = [r for r in read_log(out / "log.csv") if r and int(r[0]) <= state.frame]
         result.first_frame = state.frame + 1
     else:
+        # an older run's frames go before this one writes any: interrupted, it leaves a shorter
+        # sequence of its own frames (which --resume continues), never a mix of two runs
+        remove_stale_frames(out, [], ".obj")
         _first_frame(run, allow_initial_intersections)
         result.first_frame = 1
 

@@ -21,13 +21,14 @@ def write_frames(frames, output, quiet: bool = True, n_frames: int | None = None
     """Write Floret frames as ``output/frame_0000.floret`` ... (atomic); returns the paths."""
     out = Path(output)
     out.mkdir(parents=True, exist_ok=True)
+    # an older run's frames go first: an interrupted run leaves a shorter sequence, never a mix
+    remove_stale_frames(out, [], ".floret")
     written = []
     with progress(frames, length=n_frames, label="floret-animate", quiet=quiet) as bar:
         for i, fr in enumerate(bar):
             p = out / frame_name(i, FRAME_PREFIX, ".floret")
             write_floret(p, fr)
             written.append(p)
-    remove_stale_frames(out, written, ".floret")
     return written
 
 

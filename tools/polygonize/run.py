@@ -145,6 +145,8 @@ def polygonize_files(source, output, *, lam=None, eta=None, aspect=None, quiet: 
     mesher, report = build_mesher(frames, paths, lam=lam, eta=eta, aspect=aspect)
     out = Path(output)
     out.mkdir(parents=True, exist_ok=True)
+    # an older run's frames go first: an interrupted run leaves a shorter sequence, never a mix
+    remove_stale_frames(out, [], ".obj")
     written = []
     with progress(list(enumerate(frames)), label="polygonize", quiet=quiet) as bar:
         for i, f in bar:
@@ -153,5 +155,4 @@ def polygonize_files(source, output, *, lam=None, eta=None, aspect=None, quiet: 
             p = out / frame_name(i, "frame_", ".obj")
             write_obj(p, m, header=f"polygonize: {paths[i].name} (time {f.key_time})")
             written.append(p)
-    remove_stale_frames(out, written, ".obj")
     return report

@@ -1,0 +1,48 @@
+"""A rerun into a folder with an older, longer run (issue 14): the older run's frames go before the
+new run writes any, so a rerun interrupted half way leaves a shorter sequence of its own frames,
+never new frames 0..k beside old ones after k (which canopy-render and subdivide would read as one
+run). floret-animate, polygonize and fccompose (without --resume; tests/test_fccompose.py keeps the
+stale-frame test of a longer earlier run)."""
+from __future__ import annotations
+
+import pytest
+
+from conftest import REPO, run_cli
+from inflo.formats.floret import read_floret
+from inflo.tools.floret_animate.run import write_frames
+
+KEYS = [REPO / "pipelines" / "examples" / "disk_bud.floret", REPO / "pipelines" / "examples" / "disk_open.floret"]
+
+
+def _old_run(folder, suffix, n=10):
+    folder.mkdir(parents=True, exist_ok=True)
+    for i in range(n):
+        (folder / f"frame_{i:04d}{suffix}").write_text("old run\n")
+
+
+def test_floret_animate_interrupted_rerun_leaves_no_older_frames(tmp_path):
+    out = tmp_path / "frames"
+    _old_run(out, ".floret")
+    fr = read_floret(KEYS[0])
+
+    def interrupted():
+        yield fr
+        yield fr
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        write_frames(interrupted(), out, n_frames=10)
+    assert sorted(p.name for p in out.iterdir()) == ["frame_0000.floret", "frame_0001.floret"]
+    assert "old run" not in (out / "frame_0001.floret").read_text()
+
+
+def test_polygonize_rerun_replaces_the_older_frames(tmp_path):
+    frames = tmp_path / "frames"
+    r = run_cli("floret-animate", "-q", *KEYS, "--frames", "3", "-o", frames)
+    assert r.returncode == 0, r.stderr
+    obj = tmp_path / "obj"
+    _old_run(obj, ".obj")
+    r = run_cli("polygonize", "-q", frames, "-o", obj)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in obj.glob("*.obj")) == [f"frame_{i:04d}.obj" for i in range(3)]
+    assert all("old run" not in p.read_text() for p in obj.glob("*.obj"))
