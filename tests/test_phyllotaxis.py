@@ -382,22 +382,21 @@ def test_compound_head_start_frees_each_heads_apex(tmp_path, write):
     """head_start = 0 puts a floret on each head's apex and the next about half a floret diameter
     from it (eq. 5.2 near the apex); head_start = 0.2 leaves a fifth of each (flat) head's radius
     free, and its florets farther apart (the orlaya's umbellets)."""
-    rows = {}
+    from inflo.tools.phyllotaxis.generate import generate
+    from inflo.tools.phyllotaxis.params import read_params
+
     for hs in (0.0, 0.2):
         params = write(f"c{hs}.toml", "[surface]\ncurve = 'disk'\n[primordia]\narea = 0.35\nstart = 0.1\n"
                                       "[compound]\nhead_curve = 'disk'\nhead_height = 0.0\nhead_fill = 0.4\n"
                                       f"floret_fraction = 0.04\nhead_start = {hs}\n")
-        res = run_cli("phyllotaxis", params, "-o", tmp_path / f"o{hs}", "--quiet")
-        assert res.returncode == 0, res.stderr
+        generate(read_params(params), tmp_path / f"o{hs}")
         sc = read_scn(tmp_path / f"o{hs}/scene.scn")
-        rows[hs] = sc
-    for hs, sc in rows.items():
         a = sc.arrays()
         d = a["scale"][0, 0]
+        head_r = math.sqrt(0.4 * 0.35 / math.pi)
         for g in sorted({int(x) for x in a["group"]}):
             m = a["group"] == g
             r = np.linalg.norm(a["pos"][m] - sc.groups[g].centre, axis=1)
-            head_r = math.sqrt(0.4 * 0.35 / math.pi)
             if hs == 0.0:
                 assert r.min() < 1e-9
             else:
@@ -405,8 +404,8 @@ def test_compound_head_start_frees_each_heads_apex(tmp_path, write):
             pair = np.linalg.norm(a["pos"][m][:, None] - a["pos"][m][None], axis=2)
             np.fill_diagonal(pair, np.inf)
             assert (pair.min() / d > 0.7) == (hs > 0)
-    res = run_cli("phyllotaxis", write("bad.toml", "[compound]\nhead_start = 1.0\n"), "-o", tmp_path / "b")
-    assert res.returncode == 2 and "head_start" in res.stderr
+    with pytest.raises(FormatError, match="head_start"):
+        read_params(write("bad.toml", "[compound]\nhead_start = 1.0\n"))
 
 
 def test_con_generating_curve_end_to_end(tmp_path, write):
