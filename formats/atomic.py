@@ -131,12 +131,16 @@ def first_missing_frame(paths, *, start: int | None = None) -> str | None:
 def remove_stale_frames(folder, keep, suffix: str, prefix: str = "frame_") -> list[Path]:
     """Remove ``prefix<digits>suffix`` files in ``folder`` whose names are not in ``keep`` (paths or
     names): the frames of an earlier, longer run that this run did not write, so a sequence folder
-    holds one run. Returns the removed paths."""
+    holds one run; and the hidden ``.part`` files a writer killed mid-frame left (a sequence folder
+    has one writer at a time). Returns the removed paths."""
     names = {Path(k).name for k in keep}
     pat = re.compile(re.escape(prefix) + r"\d+" + re.escape(suffix) + "$")
+    # a writer killed mid-write (SIGKILL: no cleanup) leaves its hidden temporary file
+    # (:func:`atomic_path`): one run writes a sequence folder, so such files are the dead one's
+    part = re.compile(r"\." + re.escape(prefix) + r"\d+" + re.escape(suffix) + r"\..+\.part$")
     removed = []
     for p in sorted(Path(folder).iterdir()):
-        if pat.match(p.name) and p.name not in names:
+        if (pat.match(p.name) and p.name not in names) or part.match(p.name):
             p.unlink()
             removed.append(p)
     return removed

@@ -46,3 +46,15 @@ def test_polygonize_rerun_replaces_the_older_frames(tmp_path):
     assert r.returncode == 0, r.stderr
     assert sorted(p.name for p in obj.glob("*.obj")) == [f"frame_{i:04d}.obj" for i in range(3)]
     assert all("old run" not in p.read_text() for p in obj.glob("*.obj"))
+
+
+def test_a_killed_writers_part_files_go_with_the_older_run(tmp_path):
+    from inflo.formats.atomic import remove_stale_frames
+
+    _old_run(tmp_path, ".obj", 3)
+    (tmp_path / ".frame_0002.obj.x1y2z3.part").write_text("half a frame")
+    (tmp_path / ".notes.txt.abc.part").write_text("not a frame")
+    (tmp_path / "log.csv").write_text("frame\n")
+    removed = remove_stale_frames(tmp_path, ["frame_0000.obj"], ".obj")
+    assert sorted(p.name for p in removed) == [".frame_0002.obj.x1y2z3.part", "frame_0001.obj", "frame_0002.obj"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".notes.txt.abc.part", "frame_0000.obj", "log.csv"]
