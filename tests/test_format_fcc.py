@@ -117,6 +117,7 @@ animation: 0 1 1 1 disk/
 obj: 1 0.5 0.5 0.5 ray.obj
 rigid body animation: 2 1 1 1 rba/ heads.scn
 weight: 0 disk.weights
+petal weight: 1 ray.petals
 bending stiffness: 1 0.3
 distance stiffness: 0 0.9
 animation output folder location: out/
@@ -197,6 +198,7 @@ def test_every_key_of_the_list(write, tmp_path):
             RigidBodyAnimationEntry(2, (1, 1, 1), FilePath("rba/"), FilePath("heads.scn")),
         ),
         weights={0: FilePath("disk.weights")},
+        petal_weights={1: FilePath("ray.petals")},
         bending_stiffness={1: 0.3},
         distance_stiffness={0: 0.9},
         animation_output_folder=FilePath("out/"),
