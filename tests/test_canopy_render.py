@@ -462,3 +462,100 @@ def test_failure_while_writing_an_animation_leaves_no_file(renderer, monkeypatch
         assert res.exit_code == 1 and "simulated crash" in res.output
         assert not (tmp_path / name).exists()
     assert no_partial_files(tmp_path)
+
+
+# ------------------------------------------------------------------------------------------------
+# texture maps (--texture, --mtl-textures; issue 23's vein texture on its blade)
+
+
+def _textured_quad(tmp_path, *, material="leaf", seam=False):
+    """A unit square in z = 0 with uv = position (or, with ``seam``, the second triangle's corners
+    given their own vt lines: vertices 0 and 2 carry two uvs each), and a flat second square."""
+    vt = "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+    faces = "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n"
+    if seam:
+        vt += "vt 0 0\nvt 1 1\n"
+        faces = "f 1/1 2/2 3/3\nf 1/5 3/6 4/4\n"
+    text = ("mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1.5 0 0\nv 2.5 0 0\nv 2.5 1 0\nv 1.5 1 0\n"
+            + vt + f"usemtl {material}\n" + faces + "usemtl flat\nf 5 6 7\nf 5 7 8\n")
+    obj = tmp_path / "quad.obj"
+    obj.write_text(text)
+    # left half red, right half blue, the top-right quarter transparent (cut out)
+    img = np.zeros((8, 8, 4), np.uint8)
+    img[:, :4] = (220, 20, 20, 255)
+    img[:, 4:] = (20, 20, 220, 255)
+    img[:4, 4:, 3] = 0  # image rows run top down: rows 0..3 are v > 0.5
+    Image.fromarray(img, "RGBA").save(tmp_path / "tex.png")
+    (tmp_path / "quad.mtl").write_text(f"newmtl {material}\nKd 1 1 1\nmap_Kd tex.png\n")
+    return obj
+
+
+def _quad_pixels(tmp_path, *args):
+    out = tmp_path / "q.png"
+    res = invoke(tmp_path / "quad.obj", "-o", out, "--view", "front", "--ortho", "--size", "250x100",
+                 "--color", "0.2,0.8,0.2", "-q", *args)
+    assert res.exit_code == 0, res.output
+    px = open_image(out)[2].astype(int)
+    # the textured square spans x ~ 0..0.4 of the width, the flat one x ~ 0.6..1
+    h, w = px.shape[:2]
+    at = lambda fx, fy: px[int(fy * h), int(fx * w)]  # fy from the top
+    return at
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("how", ["material", "mtl", "all"])
+def test_texture_is_sampled_at_the_uv_coordinates(renderer, tmp_path, how):
+    _textured_quad(tmp_path)
+    extra = {"material": ["--texture", f"leaf={tmp_path / 'tex.png'}"], "mtl": ["--mtl-textures"],
+             "all": ["--texture", tmp_path / "tex.png"]}[how]
+    at = _quad_pixels(tmp_path, *extra)
+    lower_left, lower_right, upper_right = at(0.12, 0.7), at(0.3, 0.7), at(0.3, 0.3)
+    assert lower_left[0] > 2 * lower_left[2] and lower_left[0] > 100  # red texels
+    assert lower_right[2] > 2 * lower_right[0] and lower_right[2] > 100  # blue texels
+    assert (upper_right > 240).all()  # alpha 0: cut out, the white background shows
+    flat = at(0.8, 0.5)
+    assert flat[1] > flat[0] + 60 and flat[1] > flat[2] + 60  # the untextured square keeps its --color
+    # without a texture option the same file is drawn flat, as before
+    plain = _quad_pixels(tmp_path)
+    assert plain(0.12, 0.7)[1] > plain(0.12, 0.7)[0] + 60 and not (plain(0.3, 0.3) > 240).all()
+
+
+def test_texture_seams_copy_vertices_and_keep_the_faces(tmp_path):
+    from inflo.formats.obj import read_obj
+    from inflo.tools.canopy_render.texture import TextureSpec, apply_textures, read_texcoords
+
+    obj = _textured_quad(tmp_path, seam=True)
+    vt, face_vt = read_texcoords(obj)
+    assert vt.shape == (6, 2) and face_vt.tolist() == [[0, 1, 2], [4, 5, 3], [-1, -1, -1], [-1, -1, -1]]
+    mesh = read_obj(obj)
+    spec = TextureSpec(use_mtl=True)
+    tm = apply_textures(mesh, obj, spec)
+    assert len(tm.vertices) == 8 + 2  # vertices 0 and 2 are copied for their second uv
+    assert tm.face_texture.tolist() == [0, 0, -1, -1]
+    assert np.allclose(tm.vertices[tm.faces], mesh.vertices[mesh.faces])  # the same triangles
+    assert np.allclose(tm.uv[tm.faces[:2]], vt[face_vt[:2]])  # every corner its own uv
+    assert tm.lines == mesh.lines and tm.textures[0].shape == (8, 8, 4)
+    assert tm.textures[0][0, 6, 3] == 255 and tm.textures[0][7, 6, 3] == 0  # bottom row first
+    assert apply_textures(mesh, obj, TextureSpec()) is mesh  # no texture asked for: untouched
+
+
+@pytest.mark.parametrize("case", ["no_material", "missing_png", "no_vt", "bad_vt"])
+def test_cli_texture_errors_exit_2(tmp_path, case):
+    obj = _textured_quad(tmp_path)
+    args = ["--texture", f"leaf={tmp_path / 'tex.png'}"]
+    if case == "no_material":
+        args = ["--texture", f"bark={tmp_path / 'tex.png'}"]
+    elif case == "missing_png":
+        args = ["--texture", f"leaf={tmp_path / 'nope.png'}"]
+    elif case == "no_vt":
+        obj.write_text(obj.read_text().replace("f 1/1 3/3 4/4", "f 1 3 4"))
+    else:
+        obj.write_text(obj.read_text().replace("vt 1 1\n", "vt 1 x\n"))
+    out = tmp_path / "out.png"
+    res = run_cli("canopy-render", obj, "-o", out, *args)
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in res.stderr, res.stderr
+    assert {"no_material": "'bark'", "missing_png": "not found", "no_vt": "without them",
+            "bad_vt": "quad.obj:12"}[case] in lines[0]
+    assert not out.exists()

@@ -25,6 +25,11 @@ Camera: automatic framing (every frame of an animation, so it does not jump) fro
 Z-up files); ``--fcc PARAMS.fcc`` takes the thesis viewer's ``camera position``, ``camera
 lookat``, ``camera up``, ``camera fov``, ``near plane``, ``far plane`` and ``light position``.
 
+Textures: ``--texture [MATERIAL=]IMAGE.png`` or ``--mtl-textures`` (the ``.mtl`` ``map_Kd``) draw
+faces with an image at their ``vt`` coordinates (see :mod:`.texture`); e.g. a venation blade::
+
+    canopy-render out/blade.obj --mtl-textures --view front --ortho -o leaf.png
+
 Colours: the OBJ's vertex colours; else ``--color`` per input; else its ``usemtl`` materials
 (``--colors FILE.toml``, then the built-in botanical palette by SCN ``mtl:`` id or organ word);
 else an automatic colour per input. See ``inflo.tools.canopy_render.colors``.
@@ -143,12 +148,17 @@ def _frames(ctx, param, value):
               help="Width of polylines and wireframe edges, pixels.")
 @click.option("--samples", type=click.IntRange(1, 16), default=4, show_default=True,
               help="Multisampling antialiasing samples (capped at the GL's maximum).")
+@click.option("--texture", "textures", multiple=True, metavar="[MATERIAL=]IMAGE.png",
+              help="Draw the faces of MATERIAL (without it: every face with 'vt' coordinates) with this "
+                   "texture image at their OBJ 'vt' uv coordinates; texels with alpha < 0.5 are cut out (repeat).")
+@click.option("--mtl-textures", is_flag=True,
+              help="Take texture images from the inputs' .mtl files (map_Kd) for the faces with 'vt' coordinates.")
 @click.option("--sequence", "as_sequence", is_flag=True,
               help="The input files are the frames of one sequence (e.g. a shell-expanded glob).")
 def main(inputs, output, frame, sheet_frames, sheet_every, columns, label_format, title, fps, size, view,
          azimuth, elevation, up_axis, fov, ortho, zoom, margin, fcc, fit_all, background, colors_per_input,
          color_file, no_vertex_colors, wireframe, wireframe_color, draw_lines, line_color, line_width,
-         samples, as_sequence, quiet, debug):
+         samples, textures, mtl_textures, as_sequence, quiet, debug):
     from .job import RenderJob, output_kind, run_job
 
     if frame == 0:
@@ -189,6 +199,7 @@ def main(inputs, output, frame, sheet_frames, sheet_every, columns, label_format
         sheet_frames=sheet_frames, sheet_every=sheet_every, columns=columns, label_format=label_format,
         title=title, fps=fps, view=view, azimuth=azimuth, elevation=elevation, up_axis=up_axis, fov=fov,
         ortho=ortho, zoom=zoom, margin=margin, fcc=fcc, fit_all=fit_all, quiet=quiet,
+        textures=list(textures), mtl_textures=mtl_textures,
     )
     summary = run_job(job)
     if not quiet:

@@ -111,10 +111,13 @@ class FrameReader:
     Parameters
     ----------
     layers : list of Layer
+    textures : .texture.TextureSpec or None
+        Texture maps to apply to the meshes read (``--texture``, ``--mtl-textures``).
     """
 
-    def __init__(self, layers: Sequence[Layer]):
+    def __init__(self, layers: Sequence[Layer], textures=None):
         self.layers = list(layers)
+        self.textures = textures  # a .texture.TextureSpec, or None
         self.n_frames = sequence_length(self.layers)
         self._cache: dict[tuple[int, int], ObjMesh] = {}
         self._last: dict[int, ObjMesh] = {}
@@ -126,6 +129,10 @@ class FrameReader:
         if mesh is None:
             path = lay.path(frame)
             mesh = _share(self._last.get(layer), read_obj(path))
+            if self.textures is not None and self.textures.active:
+                from .texture import apply_textures
+
+                mesh = apply_textures(mesh, path, self.textures)
             if len(mesh.vertices) and np.abs(mesh.vertices).max() > MAX_COORDINATE:
                 raise InputError(f"{path}: expected coordinates within +-{MAX_COORDINATE:g} (a renderable scene), "
                                  f"found {float(np.abs(mesh.vertices).max()):g}")

@@ -76,6 +76,10 @@ class RenderJob:
     fit_all : bool
         Frame a still on every frame of the sequence (same scale as the animation).
     quiet : bool
+    textures : list of str
+        ``[MATERIAL=]IMAGE.png`` texture maps (:mod:`.texture`).
+    mtl_textures : bool
+        Take texture maps from the inputs' ``.mtl`` ``map_Kd`` lines.
     """
 
     inputs: list
@@ -101,6 +105,8 @@ class RenderJob:
     fcc: str | None = None
     fit_all: bool = False
     quiet: bool = False
+    textures: list = field(default_factory=list)
+    mtl_textures: bool = False
 
 
 def read_fcc_camera(path):
@@ -123,7 +129,21 @@ def run_job(job: RenderJob) -> str:
     t0 = time.perf_counter()
     kind = output_kind(job.output, bool(job.sheet_frames or job.sheet_every))
     layers = resolve_inputs(job.inputs, as_sequence=job.as_sequence)
-    reader = FrameReader(layers)
+    spec = None
+    if job.textures or job.mtl_textures:
+        from .texture import TextureSpec, parse_texture_option
+
+        spec = TextureSpec(use_mtl=job.mtl_textures)
+        for value in job.textures:
+            try:
+                mat, img = parse_texture_option(value)
+            except ValueError as exc:
+                raise InputError(f"--texture: {exc}") from None
+            if mat is None:
+                spec.everything = img
+            else:
+                spec.by_material[mat] = img
+    reader = FrameReader(layers, spec)
     n = reader.n_frames
     options = replace(job.options, size=tuple(job.size or DEFAULT_SIZES[kind]))
 
@@ -144,6 +164,13 @@ def run_job(job: RenderJob) -> str:
         with progress(length=len(needed), label="reading  ", quiet=job.quiet or len(needed) < 3) as bar:
             scenes = dict(zip(needed, reader.scenes(needed, on_frame=lambda _: bar.update(1))))
         n_tri = max(sum(count_primitives(m)[0] for m in scenes[i]) for i in shown)
+        if spec is not None:
+            for name in list(spec.by_material) + ([""] if spec.everything else []):
+                if name not in spec.used:
+                    raise InputError(
+                        f"--texture {name + '=' if name else ''}...: expected "
+                        + (f"faces of material {name!r} (usemtl) in an input" if name else
+                           "an input with 'vt' texture coordinates") + ", found none")
         if all(sum(sum(count_primitives(m)) for m in scenes[i]) == 0 for i in framed):
             raise InputError(f"{layers[0].source}: nothing to draw (no faces and no 'l' polylines)")
         camera = auto_camera(

@@ -326,6 +326,29 @@ void main() {
 """
 
 
+def _textured(source: str, pairs) -> str:
+    """A shader of the mesh program with texture sampling spliced in (:mod:`.texture`)."""
+    for old, new in pairs:
+        if source.count(old) != 1:
+            raise AssertionError(f"texture shader: {old!r} not found once")
+        source = source.replace(old, new)
+    return source
+
+
+_TEX_VS = _textured(_MESH_VS, [
+    ("in vec3 in_color;\n", "in vec3 in_color;\nin vec2 in_uv;\nout vec2 v_uv;\n"),
+    ("    v_color = in_color;\n", "    v_color = in_color;\n    v_uv = in_uv;\n"),
+])
+"""The mesh vertex shader passing texture coordinates on."""
+
+_TEX_FS = _textured(_MESH_FS, [
+    ("in vec3 v_color;\n", "in vec3 v_color;\nin vec2 v_uv;\nuniform sampler2D u_tex;\n"),
+    ("void main() {\n", "void main() {\n    vec4 texel = texture(u_tex, v_uv);\n    if (texel.a < 0.5) discard;\n"),
+    ("pow(clamp(u_color * v_color, 0.0, 1.0), vec3(2.2))", "pow(clamp(texel.rgb * v_color, 0.0, 1.0), vec3(2.2))"),
+])
+"""The mesh fragment shader with the base colour from a texture (alpha < 0.5: not drawn)."""
+
+
 def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
@@ -360,6 +383,9 @@ class _Draw:
     groups: list = field(default_factory=list)  # [(first face, count, rgb)]
     edges: np.ndarray | None = None    # (k, 2) int32 wireframe edges
     segments: np.ndarray | None = None  # (s, 2) int32 polyline segments
+    uv: np.ndarray | None = None       # (n, 2) float32 texture coordinates (textured meshes)
+    tex_tris: np.ndarray | None = None  # (t, 3) int32 textured faces, sorted by texture
+    tex_groups: list = field(default_factory=list)  # [(first textured face, count, texture array)]
 
 
 def _prepare(mesh, index: int, options: RenderOptions, origin: np.ndarray) -> _Draw:
@@ -377,20 +403,37 @@ def _prepare(mesh, index: int, options: RenderOptions, origin: np.ndarray) -> _D
     override = options.mesh_colors[index] if index < len(options.mesh_colors) else None
     default = options.default_colors[index % len(options.default_colors)]
     tris, groups = faces, []
+    fm_all = getattr(mesh, "face_material", None)
+    face_texture = getattr(mesh, "face_texture", None)
+    tex_tris, tex_groups = None, []
+    if face_texture is not None and len(face_texture) == len(faces) and np.any(face_texture >= 0):
+        ft = np.asarray(face_texture, np.int64)
+        sel = ft >= 0
+        order_t = np.argsort(ft[sel], kind="stable")
+        tex_tris = np.ascontiguousarray(faces[sel][order_t], np.int32)
+        sorted_t = ft[sel][order_t]
+        starts = np.flatnonzero(np.r_[True, sorted_t[1:] != sorted_t[:-1]])
+        ends = np.r_[starts[1:], len(sorted_t)]
+        tex_groups = [(s, e - s, mesh.textures[int(sorted_t[s])]) for s, e in zip(starts.tolist(), ends.tolist())]
+        tris = faces[~sel]
+        if fm_all is not None and len(fm_all) == len(faces):
+            fm_all = np.asarray(fm_all)[~sel]
     if options.use_vertex_colors and vc is not None and len(vc) == len(v):
         color = np.clip(np.asarray(vc, dtype=np.float32), 0.0, 1.0)
-        groups = [(0, len(faces), (1.0, 1.0, 1.0))]
+        groups = [(0, len(tris), (1.0, 1.0, 1.0))]
     elif override is not None:
-        groups = [(0, len(faces), tuple(override))]
+        groups = [(0, len(tris), tuple(override))]
     else:
-        fm = getattr(mesh, "face_material", None)
+        fm = fm_all
         names = getattr(mesh, "materials", None) or []
-        if fm is None or not names or len(fm) != len(faces):
-            groups = [(0, len(faces), tuple(default))]
+        if len(tris) == 0:
+            groups = []
+        elif fm is None or not names or len(fm) != len(tris):
+            groups = [(0, len(tris), tuple(default))]
         else:
             fm = np.asarray(fm, dtype=np.int64)
             order = np.argsort(fm, kind="stable")
-            tris = faces[order]
+            tris = tris[order]
             sorted_m = fm[order]
             starts = np.flatnonzero(np.r_[True, sorted_m[1:] != sorted_m[:-1]])
             ends = np.r_[starts[1:], len(sorted_m)]
@@ -402,8 +445,11 @@ def _prepare(mesh, index: int, options: RenderOptions, origin: np.ndarray) -> _D
     segments = None
     if options.draw_lines and getattr(mesh, "lines", None):
         segments = polyline_segments(mesh.lines)
+    uv = None
+    if tex_tris is not None:
+        uv = np.ascontiguousarray(mesh.uv, np.float32).reshape(-1, 2)
     return _Draw(pos=pos, normal=normal, color=color, tris=np.ascontiguousarray(tris, np.int32),
-                 groups=groups, edges=edges, segments=segments)
+                 groups=groups, edges=edges, segments=segments, uv=uv, tex_tris=tex_tris, tex_groups=tex_groups)
 
 
 def _clip_range(camera: Camera, draws: list[_Draw], origin: np.ndarray) -> tuple[float, float]:
@@ -463,6 +509,7 @@ class Renderer:
         self.mesh_prog = self.ctx.program(vertex_shader=_MESH_VS, fragment_shader=_MESH_FS)
         self.line_prog = self.ctx.program(vertex_shader=_LINE_VS, fragment_shader=_LINE_FS)
         self._white = self.ctx.buffer(np.ones(3, np.float32).tobytes())
+        self._tex_prog = None  # compiled on the first textured mesh
         self._fbo_key = None
         self._fbos = ()
 
@@ -544,6 +591,8 @@ class Renderer:
         ctx.disable(ctx.CULL_FACE)
         ctx.depth_func = "<="
         self._set_mesh_uniforms(camera, origin, mvp, options)
+        if any(d.tex_groups for d in draws):
+            self._set_mesh_uniforms(camera, origin, mvp, options, self.tex_prog)
         ctx.polygon_offset = (1.0, 1.0) if options.wireframe else (0.0, 0.0)
         made = []
         try:
@@ -568,8 +617,15 @@ class Renderer:
                 obj.release()
         return np.frombuffer(data, dtype=np.uint8).reshape(h, w, 3)[::-1].copy()
 
-    def _set_mesh_uniforms(self, camera: Camera, origin, mvp, options: RenderOptions) -> None:
-        p = self.mesh_prog
+    @property
+    def tex_prog(self):
+        """The textured mesh program (:data:`_TEX_VS`, :data:`_TEX_FS`), compiled on first use."""
+        if self._tex_prog is None:
+            self._tex_prog = self.ctx.program(vertex_shader=_TEX_VS, fragment_shader=_TEX_FS)
+        return self._tex_prog
+
+    def _set_mesh_uniforms(self, camera: Camera, origin, mvp, options: RenderOptions, p=None) -> None:
+        p = self.mesh_prog if p is None else p
         r, u, f = camera.basis()
         to_viewer = -f
         if camera.light is None:
@@ -595,6 +651,8 @@ class Renderer:
                 p[name].value = value
 
     def _draw_mesh(self, d: _Draw, made: list) -> None:
+        if d.tex_groups:
+            self._draw_textured(d, made)
         if len(d.tris) == 0 or not d.groups:
             return
         ctx, p = self.ctx, self.mesh_prog
@@ -613,6 +671,36 @@ class Renderer:
         made.append(vao)
         for first, count, rgb in d.groups:
             p["u_color"].value = tuple(float(c) for c in rgb)
+            vao.render(ctx.TRIANGLES, vertices=3 * count, first=3 * first, instances=1)
+
+    def _draw_textured(self, d: _Draw, made: list) -> None:
+        """The textured faces of a mesh: base colour from the texture (mipmapped, trilinear)."""
+        ctx, p = self.ctx, self.tex_prog
+        vbo = ctx.buffer(d.pos.tobytes())
+        nbo = ctx.buffer(np.ascontiguousarray(d.normal, np.float32).tobytes())
+        tbo = ctx.buffer(d.uv.tobytes())
+        ibo = ctx.buffer(d.tex_tris.tobytes())
+        made += [vbo, nbo, tbo, ibo]
+        content = [(vbo, "3f", "in_pos"), (nbo, "3f", "in_normal"), (tbo, "2f", "in_uv")]
+        if d.color is not None:
+            cbo = ctx.buffer(np.ascontiguousarray(d.color, np.float32).tobytes())
+            made.append(cbo)
+            content.append((cbo, "3f", "in_color"))
+        else:
+            content.append((self._white, "3f/i", "in_color"))
+        vao = ctx.vertex_array(p, content, index_buffer=ibo, index_element_size=4)
+        made.append(vao)
+        for first, count, image in d.tex_groups:
+            h, w = image.shape[:2]
+            tex = ctx.texture((w, h), 4, np.ascontiguousarray(image, np.uint8).tobytes())
+            made.append(tex)
+            tex.build_mipmaps()
+            tex.filter = (ctx.LINEAR_MIPMAP_LINEAR, ctx.LINEAR)
+            tex.repeat_x = tex.repeat_y = False
+            tex.anisotropy = 16.0
+            tex.use(0)
+            if "u_tex" in p:
+                p["u_tex"].value = 0
             vao.render(ctx.TRIANGLES, vertices=3 * count, first=3 * first, instances=1)
 
     def _draw_lines(self, d: _Draw, pairs: np.ndarray, rgb, made: list) -> None:
