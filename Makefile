@@ -1,4 +1,4 @@
-# inflo top-level Makefile: make lily | make yarrow | make sunflower | make gaillardia | make dahlia | make dyssodia | make orlaya | make test | make bench | make golden | make clean
+# inflo top-level Makefile: make lily | make yarrow | make sunflower | make gaillardia | make dahlia | make dyssodia | make orlaya | make test | make test-blender | make bench | make golden | make clean
 # The first target run on a fresh clone creates .venv and installs inflo with its test extras.
 
 QUALITY ?= draft
@@ -12,7 +12,7 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: all venv test bench golden golden-check lily yarrow sunflower gaillardia dahlia dyssodia orlaya clean distclean
+.PHONY: all venv test test-blender bench golden golden-check lily yarrow sunflower gaillardia dahlia dyssodia orlaya clean distclean
 
 all: lily
 
@@ -27,6 +27,12 @@ $(STAMP): pyproject.toml
 
 test: $(STAMP)
 	$(PY) -m pytest -q $(PYTEST_ARGS)
+
+# tests/test_blender.py in real Blender: bpy 4.5 LTS (a 370 MB wheel) in its own venv, not in CI's make test
+test-blender: $(STAMP)
+	@test -x .venv-blender/bin/python || $(PYTHON) -m venv .venv-blender
+	@.venv-blender/bin/python -c 'import bpy' 2>/dev/null || .venv-blender/bin/python -m pip install --quiet 'bpy==4.5.*'
+	$(PY) -m pytest -q tests/test_blender.py $(PYTEST_ARGS)
 
 bench: $(STAMP)
 	$(PY) -m bench.run

@@ -7,6 +7,8 @@ merges or drops vertices; see VLAB_FORMATS.md). Spec: ``formats/obj.md``.
 Supported statements: ``v x y z [r g b]``, ``vn``, ``vt`` (skipped), ``f`` with ``i``, ``i/t``,
 ``i//n``, ``i/t/n`` references (1-based or negative), polygons fan-triangulated, ``l`` polylines,
 ``o``/``g`` (face groups), ``usemtl`` (face materials), ``mtllib``/``s`` (ignored), ``#`` comments.
+The writer adds ``mtllib materials.mtl`` to a mesh with materials and ``s 1`` (smooth shading)
+before the faces, for viewers such as Blender; :func:`write_mtl` writes that material library.
 """
 from __future__ import annotations
 
@@ -26,11 +28,17 @@ __all__ = [
     "write_obj_sequence",
     "list_obj_sequence",
     "as_written",
+    "write_mtl",
     "FLOAT_FMT",
+    "MTL_NAME",
 ]
 
 FLOAT_FMT = "%.6f"
 """Coordinates are written with six decimals: stable text for diffs (ARCHITECTURE.md)."""
+
+MTL_NAME = "materials.mtl"
+"""The material library a written OBJ with ``usemtl`` names (``mtllib``), beside it in its folder;
+``canopy-export --mtl`` writes it from a colour file (formats/obj.md)."""
 
 _IGNORED = {"vt", "vp", "s", "mtllib", "usemap", "maplib", "shadow_obj", "trace_obj", "lod", "bevel",
             "c_interp", "d_interp", "cstype", "deg", "curv", "surf", "end", "p"}
@@ -338,16 +346,21 @@ def as_written(arr: np.ndarray, fmt: str = FLOAT_FMT) -> np.ndarray:
     return np.array(_fmt_rows(arr, "", fmt).split(), dtype=np.float64).reshape(arr.shape)
 
 
-def write_obj(path, mesh: ObjMesh, *, header: str | None = None, fmt: str = FLOAT_FMT) -> None:
+def write_obj(path, mesh: ObjMesh, *, header: str | None = None, fmt: str = FLOAT_FMT,
+              mtllib: str | None = MTL_NAME) -> None:
     """Write ``mesh`` to ``path`` atomically, vertices in order, faces 1-based.
 
     Faces are written grouped as stored; a ``g``/``usemtl`` line is emitted where a face's group
     or material changes. Per-vertex normals are written as ``vn`` with ``f a//a b//b c//c``.
+    A mesh with materials names the library ``mtllib`` (None: no ``mtllib`` line) after the
+    header; ``s 1`` (one smoothing group: smooth shading) comes before the first face.
     """
     _check_mesh(mesh, path)
     parts = []
     if header:
         parts.extend(f"# {h}\n" for h in header.splitlines())
+    if mtllib and mesh.face_material is not None and mesh.n_faces and bool(np.any(mesh.face_material >= 0)):
+        parts.append(f"mtllib {mtllib}\n")
     if mesh.vertex_colors is not None:
         parts.append(_fmt_rows(np.hstack([mesh.vertices, mesh.vertex_colors]), "v ", fmt))
     else:
@@ -376,7 +389,7 @@ def _face_lines(mesh: ObjMesh) -> str:
     change = np.ones(m, dtype=bool)
     change[1:] = (grp[1:] != grp[:-1]) | (mat[1:] != mat[:-1])
     starts = np.nonzero(change)[0].tolist() + [m]
-    out = []
+    out = ["s 1\n"]
     cur_g = cur_m = -1
     for s0, s1 in zip(starts[:-1], starts[1:]):
         g, mt = int(grp[s0]), int(mat[s0])
@@ -390,6 +403,28 @@ def _face_lines(mesh: ObjMesh) -> str:
             chunk = f1[k:min(s1, k + 8192)]
             out.append((row * len(chunk)) % tuple(chunk.ravel().tolist()))
     return "".join(out)
+
+
+def write_mtl(path, colors, *, header: str | None = None, fmt: str = "%.6f") -> None:
+    """Write a Wavefront material library: ``newmtl NAME`` with ``Kd r g b`` per material.
+
+    Parameters
+    ----------
+    path : path
+        Written atomically.
+    colors : mapping str -> (3,) float
+        Material name -> diffuse colour, written as given (canopy-export gives linear RGB).
+    header : str or None
+        Comment lines at the top.
+    """
+    out = [f"# {h}\n" for h in (header or "").splitlines()]
+    for name, rgb in colors.items():
+        if not name or any(c.isspace() for c in name):
+            raise ValueError(f"{path}: material name {name!r} must be one word")
+        r, g, b = (float(c) for c in rgb)
+        out.append(f"\nnewmtl {name}\nKd {fmt % r} {fmt % g} {fmt % b}\nKa 0 0 0\nKs 0 0 0\nd 1\nillum 1\n")
+    with atomic_write(path) as fh:
+        fh.write("".join(out))
 
 
 def _check_mesh(mesh: ObjMesh, path) -> None:

@@ -26,7 +26,7 @@ PHYLLO_SRC := $(call SRC,phyllotaxis)
 DIMORPH_SRC := $(call SRC,dimorph)
 FCC_SRC := $(call SRC,fccompose pbd collide)
 RENDER_SRC := $(call SRC,canopy_render)
-EXPORT_SRC := $(call SRC,canopy_export)
+EXPORT_SRC := $(call SRC,canopy_export) $(ROOT)/tools/canopy_render/colors.py
 
 BACKGROUND := 0.55,0.70,0.86
 RENDER := $(BIN)canopy-render -q --background $(BACKGROUND) --colors colors.toml

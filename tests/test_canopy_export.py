@@ -212,3 +212,58 @@ def test_helpers():
     v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [5, 5, 5]], float)
     n = vertex_normals(v, np.array([[0, 1, 2]]))
     assert n.dtype == np.float32 and np.all(n == 0)
+
+
+def test_changing_faces_carry_material_index_and_mtl(build):
+    """Where faces change, each face's material also goes as the uniform primvar material_index
+    (Blender's Mesh Sequence Cache reads subsets once, at import; tests/test_blender.py); faces
+    without usemtl among faces with one get the part's default material in a subset of their
+    own; --mtl writes materials.mtl (Kd linear) beside the OBJ frames, which name it (mtllib)."""
+    tmp, seq, static, colors = build
+    (seq / "frame_0001.obj").write_text(_frame_text(1).replace("usemtl mtl3\n", "", 1))
+    out = tmp / "flower.usda"
+    res = _run(seq, "--colors", colors, "--mtl", "-o", out)
+    assert res.exit_code == 0, res.output
+    stage = Usd.Stage.Open(str(out))
+    mesh = UsdGeom.Mesh.Get(stage, "/flower/canopy")
+    pv = UsdGeom.PrimvarsAPI(mesh).GetPrimvar("material_index")
+    assert pv.GetInterpolation() == "uniform"
+    # materials in order of first appearance: mtl3, mtl4, canopy_default (frame 2's unbound face)
+    assert [list(pv.Get(t)) for t in (1.0, 2.0, 3.0)] == [[0, 1], [2, 1], [0, 1, 1]]
+    subsets = UsdShade.MaterialBindingAPI(mesh.GetPrim()).GetMaterialBindSubsets()
+    assert [s.GetPrim().GetName() for s in subsets] == ["mtl3", "mtl4", "canopy_default"]
+    assert list(subsets[2].GetIndicesAttr().Get(2.0)) == [0] and list(subsets[2].GetIndicesAttr().Get(3.0)) == []
+    mtl = (seq / "materials.mtl").read_text()
+    assert "newmtl mtl3\nKd 0.214041 0.050876 1.000000\n" in mtl and "newmtl mtl4\n" in mtl
+    assert "canopy_default" not in mtl  # not an OBJ material
+
+    # the OBJ writer names the library and smooth shading; the reader ignores both
+    from inflo.formats.obj import ObjMesh, write_obj
+
+    m = read_obj(seq / "frame_0000.obj")
+    write_obj(tmp / "w.obj", m, header="x")
+    lines = (tmp / "w.obj").read_text().splitlines()
+    assert lines[:2] == ["# x", "mtllib materials.mtl"] and lines[lines.index("s 1") + 1].startswith("usemtl")
+    write_obj(tmp / "n.obj", ObjMesh(vertices=m.vertices, faces=m.faces))
+    assert "mtllib" not in (tmp / "n.obj").read_text() and "s 1\n" in (tmp / "n.obj").read_text()
+
+
+def test_floret_subsets(build):
+    tmp, seq, static, colors = build
+    for k in range(3):
+        text = _frame_text(k).replace("usemtl mtl3", "g floret_0\nusemtl mtl3")
+        (seq / f"frame_{k:04d}.obj").write_text(text.replace("f 3 5 4", "g floret_1\nf 3 5 4"))
+    out = tmp / "flower.usda"
+    assert _run(seq, "--subsets", "floret", "-o", out).exit_code == 0
+    stage = Usd.Stage.Open(str(out))
+    mesh = UsdGeom.Mesh.Get(stage, "/flower/canopy")
+    subsets = {s.GetPrim().GetName(): s for s in UsdShade.MaterialBindingAPI(mesh.GetPrim()).GetMaterialBindSubsets()}
+    assert list(subsets) == ["floret_0_mtl3", "floret_0_mtl4", "floret_1_mtl4"]
+    assert list(subsets["floret_1_mtl4"].GetIndicesAttr().Get(1.0)) == []
+    assert list(subsets["floret_1_mtl4"].GetIndicesAttr().Get(3.0)) == [2]
+    assert UsdGeom.Subset.ValidateFamily(mesh, UsdGeom.Tokens.face, "materialBind") == (True, "")
+    bound = {n: UsdShade.MaterialBindingAPI(s.GetPrim()).ComputeBoundMaterial()[0].GetPrim().GetName()
+             for n, s in subsets.items()}
+    assert bound == {"floret_0_mtl3": "mtl3", "floret_0_mtl4": "mtl4", "floret_1_mtl4": "mtl4"}
+    res = _run(seq, "--subsets", "organ", "-o", out)
+    assert res.exit_code == 2

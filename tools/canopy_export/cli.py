@@ -18,6 +18,8 @@ Examples::
         -o build/lily/lily.usdc
     canopy-export build/yarrow/canopy build/yarrow/branches --units mm --fps 30 -o yarrow.usda
     canopy-export build/lily/canopy --pc2 build/lily/pc2 -o lily.usdc   # + tepals' point cache
+    canopy-export build/yarrow/canopy --subsets floret --mtl -o yarrow.usdc   # a subset per floret;
+                                                             # + build/yarrow/canopy/materials.mtl
 
 Open it in Blender: File > Import > Universal Scene Description, press play.
 """
@@ -63,9 +65,14 @@ def _output(ctx, param, value):
 @click.option("--normals", is_flag=True, help="Also write per-vertex normals (Blender computes its own).")
 @click.option("--constant-topology", is_flag=True,
               help="Bad input if any frame's faces or vertex count differ from the first frame's.")
+@click.option("--subsets", type=click.Choice(["material", "floret"]), default="material", show_default=True,
+              help="GeomSubsets per material of a part, or per OBJ group (floret) and material.")
+@click.option("--mtl", is_flag=True,
+              help="Also write materials.mtl (the OBJ files' mtllib) beside each part's OBJ files, Kd linear.")
 @click.option("--pc2", "pc2_dir", type=click.Path(file_okay=False), default=None,
               help="Also write DIR/<part>.pc2 point caches (fixed topology; Blender's Mesh Cache modifier).")
-def main(inputs, output, color_file, units, fps, start_frame, normals, constant_topology, pc2_dir, quiet, debug):
+def main(inputs, output, color_file, units, fps, start_frame, normals, constant_topology, subsets, mtl, pc2_dir,
+         quiet, debug):
     colors = None
     if color_file:
         from inflo.tools.canopy_render.colors import load_color_file
@@ -74,7 +81,7 @@ def main(inputs, output, color_file, units, fps, start_frame, normals, constant_
     parts = resolve_parts(inputs)
     n_frames = frame_count(parts)
     options = ExportOptions(fps=fps, start_frame=start_frame, meters_per_unit=units, normals=normals,
-                            constant_topology=constant_topology)
+                            constant_topology=constant_topology, subsets=subsets, mtl=mtl)
     with progress(length=n_frames, label="canopy-export", quiet=quiet, unit="frames") as bar:
         report = export_canopy(parts, output, colors=colors, options=options, pc2_dir=pc2_dir,
                                on_frame=lambda k: bar.update(1))

@@ -16,6 +16,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from inflo.formats.errors import InputError
+from inflo.formats.obj import MTL_NAME, write_mtl
 from inflo.formats.pc2 import write_pc2
 
 from .parts import Part, frame_count, iter_frames, prim_name
@@ -58,6 +59,12 @@ class ExportOptions:
         Write per-vertex normals (the OBJ's own, else area-weighted ones), time-sampled.
     constant_topology : bool
         Fail (bad input) when any frame's faces or vertex count differ from the first frame's.
+    subsets : str
+        ``"material"``: one GeomSubset per OBJ material of a part; ``"floret"``: one per OBJ group
+        (a floret of a canopy) and material, each bound to its material.
+    mtl : bool
+        Also write ``materials.mtl`` (the name the OBJ frames' ``mtllib`` gives) beside each
+        part's OBJ files: its materials with ``Kd`` the colour file's colour, linear.
     """
 
     fps: float = 24.0
@@ -65,6 +72,8 @@ class ExportOptions:
     meters_per_unit: float = 0.01
     normals: bool = False
     constant_topology: bool = False
+    subsets: str = "material"
+    mtl: bool = False
 
 
 @dataclass
@@ -82,6 +91,7 @@ class ExportReport:
     n_bytes: int
     seconds: float
     pc2: list[Path] = field(default_factory=list)
+    mtl: list[Path] = field(default_factory=list)
     polyline_parts: list[str] = field(default_factory=list)
     """Parts whose OBJ files have ``l`` polylines, which are not exported."""
 
@@ -93,9 +103,20 @@ class ExportReport:
                 f"{self.seconds:.1f} s")
         if self.pc2:
             line += f"; PC2: {', '.join(str(p) for p in self.pc2)}"
+        if self.mtl:
+            line += f"; MTL: {', '.join(str(p) for p in self.mtl)}"
         if self.polyline_parts:
             line += f"; polylines not exported ({', '.join(self.polyline_parts)})"
         return line
+
+
+def _mtl_folders(parts: Sequence[Part], materials: Mapping[str, list]) -> dict[Path, list[str]]:
+    """Per folder holding a part's OBJ files, the materials its parts use (order of appearance)."""
+    out: dict[Path, list[str]] = {}
+    for p in parts:
+        names = out.setdefault(p.paths[0].parent, [])
+        names.extend(n for n in materials[p.name] if n not in names)
+    return {k: v for k, v in out.items() if v}
 
 
 def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] | None = None,
@@ -127,7 +148,7 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
     """
     from inflo.tools.canopy_render.colors import INPUT_PALETTE, material_color
 
-    from .usd import USD_SUFFIXES, UsdBuilder
+    from .usd import USD_SUFFIXES, UsdBuilder, srgb_to_linear
 
     t0 = time.perf_counter()
     opts = options or ExportOptions()
@@ -142,11 +163,12 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
         material_color=lambda name: material_color(name, table),
         default_colors=[INPUT_PALETTE[i % len(INPUT_PALETTE)] for i in range(len(parts))],
         n_frames=n_frames, start_frame=opts.start_frame, fps=opts.fps,
-        meters_per_unit=opts.meters_per_unit, normals=opts.normals,
+        meters_per_unit=opts.meters_per_unit, normals=opts.normals, subsets=opts.subsets,
     )
     caches = {p.name: [] for p in parts if not p.is_static} if pc2_dir is not None else {}
     topology = {p.name: 0 for p in parts}
     polylines = set()
+    part_materials: dict[str, list[str]] = {p.name: [] for p in parts}
     for k, meshes, changed in iter_frames(parts, n_frames, constant_topology=opts.constant_topology):
         builder.add_frame(k, meshes, changed)
         for part, mesh, change in zip(parts, meshes, changed):
@@ -155,6 +177,8 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
             topology[part.name] += int(change)
             if mesh.lines:
                 polylines.add(part.name)
+            if change:
+                part_materials[part.name].extend(n for n in mesh.materials if n not in part_materials[part.name])
             if part.name in caches:
                 if change and k > 0:
                     raise InputError(
@@ -169,9 +193,17 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
         target = Path(pc2_dir) / f"{name}.pc2"
         write_pc2(target, np.stack(frames), start_frame=opts.start_frame)
         written.append(target)
+    mtl_files = []
+    if opts.mtl:
+        for folder, names in _mtl_folders(parts, part_materials).items():
+            target = folder / MTL_NAME
+            write_mtl(target, {n: srgb_to_linear(material_color(n, table)) for n in names},
+                      header="canopy-export: the materials of the OBJ files in this folder, Kd in linear RGB "
+                             "(formats/obj.md)")
+            mtl_files.append(target)
     return ExportReport(
         output=output, parts=[p.name for p in parts], n_frames=n_frames, start_frame=opts.start_frame,
         fps=opts.fps, topology_samples=topology, materials=builder.material_names,
-        n_bytes=os.path.getsize(output), seconds=time.perf_counter() - t0, pc2=written,
+        n_bytes=os.path.getsize(output), seconds=time.perf_counter() - t0, pc2=written, mtl=mtl_files,
         polyline_parts=[p.name for p in parts if p.name in polylines],
     )

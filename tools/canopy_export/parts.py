@@ -148,7 +148,7 @@ def iter_frames(parts: Sequence[Part], n_frames: int, *, constant_topology: bool
         One per part; None for a static part after frame 0 (its mesh does not change).
     changed : list of bool
         Per part: the faces or the per-face materials differ from the previous frame (always
-        True at frame 0).
+        True at frame 0); also where only the faces' groups changed.
 
     Raises
     ------
@@ -179,7 +179,7 @@ def iter_frames(parts: Sequence[Part], n_frames: int, *, constant_topology: bool
 
 
 def _face_materials(mesh: ObjMesh) -> tuple:
-    """A comparable key of which material each face has (names, not indices)."""
-    if mesh.face_material is None:
-        return ()
-    return tuple(mesh.materials), mesh.face_material.tobytes()
+    """A comparable key of which material and group each face has (names and indices)."""
+    mat = () if mesh.face_material is None else (tuple(mesh.materials), mesh.face_material.tobytes())
+    grp = () if mesh.face_group is None else (tuple(mesh.groups), mesh.face_group.tobytes())
+    return mat, grp

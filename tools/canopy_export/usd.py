@@ -13,7 +13,7 @@ Frame ``k`` of the sequences (0-based) is time code ``start_frame + k``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Sequence
 
@@ -22,10 +22,13 @@ import numpy as np
 from inflo.formats.atomic import atomic_path
 from inflo.formats.obj import ObjMesh
 
-__all__ = ["USD_SUFFIXES", "srgb_to_linear", "vertex_normals", "UsdBuilder"]
+__all__ = ["USD_SUFFIXES", "SUBSET_MODES", "srgb_to_linear", "vertex_normals", "UsdBuilder"]
 
 USD_SUFFIXES = (".usdc", ".usda", ".usd")
 """Output suffixes: binary crate, text, binary (usd-core's default for ``.usd``)."""
+
+SUBSET_MODES = ("material", "floret")
+"""``--subsets``: one GeomSubset per material of a part, or per OBJ group (floret) and material."""
 
 RGB = tuple[float, float, float]
 
@@ -58,7 +61,8 @@ class _Topology:
     frame: int
     counts: np.ndarray  # (m,) int32
     indices: np.ndarray  # (3m,) int32
-    subsets: dict = field(default_factory=dict)  # material name -> (k,) int32 face indices
+    subsets: dict = field(default_factory=dict)  # subset key -> (k,) int32 face indices
+    face_material: np.ndarray | None = None  # (m,) int32 index into the part's materials, -1 none
     unbound: bool = False  # some faces have no material
 
 
@@ -69,6 +73,7 @@ class _PartState:
     default_color: RGB
     topology: list = field(default_factory=list)
     materials: list = field(default_factory=list)  # names in order of first appearance
+    subsets: dict = field(default_factory=dict)  # subset key -> material name, in order of appearance
 
 
 class UsdBuilder:
@@ -91,12 +96,20 @@ class UsdBuilder:
         the stage's metres per unit.
     normals : bool
         Also write per-vertex normals (time-sampled with the points).
+    subsets : {"material", "floret"}
+        ``material``: one GeomSubset per OBJ material; ``floret``: one per OBJ group (``g``, a
+        floret of a canopy) and material, each bound to its material.
     """
 
     def __init__(self, root_name: str, part_names: Sequence[str], static: Sequence[bool], *,
                  material_color, default_colors: Sequence[RGB], n_frames: int, start_frame: float = 1.0,
-                 fps: float = 24.0, meters_per_unit: float = 0.01, normals: bool = False):
+                 fps: float = 24.0, meters_per_unit: float = 0.01, normals: bool = False,
+                 subsets: str = "material"):
         from pxr import Sdf, Usd, UsdGeom
+
+        if subsets not in SUBSET_MODES:
+            raise ValueError(f"subsets must be one of {', '.join(SUBSET_MODES)}, got {subsets!r}")
+        self.subset_mode = subsets
 
         self._material_color = material_color
         self.n_frames = int(n_frames)
@@ -157,27 +170,52 @@ class UsdBuilder:
             if change:
                 st.topology.append(self._topology(st, frame, mesh))
 
-    @staticmethod
-    def _topology(st: _PartState, frame: int, mesh: ObjMesh) -> _Topology:
+    def _topology(self, st: _PartState, frame: int, mesh: ObjMesh) -> _Topology:
         m = mesh.n_faces
         topo = _Topology(frame=frame, counts=np.full(m, 3, np.int32),
                          indices=np.ascontiguousarray(mesh.faces, dtype=np.int32).reshape(-1))
-        if mesh.face_material is None:
-            topo.unbound = m > 0
+        if mesh.face_material is None or not np.any(mesh.face_material >= 0):
+            topo.unbound = m > 0  # the part's default material, bound on the Mesh
             return topo
-        for k, name in enumerate(mesh.materials):
-            faces = np.flatnonzero(mesh.face_material == k).astype(np.int32)
-            if len(faces):
-                topo.subsets[name] = faces
-                if name not in st.materials:
-                    st.materials.append(name)
-        topo.unbound = bool(np.any(mesh.face_material < 0))
+        # faces before any usemtl, among faces with one, take the part's default material in a
+        # subset of their own (Blender ignores a Mesh's own binding once it has subsets)
+        names = [*mesh.materials, default_material(st.name)]
+        face_mat = np.where(mesh.face_material < 0, len(mesh.materials), mesh.face_material)
+        for k, name in enumerate(names):
+            if name not in st.materials and np.any(face_mat == k):
+                st.materials.append(name)
+        # the face's material as an index into the part's materials (order of first appearance)
+        remap = np.array([st.materials.index(n) if n in st.materials else -1 for n in names], np.int32)
+        topo.face_material = remap[face_mat]
+        mesh = replace(mesh, materials=names, face_material=face_mat.astype(np.int32))
+        by_floret = self.subset_mode == "floret" and mesh.face_group is not None
+        if by_floret:
+            # runs of faces of one (group, material), keyed "<group>_<material>" in order of appearance
+            key = mesh.face_group.astype(np.int64) * (len(mesh.materials) + 1) + mesh.face_material
+            order = np.argsort(key, kind="stable")
+            bounds = np.flatnonzero(np.diff(key[order])) + 1
+            for run in np.split(order, bounds):
+                if not len(run):
+                    continue
+                g, k = int(mesh.face_group[run[0]]), int(mesh.face_material[run[0]])
+                name = mesh.materials[k]
+                sub = f"{mesh.groups[g]}_{name}" if g >= 0 else name
+                topo.subsets[sub] = np.sort(run).astype(np.int32)
+                st.subsets.setdefault(sub, name)
+            # subsets in the order their faces come in the file
+            topo.subsets = dict(sorted(topo.subsets.items(), key=lambda kv: int(kv[1][0])))
+        else:
+            for k, name in enumerate(mesh.materials):
+                faces = np.flatnonzero(mesh.face_material == k).astype(np.int32)
+                if len(faces):
+                    topo.subsets[name] = faces
+                    st.subsets.setdefault(name, name)
         return topo
 
     def _write_topology(self) -> None:
         """Faces and subsets of every part and the materials they bind (once, after the last
         frame); sets :attr:`material_names`."""
-        from pxr import Usd, UsdGeom, UsdShade, Vt
+        from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
 
         if self._finished:
             return
@@ -206,24 +244,39 @@ class UsdBuilder:
                 index_attr.Set(Vt.IntArray.FromNumpy(s.indices), t)
             prim = usd_mesh.GetPrim()
             if any(s.unbound for s in samples):
-                key = f"{st.name}_default"
+                key = default_material(st.name)
                 mat = material(key, st.default_color)
                 UsdShade.MaterialBindingAPI.Apply(prim).Bind(mat)
             if not st.materials:
                 continue
             binding = UsdShade.MaterialBindingAPI.Apply(prim)
             used: set[str] = set()
-            for name in st.materials:
-                sub_name = _unique(_prim_name(name), used)
+            # subsets in the order of their material's first appearance (Blender numbers its
+            # material slots in the order it meets the subsets' materials)
+            rank = {name: i for i, name in enumerate(st.materials)}
+            keys = sorted(st.subsets, key=lambda key: rank[st.subsets[key]])
+            for key in keys:
+                name = st.subsets[key]
+                sub_name = _unique(_prim_name(key), used)
                 used.add(sub_name)
                 subset = UsdGeom.Subset.Define(self.stage, prim.GetPath().AppendChild(sub_name))
                 subset.CreateElementTypeAttr(UsdGeom.Tokens.face)
                 subset.CreateFamilyNameAttr(UsdShade.Tokens.materialBind)
                 ind = subset.CreateIndicesAttr()
                 for s, t in zip(samples, times):
-                    ind.Set(Vt.IntArray.FromNumpy(s.subsets.get(name, np.zeros(0, np.int32))), t)
-                UsdShade.MaterialBindingAPI.Apply(subset.GetPrim()).Bind(material(name, self._material_color(name)))
+                    ind.Set(Vt.IntArray.FromNumpy(s.subsets.get(key, np.zeros(0, np.int32))), t)
+                rgb = st.default_color if name == default_material(st.name) else self._material_color(name)
+                UsdShade.MaterialBindingAPI.Apply(subset.GetPrim()).Bind(material(name, rgb))
             binding.SetMaterialBindSubsetsFamilyType(UsdGeom.Tokens.nonOverlapping)
+            if not one:
+                # Blender's Mesh Sequence Cache reads the subsets once, at import, and keeps those
+                # face numbers in every frame; where the faces change, each face's material also
+                # goes as a per-face primvar that it reads every frame (its attribute material_index)
+                pv = UsdGeom.PrimvarsAPI(prim).CreatePrimvar(
+                    "material_index", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.uniform)
+                for s, t in zip(samples, times):
+                    fm = s.face_material if s.face_material is not None else np.zeros(len(s.counts), np.int32)
+                    pv.Set(Vt.IntArray.FromNumpy(np.ascontiguousarray(fm, dtype=np.int32)), t)
         self.material_names = list(materials)
 
     def save(self, path) -> None:
@@ -247,6 +300,11 @@ class UsdBuilder:
         """The stage as USDA text (for tests and diffs)."""
         self._write_topology()
         return self.stage.GetRootLayer().ExportToString()
+
+
+def default_material(part: str) -> str:
+    """The material of a part's faces without ``usemtl`` (canopy-render's colour of the part's input)."""
+    return f"{part}_default"
 
 
 def _prim_name(text: str) -> str:
