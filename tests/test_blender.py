@@ -14,6 +14,9 @@ does not run them: CI is near its time budget (README, "Open it in Blender").
   triangles, each polygon's material is its OBJ ``usemtl`` and each material's base colour is the
   colour file's, linear; one Cycles render of the last frame (8 samples) has the silhouette of
   canopy-render's still through the same camera.
+- One OBJ frame of the lily imported with File > Import > Wavefront (.obj): its ``mtllib``
+  library (``materials.mtl``, written by the usd stage's ``canopy-export --mtl``) gives each
+  material the colour file's colour, linear, and ``s 1`` makes every polygon smooth.
 - A small build whose faces change (a floret emerging, with faces of no material and two
   groups, ``--subsets floret``): Blender follows the changing faces and keeps every polygon's
   material in every frame.
@@ -155,6 +158,22 @@ def test_lily_usd_in_blender(bpy_python, lily_build, tmp_path):
     iou = np.sum(alpha & drawn) / np.sum(alpha | drawn)
     assert alpha.sum() > 0.05 * alpha.size, "Blender drew (almost) nothing"
     assert iou > 0.9, f"silhouettes differ: intersection over union {iou:.3f}"
+
+
+def test_obj_frame_in_blender(bpy_python, lily_build, tmp_path):
+    from inflo.tools.canopy_render.colors import load_color_file, material_color
+
+    colors = load_color_file(LILY / "colors.toml")
+    for folder in ("canopy", "column_obj"):
+        path = list_obj_sequence(lily_build / folder)[-1]
+        report, _ = probe(bpy_python, path, tmp_path / folder, "--frames", "1")
+        (obj,) = report["objects"].values()
+        mesh = read_obj(path)
+        assert obj["frames"]["1"] == {"vertices": mesh.n_vertices, "polygons": mesh.n_faces, "smooth": True}
+        assert [m["name"] for m in obj["materials"]] == mesh.materials
+        for m in obj["materials"]:
+            np.testing.assert_allclose(m["base_color"], srgb_linear(material_color(m["name"], colors)), atol=2e-6,
+                                       err_msg=f"{folder}: {m['name']} (Blender's default grey: no materials.mtl?)")
 
 
 def _frame(k: int) -> str:

@@ -8,12 +8,13 @@ wheel. ``tests/test_blender.py`` and ``bench/bench_export.py`` run it in a subpr
         [--frames all|none|1,50,100] [--faces] [--render PNG --camera CAM.json --size 320x240 --samples 8]
 
 It imports the file with File > Import > Universal Scene Description's defaults
-(``bpy.ops.wm.usd_import``: the scene's frame range set from the file), then writes
+(``bpy.ops.wm.usd_import``: the scene's frame range set from the file; an ``.obj`` file with
+File > Import > Wavefront's, ``bpy.ops.wm.obj_import``), then writes
 
 - ``probe.json``: Blender's version, the scene's frame range and fps, the seconds the import,
   the frame evaluation and the render took, and per mesh object its name, world matrix,
   modifiers, materials (name, the Principled BSDF's base colour, linear) and per evaluated frame
-  the vertex and polygon counts;
+  the vertex and polygon counts and whether every polygon is shaded smooth;
 - ``probe.npz``: per mesh object and evaluated frame ``<object>/co/<frame>``, the evaluated
   vertex positions (object space: the USD points), ``<object>/mat/<frame>`` the material index of
   each polygon, and with ``--faces`` ``<object>/faces/<frame>`` (polygon corner vertex indices,
@@ -41,6 +42,7 @@ def _args(argv):
     p.add_argument("-o", "--output", required=True, help="output stem: STEM.json and STEM.npz")
     p.add_argument("--frames", default="all", help="all, none, or a comma list of scene frames")
     p.add_argument("--faces", action="store_true", help="also store polygons where they change")
+    p.add_argument("--no-arrays", action="store_true", help="write the JSON report only (timings, counts)")
     p.add_argument("--render", default=None, help="render a PNG of one frame with Cycles")
     p.add_argument("--render-frame", type=int, default=None, help="scene frame to render [the last]")
     p.add_argument("--camera", default=None, help="JSON camera: eye, target, up, fov (file coordinates)")
@@ -124,7 +126,10 @@ def main(argv=None) -> int:
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     t = time.perf_counter()
-    result = bpy.ops.wm.usd_import(filepath=args.usd)
+    if args.usd.lower().endswith(".obj"):  # one OBJ frame, File > Import > Wavefront (.obj) defaults
+        result = bpy.ops.wm.obj_import(filepath=args.usd)
+    else:
+        result = bpy.ops.wm.usd_import(filepath=args.usd)
     report = {"blender": bpy.app.version_string, "import_result": sorted(result),
               "seconds_import": time.perf_counter() - t}
     scene = bpy.context.scene
@@ -177,8 +182,10 @@ def main(argv=None) -> int:
                 if prev is None or prev.shape != faces.shape or not np.array_equal(prev, faces):
                     arrays[f"{o.name}/faces/{f}"] = faces
                     last_faces[o.name] = faces
+            smooth = np.zeros(npoly, bool)
+            me.polygons.foreach_get("use_smooth", smooth)
             objects[o.name]["frames"][str(f)] = {"vertices": nv, "polygons": npoly,
-                                                 "smooth": bool(npoly and me.polygons[0].use_smooth)}
+                                                 "smooth": bool(npoly and smooth.all())}
             ev.to_mesh_clear()
     report["seconds_frames"] = time.perf_counter() - t
     report["objects"] = objects
@@ -188,7 +195,7 @@ def main(argv=None) -> int:
         some = meshes[0].matrix_world if meshes else (root.matrix_world if root else None)
         matrix = np.array(some) if some is not None else np.eye(4)
         _render(bpy, args, matrix, report)
-    np.savez(args.output + ".npz", **arrays)
+    np.savez(args.output + ".npz", **({} if args.no_arrays else arrays))
     with open(args.output + ".json", "w") as fh:
         json.dump(report, fh, indent=1)
     return 0
