@@ -100,6 +100,18 @@ def format_rows(ids, values):
     return buf[:p], flagged
 
 
+def tiny_nonzero_rows(vals: np.ndarray) -> np.ndarray:
+    """Rows of ``id``-less ``pos scale up right`` values (n, 12) holding a non-zero scale component,
+    or a non-zero up/right vector, that ``%.6f`` would print as zero: :func:`format_preamble` writes
+    those in exponent form (issue 14: a valid scale of 4e-7 came back as 0)."""
+    a = np.abs(vals)
+    tiny = (a > 0) & (a < 1e-6)
+    scale = tiny[:, 3:6].any(axis=1)
+    up = (a[:, 6:9] < 1e-6).all(axis=1) & tiny[:, 6:9].any(axis=1)
+    right = (a[:, 9:12] < 1e-6).all(axis=1) & tiny[:, 9:12].any(axis=1)
+    return scale | up | right
+
+
 def rba_bytes(ids, pos, scale, up, right) -> bytes:
     """The rows ``id pos scale up right`` as ``write_rba`` writes them (no header), byte for byte."""
     ids = np.ascontiguousarray(ids, dtype=np.int64).reshape(-1)
@@ -109,6 +121,7 @@ def rba_bytes(ids, pos, scale, up, right) -> bytes:
     if len(ids) == 0:
         return b""
     odd = (ids < 0) | ~np.isfinite(vals).all(axis=1)  # rows the kernel does not take
+    odd |= tiny_nonzero_rows(vals)  # values the fixed format would print as zero (format_preamble)
     if odd.any():
         buf, flagged = format_rows(np.where(odd, 0, ids), np.where(odd[:, None], 0.0, vals))
         flagged |= odd

@@ -387,6 +387,9 @@ class KeySpec:
     low : float or None
         The range: ``"int"``: at least ``low``; ``"float"``: at least ``low``, above it when
         ``strict``; None: any finite number.
+    high : float or None
+        ``"int"``: at most ``high`` (iteration and frame counts: a count beyond it is a typo, not a
+        run this machine could finish, issue 14); None: no upper bound.
     strict : bool
     check : str
         A condition on the values together, as the spec words it (:data:`_CHECKS`).
@@ -400,6 +403,7 @@ class KeySpec:
     kind: str
     n: int = 1
     low: float | None = None
+    high: float | None = None
     strict: bool = False
     check: str = ""
     field: str = ""
@@ -408,7 +412,7 @@ class KeySpec:
     def spec_value(self) -> str:
         """The text of the spec table's "value" column for this key."""
         if self.kind == "int":
-            text = f"int ≥ {self.low:g}"
+            text = f"int ≥ {self.low:g}" if self.high is None else f"int in [{self.low:g}, {self.high:g}]"
         elif self.kind == "float":
             text = "float" if self.n == 1 else f"{self.n} floats"
             if self.low is not None:
@@ -435,30 +439,33 @@ _SYNTAX = {
 }
 
 _COUNT0, _COUNT1 = KeySpec("int", low=0), KeySpec("int", low=1)
+#: Upper bounds of the counts: iterations per step, steps per frame, frames (issue 14: a count of
+#: 1e11 hung, one of 1e23 overflowed the kernels' integers).
+_ITERS, _FRAMES = 10_000, 100_000
 
 #: Every key, in the order the writer writes them (the thesis's C.1 list order, with ``max
 #: collision retries`` from its example placed after the collision iterations).
 KEYS: Mapping[str, KeySpec] = MappingProxyType({
-    "solver iterations": replace(_COUNT0, field="solver_iterations"),
-    "collision solver iterations": replace(_COUNT0, field="collision_iterations"),
-    "max collision retries": replace(_COUNT0, field="max_collision_retries"),
+    "solver iterations": replace(_COUNT0, high=_ITERS, field="solver_iterations"),
+    "collision solver iterations": replace(_COUNT0, high=_ITERS, field="collision_iterations"),
+    "max collision retries": replace(_COUNT0, high=1000, field="max_collision_retries"),
     "kStretch": KeySpec("stiffness", field="k_stretch"),
     "kBend": KeySpec("stiffness", field="k_bend"),
     "kCollision": KeySpec("stiffness", field="k_collision"),
     "spacing": KeySpec("float", low=0, field="spacing"),
     "scene scale factor": KeySpec("float", 3, low=0, strict=True, field="scene_scale"),
-    "updates per frame": replace(_COUNT1, field="updates_per_frame"),
-    "run for number of frames": replace(_COUNT0, field="run_frames"),
-    "sanity check per frames": replace(_COUNT0, field="sanity_check_every"),
-    "max substeps": replace(_COUNT0, field="max_substeps"),
+    "updates per frame": replace(_COUNT1, high=1000, field="updates_per_frame"),
+    "run for number of frames": replace(_COUNT0, high=_FRAMES, field="run_frames"),
+    "sanity check per frames": replace(_COUNT0, high=_FRAMES, field="sanity_check_every"),
+    "max substeps": replace(_COUNT0, high=16, field="max_substeps"),
     "edge stretch bounds": KeySpec("float", 2, low=0, strict=True, check="lo ≤ 1 ≤ hi",
                                    field="stretch_bounds"),
-    "relax iterations": replace(_COUNT0, field="relax_iterations"),
+    "relax iterations": replace(_COUNT0, high=_ITERS, field="relax_iterations"),
     "collisions": KeySpec("bool", field="collisions"),
     "emergence scales": KeySpec("scales", field="emergence_scales"),
     "emergence growth frames": KeySpec("float", low=0, strict=True, field="emergence_growth_frames"),
-    "output animation frames number": replace(_COUNT1, field="output_frames_number"),
-    "output animation obj per frames": replace(_COUNT0, field="output_obj_skip"),
+    "output animation frames number": replace(_COUNT1, high=_FRAMES, field="output_frames_number"),
+    "output animation obj per frames": replace(_COUNT0, high=_FRAMES, field="output_obj_skip"),
     "lattice size multiply": KeySpec("float", 3, low=0, strict=True, field="lattice.size_multiply"),
     "lattice make cube": KeySpec("bool", field="lattice.make_cube"),
     "origin": KeySpec("float", 3, field="lattice.origin"),
@@ -584,15 +591,17 @@ class _Reader:
             out.append(v)
         return tuple(out)
 
-    def integer(self, key, tok, line, minimum) -> int:
+    def integer(self, key, tok, line, minimum, maximum=None) -> int:
         v = parse_int(tok, self.path, line, f"an integer for '{key}'")
         if v < minimum:
             raise self.err(line, f"an integer >= {minimum} for '{key}'", shorten(tok))
+        if maximum is not None and v > maximum:
+            raise self.err(line, f"an integer in [{minimum:g}, {maximum:g}] for '{key}'", shorten(tok))
         return v
 
-    def count(self, key, value, line, minimum) -> int:
+    def count(self, key, value, line, minimum, maximum=None) -> int:
         (tok,) = self.count_tokens(key, value, line, 1, f"1 integer (>= {minimum})")
-        return self.integer(key, tok, line, minimum)
+        return self.integer(key, tok, line, minimum, maximum)
 
     def stiffness_value(self, key, tok, line) -> float:
         v = self.number(tok, line, f"a stiffness in [0, 1] for '{key}'")
@@ -668,7 +677,7 @@ class _Reader:
     # -- the readers of _READ: (key, spec, value, line) -> the key's value -----------------------
 
     def read_int(self, key, spec, value, n):
-        return self.count(key, value, n, spec.low)
+        return self.count(key, value, n, spec.low, spec.high)
 
     def read_float(self, key, spec, value, n):
         positive = spec.low == 0 and spec.strict

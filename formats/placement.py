@@ -10,7 +10,7 @@ import numpy as np
 
 from .errors import FormatError, parse_float, parse_int, shorten
 
-__all__ = ["PREAMBLE_FIELDS", "parse_preamble", "format_preamble", "placement_matrix", "frame_axes", "FLOAT_FMT"]
+__all__ = ["PREAMBLE_FIELDS", "parse_preamble", "format_preamble", "format_nonzero", "placement_matrix", "frame_axes", "FLOAT_FMT"]
 
 FLOAT_FMT = "%.6f"
 PREAMBLE_FIELDS = 13  # id, pos(3), scale(3), up(3), right(3)
@@ -72,7 +72,28 @@ def parse_preamble(tokens, path, line, what: str = "placement"):
     return pid, pos, scale, up, right
 
 
+def format_nonzero(x: float, fmt: str = FLOAT_FMT) -> str:
+    """``fmt % x``, except that a non-zero ``x`` the fixed format would print as zero is written in
+    exponent form (``%.6e``): a valid scale of 4e-7 must not come back as 0, which readers refuse."""
+    s = fmt % float(x)
+    if x != 0 and float(s) == 0:
+        return "%.6e" % float(x)
+    return s
+
+
 def format_preamble(pid: int, pos, scale, up, right, fmt: str = FLOAT_FMT) -> str:
-    """``id pos scale up right`` with fixed-format numbers."""
-    nums = np.concatenate([pos, scale, up, right])
-    return f"{int(pid)} " + " ".join(fmt % float(x) for x in nums)
+    """``id pos scale up right`` with fixed-format numbers.
+
+    Positions are written in ``fmt`` (absolute precision). A scale component, and an up or right
+    vector, that must not be zero keeps a tiny non-zero value in exponent form
+    (:func:`format_nonzero`): a scale component on its own, a vector when all of its components
+    would print as zero.
+    """
+    out = [fmt % float(x) for x in pos]
+    out += [format_nonzero(x, fmt) for x in scale]
+    for vec in (up, right):
+        text = [fmt % float(x) for x in vec]
+        if all(float(t) == 0 for t in text) and any(x != 0 for x in vec):
+            text = [format_nonzero(x, fmt) for x in vec]
+        out += text
+    return f"{int(pid)} " + " ".join(out)

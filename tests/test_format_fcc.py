@@ -337,6 +337,12 @@ MALFORMED = [
     ("solver iterations: 5.0\n", 1, "an integer for 'solver iterations'"),
     ("solver iterations: 5f\n", 1, "an integer for 'solver iterations'"),
     ("updates per frame: 0\n", 1, "an integer >= 1"),
+    # counts beyond what a run could finish (issue 14: 1e11 hung, 1e23 overflowed a kernel)
+    ("solver iterations: 100000000000000000000000\n", 1, "an integer in [0, 10000]"),
+    ("collision iterations: 99999999999\n", 1, "an integer in [0, 10000]"),
+    ("updates per frame: 1000000000\n", 1, "an integer in [1, 1000]"),
+    ("max substeps: 40\n", 1, "an integer in [0, 16]"),
+    ("output animation frames number: 1000000\n", 1, "an integer in [1, 100000]"),
     ("edge stretch bounds: 1.2 1.5\n", 1, "two numbers lo <= 1 <= hi"),
     ("emergence scales: 1 0.5 0.7\n", 1, "decreasing numbers"),
     ("emergence scales: 1.5\n", 1, "numbers in (0, 1]"),
@@ -523,6 +529,8 @@ pos6 = st.integers(1, 10**9).map(lambda i: i / 1e6)
 unit6 = st.integers(0, 10**6).map(lambda i: i / 1e6)
 nonneg6 = st.integers(0, 10**9).map(lambda i: i / 1e6)
 count = st.integers(0, 10**6)
+iters = st.integers(0, 10**4)  # the counts' ranges (formats/fcc.md)
+frames = st.integers(0, 10**5)
 vec3 = st.tuples(d6, d6, d6)
 pos3 = st.tuples(pos6, pos6, pos6)
 raw_path = st.from_regex(r"(\./|\.\./)?[a-z][a-z0-9_]{0,5}(/[a-z0-9_]{1,5}){0,2}(\.[a-z]{3})?/?",
@@ -549,22 +557,22 @@ def canopy_params(draw):
     far = draw(opt(pos6))
     if near is not None and far is not None and not far > near:
         far = near + 1.0
-    frames_number = draw(opt(st.integers(1, 10**6)))
-    skip = draw(opt(count))
+    frames_number = draw(opt(st.integers(1, 10**5)))
+    skip = draw(opt(frames))
     if frames_number is not None and skip is not None:
         skip = frames_number - 1
     return CanopyParams(
-        solver_iterations=draw(count),
-        collision_iterations=draw(count),
-        max_collision_retries=draw(count),
+        solver_iterations=draw(iters),
+        collision_iterations=draw(iters),
+        max_collision_retries=draw(st.integers(0, 1000)),
         k_stretch=draw(unit6),
         k_bend=draw(unit6),
         k_collision=draw(unit6),
         spacing=draw(nonneg6),
         scene_scale=draw(pos3),
         updates_per_frame=draw(st.integers(1, 1000)),
-        run_frames=draw(opt(count)),
-        sanity_check_every=draw(count),
+        run_frames=draw(opt(frames)),
+        sanity_check_every=draw(frames),
         output_frames_number=frames_number,
         output_obj_skip=skip,
         lattice=LatticeParams(draw(pos3), draw(st.booleans()), draw(vec3),

@@ -324,3 +324,28 @@ def test_rba_fast_reader_equals_the_line_reader(tmp_path, monkeypatch):
                 assert a.ids.tolist() == b.ids.tolist() and a.ids.dtype == b.ids.dtype
                 for f in ("pos", "scale", "up", "right"):
                     np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+
+
+def test_tiny_nonzero_scale_survives_writing(tmp_path):
+    """A valid scale of 4e-7 (or an up vector of 1e-8 components) is not written as 0, which the
+    readers refuse (issue 14); other numbers keep the fixed format."""
+    from inflo.formats.scn import Placement, Scene, read_scn, write_scn
+
+    sc = Scene(placements=[Placement("o", 0, [1e-7, 0, 0], [4e-7, 1.0, 3e-7], [1e-8, 2e-8, 0], [1, 0, 0])])
+    write_scn(tmp_path / "t.scn", sc)
+    text = (tmp_path / "t.scn").read_text()
+    assert "0.000000 4.000000e-07 1.000000 3.000000e-07 1.000000e-08 2.000000e-08 0.000000 1.000000" in text
+    back = read_scn(tmp_path / "t.scn").placements[0]
+    assert np.allclose(back.scale, [4e-7, 1.0, 3e-7], rtol=1e-6) and back.pos[0] == 0.0
+    n = 1200  # the fast path's size: rows with such values go to Python, byte-identical
+    fr = RbaFrame(np.arange(n), np.zeros((n, 3)), np.full((n, 3), 1.0), np.tile([0.0, 1, 0], (n, 1)),
+                  np.tile([1.0, 0, 0], (n, 1)))
+    fr.scale[7] = [4e-7, 1, 1]
+    fr.up[9] = [0, 5e-7, 0]
+    fr.up[11] = [5e-7, 0.5, 0]  # a vector that prints non-zero keeps the fixed format
+    write_rba(tmp_path / "fast.rba", fr, fast=True)
+    write_rba(tmp_path / "slow.rba", fr, fast=False)
+    assert (tmp_path / "fast.rba").read_bytes() == (tmp_path / "slow.rba").read_bytes()
+    back = read_rba(tmp_path / "fast.rba")
+    assert back.scale[7, 0] == pytest.approx(4e-7) and back.up[9, 1] == pytest.approx(5e-7)
+    assert (tmp_path / "fast.rba").read_text().splitlines()[11].split()[7:10] == ["0.000000", "0.500000", "0.000000"]

@@ -38,12 +38,26 @@ def inputs(tmp_path):
     (tmp_path / "samples.toml").write_text("[surface]\nsamples = 1000000000000\n")
     (tmp_path / "frames.toml").write_text("[dynamics]\nframes = 100000000\n")
     (tmp_path / "interval.toml").write_text("[dynamics]\ninterval = 1e-9\n")
+    fcc = (tmp_path / "fcc" / "dense.fcc").read_text()
+    (tmp_path / "fcc" / "wide.fcc").write_text(fcc.replace("spacing: 0.01", "spacing: 1e300"))
+    (tmp_path / "fcc" / "iters.fcc").write_text(fcc.replace("solver iterations: 50", "solver iterations: 1" + "0" * 23))
+    dup = tmp_path / "fcc" / "dup"  # a template with a duplicated (unwelded) vertex in every frame
+    dup.mkdir()
+    for f in sorted((tmp_path / "fcc" / "anim").glob("frame_*.obj")):
+        lines = f.read_text().splitlines()
+        vs = [i for i, l in enumerate(lines) if l.startswith("v ")]
+        lines[vs[178]] = lines[vs[177]]
+        (dup / f.name).write_text("\n".join(lines) + "\n")
+    (tmp_path / "fcc" / "dup.fcc").write_text(fcc.replace(" anim\n", " dup\n"))
     return tmp_path
 
 
 # (command, arguments with {d} the inputs folder, message fragment, output that must not exist)
 PROBES = [
     ("fccompose", ["{d}/fcc/dense.fcc", "-o", "{d}/fcc/anim"], "holding the 'animation' input anim", "{d}/fcc/anim/log.csv"),
+    ("fccompose", ["{d}/fcc/wide.fcc", "-o", "{d}/fcc/o1"], "at most 4 x the largest floret's extent", "{d}/fcc/o1"),
+    ("fccompose", ["{d}/fcc/iters.fcc", "-o", "{d}/fcc/o2"], "an integer in [0, 10000]", "{d}/fcc/o2"),
+    ("fccompose", ["{d}/fcc/dup.fcc", "-o", "{d}/fcc/o3"], "vertices 178 and 179 at the same point", "{d}/fcc/o3"),
     ("canopy-render", ["{d}/huge.obj", "-o", "{d}/r1.png"], "coordinates within +-1e+15", "{d}/r1.png"),
     ("floret-animate", ["{d}/big.floret", REPO / "pipelines" / "sunflower" / "draft" / "ray_open.floret", "-o", "{d}/f1"],
      "coordinates within +-1e+12", "{d}/f1"),

@@ -10,7 +10,7 @@ from inflo.tools.subdivide.collisions import collision_resolver
 from inflo.tools.subdivide.loop import loop_level
 from inflo.tools.subdivide.smooth import plan_subdivision, subdivide_frames, subdivide_meshes
 
-from conftest import no_partial_files, run_cli
+from conftest import REPO, no_partial_files, run_cli
 
 
 def corrugated_strip(nx, ny, amp, dz, refine=1, width=1.0, length=4.0):
@@ -128,3 +128,55 @@ def test_matches_plain_loop_when_no_collisions_arise():
     out, rep = subdivide_frames([V], plan_subdivision(F, len(V), 1), resolve=collision_resolver(spacing=0.01))
     np.testing.assert_array_equal(out[0], lv.loop(V))
     assert rep[0].collision_constraints == 0
+
+
+# ---------------------------------------------------------------- duplicated vertices (issue 14)
+
+def _duplicated(kind):
+    """The lily's last canopy frame with one vertex duplicated: 'seam' (half the triangles round it
+    use the copy) or 'sliver' (a zero-area triangle between the vertex and its copy)."""
+    from inflo.formats.obj import read_obj
+
+    m = read_obj(REPO / "tests" / "golden" / "lily" / "canopy" / "frame_0099.obj")
+    V, F = m.vertices.copy(), m.faces.copy()
+    a = F[100][0]
+    V = np.vstack([V, V[a]])
+    a2 = len(V) - 1
+    if kind == "seam":
+        around = np.flatnonzero((F == a).any(axis=1))
+        for t in around[: len(around) // 2]:
+            F[t][F[t] == a] = a2
+    else:
+        _, b, c = F[100]
+        F[100] = [a2, b, c]
+        F = np.vstack([F, [[a, a2, c]]])
+    return ObjMesh(V, F)
+
+
+@pytest.mark.parametrize("kind", ["seam", "sliver"])
+def test_duplicated_vertex_is_welded_and_the_result_collision_free(kind):
+    from inflo.tools.collide import intersecting_pairs
+    from inflo.tools.subdivide.collisions import collision_resolver, default_spacing
+    from inflo.tools.subdivide.smooth import subdivide_meshes
+
+    m = _duplicated(kind)
+    assert len(intersecting_pairs(m.vertices, m.faces)) > 0  # the duplicate's triangles touch
+    notes = []
+    resolve = collision_resolver(spacing=default_spacing(m.vertices))
+    (out,), _ = subdivide_meshes([m], 1, resolve=resolve, name="dup.obj", notes=notes)
+    assert notes == ["dup.obj: welded 1 vertices lying at the same point as another in every frame"
+                     + (", dropped 1 zero-area triangles" if kind == "sliver" else "")]
+    assert len(out.faces) == 4 * 3780 and len(intersecting_pairs(out.vertices, out.faces)) == 0
+
+
+def test_weld_only_vertices_coincident_in_every_frame():
+    from inflo.tools.subdivide.smooth import weld_coincident
+
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]], float)
+    F = np.array([[0, 1, 2], [3, 4, 2]])
+    w = weld_coincident([V, V + 1.0], F)
+    assert (w.welded, w.dropped, w.keep.tolist(), w.faces.tolist()) == (1, 0, [0, 1, 2, 4], [[0, 1, 2], [1, 3, 2]])
+    V2 = V.copy()
+    V2[3] = [2, 0, 0]  # apart in the second frame: a bud tip that opens, not a seam
+    w = weld_coincident([V, V2], F)
+    assert w.welded == 0 and w.faces.tolist() == F.tolist()

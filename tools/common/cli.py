@@ -113,3 +113,24 @@ class _Silent:
 
     def update(self, n_steps: int, current_item=None) -> None:
         pass
+
+
+def portable_path(path) -> str:
+    """A path as written into an output file's header: the same bytes in every checkout.
+
+    Relative to the working directory (normalised, '/' separators) when the file lies under it, else
+    the file's name alone, so an absolute path typed in one checkout does not make a header (and a
+    golden diff) differ from another's.
+    """
+    import os
+    from pathlib import Path, PurePosixPath
+
+    p = Path(os.path.abspath(path))
+    try:
+        rel = p.relative_to(Path.cwd().resolve())
+    except ValueError:
+        try:
+            rel = p.relative_to(Path(os.path.abspath(os.getcwd())))
+        except ValueError:
+            return p.name
+    return str(PurePosixPath(*rel.parts))

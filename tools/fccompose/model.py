@@ -204,6 +204,26 @@ class Level:
     shift: float = 0.0
 
 
+def coincident_vertices(frames: np.ndarray, faces: np.ndarray):
+    """The first frame and pair of distinct vertices (0-based, both used by triangles) at exactly the
+    same point, or None (issue 14: a template with a duplicated, unwelded vertex).
+
+    Zero-area triangles whose corners are distinct points (collinear corners, slivers) are accepted:
+    the collision core treats them as their longest edge. Coincident distinct vertices are not:
+    the triangles around them touch, so the exact test of the first frame would refuse the canopy
+    anyway, naming only florets.
+    """
+    used = np.unique(np.asarray(faces).ravel())
+    for k in range(frames.shape[0]):
+        x = frames[k, used]
+        _, first, inverse, counts = np.unique(x, axis=0, return_index=True, return_inverse=True, return_counts=True)
+        if np.any(counts > 1):
+            g = int(np.argmax(counts > 1))
+            pair = np.sort(used[np.flatnonzero(inverse.ravel() == g)[:2]])
+            return k, int(pair[0]), int(pair[1])
+    return None
+
+
 def _load_template(params: CanopyParams, entry) -> Template:
     if entry.kind == "obj":
         mesh = read_obj(entry.path.resolved)
@@ -219,6 +239,14 @@ def _load_template(params: CanopyParams, entry) -> Template:
     faces = mesh.faces
     if len(faces) == 0:
         raise FormatError(entry.path.resolved, None, "triangles (f lines)", "none")
+    bad = coincident_vertices(frames, faces)
+    if bad is not None:
+        k, i, j = bad
+        where = entry.path.resolved if entry.kind == "obj" else paths[k]
+        raise FormatError(where, None, "distinct points for distinct vertices of the triangles (the triangles at two "
+                          "coincident vertices touch, which no collision-free canopy allows: weld them into one "
+                          "vertex or move them apart)", f"vertices {i + 1} and {j + 1} at the same point "
+                          f"({' '.join(f'{c:g}' for c in frames[k, i])})")
     frames = frames * np.asarray(entry.scale, float)
     nv = frames.shape[1]
     fixed = None
@@ -809,6 +837,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
         t_off += len(t.tri_indices)
         offsets[k + 1] = v_off
 
+    check_spacing(params, florets)
     n_frames = params.run_frames
     if n_frames is None:
         ends = [0]
@@ -839,6 +868,51 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
         n_frames=int(n_frames),
         params=params,
     )
+
+
+#: ``spacing`` may be at most this many times the largest floret's extent (issue 14: a spacing ten
+#: times the florets' size made every triangle a collision candidate of every other and the run
+#: was killed for memory).
+SPACING_LIMIT = 4.0
+
+
+def check_spacing(params: CanopyParams, florets) -> None:
+    """Refuse a ``spacing`` (the collision gap, thesis app. C.1) larger than :data:`SPACING_LIMIT`
+    times the largest floret: the extent of its template over all frames times its placement's
+    largest scale (SCN, RBA rows and entry factors, every nesting level) and the scene scale factor.
+
+    Raises
+    ------
+    InputError
+        Naming the ``.fcc`` file, the spacing and the largest floret's extent.
+    """
+    if not florets or params.spacing <= 0:
+        return
+    extent, rba_max = {}, {}
+
+    def rba_factor(holder):
+        if holder.rba is None:
+            return 1.0
+        paths, frames = holder.rba
+        key = id(frames)
+        if key not in rba_max:
+            rba_max[key] = max((float(np.abs(fr.scale).max()) for fr in frames if len(fr)), default=1.0)
+        return rba_max[key] * float(np.abs(holder.rba_scale).max())
+
+    biggest = 0.0
+    for fl in florets:
+        t = fl.template
+        if t.key not in extent:
+            pts = t.frames.reshape(-1, 3)
+            extent[t.key] = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))) if len(pts) else 0.0
+        size = extent[t.key] * float(np.abs(fl.placement.scale).max()) * rba_factor(fl)
+        for lv in fl.outer:
+            size *= float(np.abs(lv.placement.scale).max()) * rba_factor(lv)
+        biggest = max(biggest, size)
+    biggest *= float(np.max(np.abs(params.scene_scale)))
+    if params.spacing > SPACING_LIMIT * biggest:
+        raise InputError(f"{params.source}: expected 'spacing' (the collision gap) at most {SPACING_LIMIT:g} x the "
+                         f"largest floret's extent = {SPACING_LIMIT * biggest:.6g}, found {params.spacing:g}")
 
 
 def build_model(params: CanopyParams) -> Model:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from inflo.tools.common.cli import inflo_command, progress
+from inflo.tools.common.cli import inflo_command, portable_path, progress
 
 from .generate import generate
 from .params import read_params
@@ -19,7 +19,7 @@ def main(params, output, png, quiet, debug):
     def bar(length, label):
         return progress(length=length, label=label, quiet=quiet)
 
-    summary = generate(p, output, progress=bar, header=f"phyllotaxis {params}")
+    summary = generate(p, output, progress=bar, header=f"phyllotaxis {portable_path(params)}")
     for msg in summary.messages:
         click.echo(f"phyllotaxis: warning: {msg}", err=True)
     if png:

@@ -79,17 +79,20 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
 
         h = spacing if spacing is not None else default_spacing(meshes[0].vertices)
         resolve = collision_resolver(spacing=h, iterations=collision_iterations, max_retries=max_collision_retries)
+    notes: list = []
     with progress(length=len(meshes), label="subdivide", quiet=quiet) as bar:
         out, reports = [], []
         for start, stop in topology_runs(meshes):  # one subdivision plan per topology
             o, r = subdivide_meshes(meshes[start:stop], levels, resolve=resolve, name=str(paths[start]),
-                                    on_frame=lambda k: bar.update(1))
+                                    on_frame=lambda k: bar.update(1), notes=notes)
             out.extend(o)
             reports.extend(r)
     targets = [Path(output)] if single else [Path(output) / p.name for p in paths]
     for t, m in zip(targets, out):
         write_obj(t, m)
     if not quiet:
+        for note in notes:
+            click.echo(f"subdivide: {note}", err=True)
         for level in range(1, levels + 1):
             rows = [r for r in reports if r.level == level]
             msg = f"subdivide: level {level}: {max(r.n_faces for r in rows)} faces"

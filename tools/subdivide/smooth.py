@@ -17,7 +17,8 @@ from inflo.formats.obj import ObjMesh
 
 from .loop import LoopLevel, loop_level
 
-__all__ = ["LevelReport", "SubdivisionPlan", "plan_subdivision", "subdivide_frames", "subdivide_meshes"]
+__all__ = ["LevelReport", "SubdivisionPlan", "Weld", "plan_subdivision", "subdivide_frames", "subdivide_meshes",
+           "weld_coincident"]
 
 # resolve(x_start (n,3), x_target (n,3), faces (m,3) int32) -> (x_end (n,3), n_constraints, n_remaining)
 Resolve = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple]
@@ -100,13 +101,74 @@ def subdivide_frames(frames: Sequence[np.ndarray], plan: SubdivisionPlan, *, res
     return out, reports
 
 
+@dataclass
+class Weld:
+    """Coincident vertices welded before subdividing (:func:`weld_coincident`)."""
+
+    keep: np.ndarray
+    """(n_out,) int64: the input vertices kept, in input order"""
+    faces: np.ndarray
+    """(m_out, 3) int64: the faces in the kept vertices' numbering"""
+    face_kept: np.ndarray
+    """(m_out,) int64: the input face each output face is"""
+    welded: int = 0
+    """vertices merged into another at the same point"""
+    dropped: int = 0
+    """faces dropped: a vertex repeated after welding (zero-area triangles made by a duplicated vertex)"""
+
+
+def weld_coincident(frames: Sequence[np.ndarray], faces: np.ndarray) -> Weld:
+    """Weld the face vertices that lie at exactly the same point in every frame, and drop the
+    triangles that then repeat a vertex (issue 14).
+
+    Meshes from other tools carry duplicated vertices (an unwelded seam, a sliver triangle made by a
+    duplicated vertex): the triangles on either side touch there, which the exact test counts as
+    intersecting, and Loop subdivision would keep the seam open as two boundaries. Welded, the seam
+    is interior and the output has no touching pair the input did not already cross. Vertices
+    coincident in only some frames (a bud tip collapsing to a point) are left as they are; unused
+    vertices are kept (they stay unused).
+    """
+    F = np.asarray(faces, dtype=np.int64)
+    n = len(frames[0])
+    rep = np.arange(n)
+    used = np.unique(F.ravel())
+    if len(used):
+        x0 = np.asarray(frames[0])[used]
+        _, first, inverse = np.unique(x0, axis=0, return_index=True, return_inverse=True)
+        cand = used[first[inverse.ravel()]]  # the first used vertex at the same point in frame 0
+        same = cand != used
+        for V in frames[1:]:
+            V = np.asarray(V)
+            same &= (V[used] == V[cand]).all(axis=1)
+        rep[used[same]] = cand[same]
+    welded = int((rep != np.arange(n)).sum())
+    if welded == 0:
+        return Weld(np.arange(n), F, np.arange(len(F)))
+    G = rep[F]
+    ok = (G[:, 0] != G[:, 1]) & (G[:, 1] != G[:, 2]) & (G[:, 0] != G[:, 2])
+    keep = np.flatnonzero(rep == np.arange(n))
+    new = np.full(n, -1, np.int64)
+    new[keep] = np.arange(len(keep))
+    return Weld(keep, new[G[ok]], np.flatnonzero(ok), welded, int((~ok).sum()))
+
+
 def subdivide_meshes(meshes: Sequence[ObjMesh], levels: int, *, resolve: Resolve | None = None,
-                     name: str = "mesh", on_frame=None):
+                     name: str = "mesh", on_frame=None, notes: list | None = None):
     """Subdivide OBJ meshes of one topology; groups and materials follow their parent faces.
+
+    Vertices at the same point in every frame are welded first and the zero-area triangles that
+    leaves are dropped (:func:`weld_coincident`); ``notes`` (a list) gets a line saying so.
 
     Returns (list of ObjMesh, list of LevelReport). Polylines and normals are dropped (normals
     would no longer match the smoothed surface).
     """
+    if levels:
+        w = weld_coincident([m.vertices for m in meshes], meshes[0].faces)
+        if w.welded:
+            if notes is not None:
+                notes.append(f"{name}: welded {w.welded} vertices lying at the same point as another in every frame"
+                             + (f", dropped {w.dropped} zero-area triangles" if w.dropped else ""))
+            meshes = [_welded(m, w) for m in meshes]
     first = meshes[0]
     plan = plan_subdivision(first.faces, first.n_vertices, levels, name=name)
     verts, reports = subdivide_frames([m.vertices for m in meshes], plan, resolve=resolve, on_frame=on_frame)
@@ -120,3 +182,11 @@ def subdivide_meshes(meshes: Sequence[ObjMesh], levels: int, *, resolve: Resolve
             materials=list(m.materials), face_material=None if m.face_material is None else m.face_material[parent],
         ))
     return out, reports
+
+
+def _welded(m: ObjMesh, w: Weld) -> ObjMesh:
+    return ObjMesh(
+        m.vertices[w.keep], w.faces.astype(m.faces.dtype),
+        groups=list(m.groups), face_group=None if m.face_group is None else m.face_group[w.face_kept],
+        materials=list(m.materials), face_material=None if m.face_material is None else m.face_material[w.face_kept],
+    )
