@@ -127,12 +127,21 @@ def main():
 
 
 
-# ---- pistil and six stamens: closed tubes (a ring of 9 columns, the last = the first) --------------
+# ---- pistil, six stamens with anthers, receptacle: closed tubes ------------------------------------
+# A ring of 9 control columns (the last = the first: closed around) by rows along the tube; the
+# first and last rows are collapsed to one point on the tube's axis (radius 0), so the clamped
+# cubic surface closes there in a rounded end (its tangent at the pole is radial): no open end.
 RING = np.linspace(0.0, 2.0 * math.pi, 9)
 
 
-def tube(centres, radii):
-    """(len(centres), 9, 3) control points of a tube around a centre line in the xy-plane."""
+def tube(centres, radii, *, base_cap=True, tip_cap=True):
+    """(rows, 9, 3) control points of a tube around a centre line in the xy-plane (horizontal
+    rings), closed at the base and/or tip by a pole row on the centre line."""
+    centres, radii = list(centres), list(radii)
+    if base_cap:
+        centres, radii = [centres[0], *centres], [0.0, *radii]
+    if tip_cap:
+        centres, radii = [*centres, centres[-1]], [*radii, 0.0]
     pts = np.zeros((len(centres), len(RING), 3))
     for j, ((cx, cy), r) in enumerate(zip(centres, radii)):
         pts[j, :, 0] = cx + r * np.cos(RING)
@@ -142,19 +151,46 @@ def tube(centres, radii):
     return pts
 
 
-# the receptacle and a stub of the pedicel under the tepals' claws (the same in both poses)
-RECEPTACLE = tube([(0, 0.2), (0, 0.17), (0, -0.08), (0, -0.45), (0, -1.2)], [0.01, 0.24, 0.33, 0.15, 0.09])
+def capsule(centre, axis, length, radius, across=(1.0, 0.0, 0.0)):
+    """(6, 9, 3) control points of a closed capsule (an anther): poles at centre +- length/2 along
+    ``axis``, rings across it widening to ``radius``. Each ring starts on ``across`` (made
+    perpendicular to the axis): two poses with the same ``across`` and axes turned about it
+    interpolate as a capsule turning (shortened at most by cos 45 deg half-way for a quarter
+    turn), not as rings twisting flat."""
+    c, a = np.asarray(centre, float), np.asarray(axis, float)
+    a = a / np.linalg.norm(a)
+    e1 = np.asarray(across, float) - np.dot(across, a) * a
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    rows = [(-0.5, 0.0), (-0.5, 0.8), (-0.25, 1.0), (0.25, 1.0), (0.5, 0.8), (0.5, 0.0)]
+    pts = np.zeros((len(rows), len(RING), 3))
+    for j, (t, r) in enumerate(rows):
+        pts[j] = c + t * length * a + radius * r * (np.cos(RING)[:, None] * e1 + np.sin(RING)[:, None] * e2)
+    pts[:, -1] = pts[:, 0]
+    return pts
+
+
+# the receptacle and a stub of the pedicel under the tepals' claws (the same in both poses), closed
+# on top (a pole on the axis) and under the stub
+RECEPTACLE = tube([(0, 0.2), (0, 0.17), (0, -0.08), (0, -0.45), (0, -1.1), (0, -1.2)],
+                  [0.0, 0.24, 0.33, 0.15, 0.09, 0.09], base_cap=False)
 
 COLUMN = {
-    # pistil on the axis: style and a club-shaped stigma; stamens lean outward, anther at the top
+    # pistil on the axis: style and a club-shaped stigma; stamens (filaments) lean outward, each
+    # carrying an anther on its tip, along the filament's tip direction in both poses. (A lily's
+    # anther turns across its filament as the flower opens; floret-animate blends each control
+    # column's own frame, which keeps a capsule's shape for small turns only: a quarter turn
+    # between two key poses flattened the anthers half-way.)
     "bud": dict(time=0.0,
-                pistil=tube([(0, 0.10), (0, 0.8), (0, 1.5), (0, 1.9)], [0.05, 0.045, 0.05, 0.08]),
+                pistil=tube([(0, 0.10), (0, 0.8), (0, 1.5), (0, 1.8), (0, 1.95)], [0.05, 0.045, 0.045, 0.08, 0.08]),
                 stamens=tube([(0.12, 0.10), (0.14, 0.7), (0.16, 1.3), (0.17, 1.6)],
-                             [0.025, 0.022, 0.022, 0.06])),
+                             [0.025, 0.022, 0.022, 0.025]),
+                anthers=capsule((0.175, 1.7, 0.0), (0.03, 1.0, 0.0), 0.45, 0.05)),
     "open": dict(time=1.0,
-                 pistil=tube([(0, 0.10), (0, 1.6), (0, 3.2), (0, 4.1)], [0.06, 0.05, 0.055, 0.11]),
+                 pistil=tube([(0, 0.10), (0, 1.6), (0, 3.2), (0, 3.9), (0, 4.1)], [0.06, 0.05, 0.05, 0.12, 0.12]),
                  stamens=tube([(0.12, 0.10), (0.3, 1.4), (0.6, 2.7), (0.85, 3.6)],
-                              [0.03, 0.025, 0.025, 0.07])),
+                              [0.03, 0.025, 0.025, 0.03]),
+                 anthers=capsule((0.905, 3.79, 0.0), (0.27, 0.96, 0.0), 0.8, 0.08)),
 }
 
 
@@ -162,14 +198,14 @@ def write_column():
     for key, p in COLUMN.items():
         blocks = []
         p = dict(p, receptacle=RECEPTACLE)
-        for name, mat, n, phase in (("receptacle", 7, 1, 0), ("pistil", 5, 1, 0), ("stamens", 6, 6, 30)):
+        for name, mat, n, phase in (("receptacle", 7, 1, 0), ("pistil", 5, 1, 0), ("stamens", 6, 6, 30),
+                                    ("anthers", 8, 6, 30)):
             nv = len(p[name])
             blocks.append(f"organ: {name}\nmaterial: {mat}\ndegree: 1 3\ngrid: 9 {nv}\n"
                           f"symmetry: {n} {phase}\nlambda: 0.1\neta: 9\npoints:\n{fmt_rows(p[name])}\n")
-        text = (f"# receptacle, pistil and stamens, pose '{key}'; written by make_keys.py\n"
+        text = (f"# receptacle, pistil, stamens and anthers, pose '{key}'; written by make_keys.py\n"
                 f"floret 1\nname: column\ntime: {p['time']}\n\n" + "\n".join(blocks))
         (OUT / f"column_{key}.floret").write_text(text)
-
 
 
 def write_weights():
