@@ -12,7 +12,7 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: all venv test test-blender bench golden golden-check lily yarrow sunflower gaillardia dahlia dyssodia orlaya clean distclean
+.PHONY: all venv test test-blender bench golden golden-check lily yarrow sunflower gaillardia dahlia dyssodia orlaya eustoma clean distclean
 
 all: lily
 
@@ -69,6 +69,9 @@ dyssodia: $(STAMP)
 
 orlaya: $(STAMP)
 	$(MAKE) -C pipelines/orlaya QUALITY=$(QUALITY)
+
+eustoma: $(STAMP)
+	$(MAKE) -C pipelines/eustoma QUALITY=$(QUALITY)
 
 clean:
 	rm -rf build bench/out .pytest_cache .hypothesis

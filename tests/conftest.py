@@ -23,6 +23,7 @@ CLI_NAMES = [
     "canopy-export",
     "venation",
     "inflo-sweep",
+    "petal-grow",
 ]
 
 

@@ -1,0 +1,93 @@
+"""Exact checks of the Eustoma build (the `check` stage of the Makefile).
+
+Usage: python check_eustoma.py BUILD_DIR   (BUILD_DIR = build/eustoma)
+
+For each cultivar: every keyframe is tested by the exact static triangle-triangle test
+(inflo.tools.collide.intersecting_pairs; touching counts) and must have zero intersecting pairs;
+the topology must be that of the bud in every frame; the joint angle (the rotation of each petal's
+base particles from the bud, by shape matching) is listed at frames 1, 50 and 100 (15 deg from
+step 50 on); and the open flower's shape is summarized (rim radius, widest radius, height; the
+flare = rim radius / radius at half height: a bell and a funnel flare out, a shallow ball curls
+in). Exits 1 on any intersection or changed topology.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from inflo.formats.obj import list_obj_sequence, read_obj
+from inflo.tools.collide import intersecting_pairs
+from inflo.tools.petal_grow.simulate import shape_match
+
+CULTIVARS = ("mellow_yellow", "maite_lady", "pinocchio")
+BASE_ROWS = 2  # base particles: the first two rows of each petal (uv v <= 0.1)
+
+
+def petal_blocks(mesh) -> list[np.ndarray]:
+    """Vertex ids of each petal (the faces of one group share no vertex with another's)."""
+    out = []
+    for g in range(len(mesh.groups)):
+        out.append(np.unique(mesh.faces[mesh.face_group == g]))
+    return out
+
+
+def joint_angle(bud: np.ndarray, x: np.ndarray, ids: np.ndarray, per_row: int) -> float:
+    """Degrees the petal's base rows turned from the bud (rigid fit)."""
+    base = ids[: BASE_ROWS * per_row]
+    r, _ = shape_match(bud[base], x[base])
+    return math.degrees(math.acos(np.clip((np.trace(r) - 1) / 2, -1, 1)))
+
+
+def shape(x: np.ndarray, blocks, per_row: int) -> dict:
+    """Rim radius (mean distance of the petal tips' row from the axis), widest radius, height,
+    radius at half the flower's height."""
+    rad = np.hypot(x[:, 0], x[:, 2])
+    tips = np.concatenate([b[-per_row:] for b in blocks])
+    h = x[:, 1].max() - x[:, 1].min()
+    mid = np.abs(x[:, 1] - (x[:, 1].min() + 0.5 * h)) < 0.08 * h
+    r_mid = float(rad[mid].max()) if mid.any() else float("nan")
+    return {"rim": float(rad[tips].mean()), "widest": float(rad.max()), "height": float(h), "mid": r_mid}
+
+
+def main(build: Path) -> int:
+    numba.set_num_threads(1)  # small meshes: one thread is faster (tools/petal_grow/simulate.py, run)
+    bad = 0
+    for name in CULTIVARS:
+        paths = list_obj_sequence(build / name)
+        first = read_obj(paths[0])
+        blocks = petal_blocks(first)
+        per_row = int(np.sum(np.isclose(first.vertices[blocks[0], 1], first.vertices[blocks[0], 1].min())))
+        pairs = []
+        angles = {}
+        for i, p in enumerate(paths):
+            m = read_obj(p)
+            if not m.same_topology(first):
+                print(f"  {name} {p.name}: topology differs from the bud")
+                bad += 1
+            n = len(intersecting_pairs(m.vertices, m.faces))
+            pairs.append(n)
+            bad += n
+            if i + 1 in (1, 50, len(paths)):
+                angles[i + 1] = np.mean([joint_angle(first.vertices, m.vertices, b, per_row) for b in blocks])
+            last = m
+        s = shape(last.vertices, blocks, per_row)
+        s0 = shape(first.vertices, blocks, per_row)
+        print(f"{name}: {len(paths)} keyframes, {len(first.faces)} triangles ({len(blocks)} petals), "
+              f"intersecting pairs: {sum(pairs)} (max per frame {max(pairs)})")
+        print("  joint angle (deg): " + ", ".join(f"frame {k} {v:.2f}" for k, v in angles.items()))
+        print(f"  bud: rim radius {s0['rim']:.2f}, widest {s0['widest']:.2f}, height {s0['height']:.2f}")
+        print(f"  open: rim radius {s['rim']:.2f}, widest {s['widest']:.2f}, height {s['height']:.2f}, "
+              f"radius at half height {s['mid']:.2f}, flare {s['rim'] / s['mid']:.2f}")
+    print("OK: every keyframe intersection-free" if bad == 0 else f"FAILED: {bad} intersecting pairs or changes")
+    return 0 if bad == 0 else 1
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        print(__doc__.strip().splitlines()[2], file=sys.stderr)
+        sys.exit(2)
+    sys.exit(main(Path(sys.argv[1])))

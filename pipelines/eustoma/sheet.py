@@ -1,0 +1,68 @@
+"""Contact sheet of the three Eustoma cultivars, one row each (Ijiri et al. 2008, fig. 17).
+
+Usage: python sheet.py BUILD_DIR --frames 1,10,...,100 [--tile WxH] [--elevation DEG] -o OUT.png
+
+Each row is canopy-render's sheet of one cultivar's keyframes (BUILD_DIR/<cultivar>/), in the
+cultivar's colour from colors.toml, framed on all its frames; the rows are stacked with a title.
+"""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+import tomllib
+from pathlib import Path
+
+from PIL import Image, ImageDraw
+
+HERE = Path(__file__).resolve().parent
+CULTIVARS = {"mellow_yellow": "Mellow Yellow (bell)", "maite_lady": "Maite Lady (funnel)",
+             "pinocchio": "Pinocchio (shallow ball)"}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("build", type=Path)
+    ap.add_argument("--frames", default="1,10,20,30,40,50,60,70,80,90,100")
+    ap.add_argument("--tile", default="240x240")
+    ap.add_argument("--elevation", default="15")
+    ap.add_argument("-o", "--output", required=True, type=Path)
+    a = ap.parse_args()
+    colors = tomllib.loads((HERE / "colors.toml").read_text())
+    render = Path(sys.executable).parent / "canopy-render"
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, title in CULTIVARS.items():
+            out = Path(tmp) / f"{name}.png"
+            frames = a.frames.split(",")
+            cmd = [str(render), "-q", str(a.build / name), "--color", colors[name], "--elevation", a.elevation,
+                   "--size", a.tile, "--fit-all", "-o", str(out), "--label", "" if len(frames) == 1 else "frame {n}"]
+            cmd += ["--frame", frames[0]] if len(frames) == 1 else ["--sheet", a.frames, "--columns", str(len(frames))]
+            subprocess.run(cmd, check=True)
+            im = Image.open(out).convert("RGB")
+            band = Image.new("RGB", (im.width, im.height + 28), "white")
+            band.paste(im, (0, 28))
+            ImageDraw.Draw(band).text((10, 8), title, fill=(0, 0, 0))
+            rows.append(band)
+    if len(a.frames.split(",")) == 1:  # the open flowers side by side
+        sheet = Image.new("RGB", (sum(r.width for r in rows), max(r.height for r in rows)), "white")
+        x = 0
+        for r in rows:
+            sheet.paste(r, (x, 0))
+            x += r.width
+    else:
+        sheet = Image.new("RGB", (max(r.width for r in rows), sum(r.height for r in rows)), "white")
+        y = 0
+        for r in rows:
+            sheet.paste(r, (0, y))
+            y += r.height
+    a.output.parent.mkdir(parents=True, exist_ok=True)
+    tmp_out = a.output.with_name("." + a.output.name + ".part.png")
+    sheet.save(tmp_out)
+    tmp_out.replace(a.output)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
