@@ -17,6 +17,8 @@ does not run them: CI is near its time budget (README, "Open it in Blender").
 - One OBJ frame of the lily imported with File > Import > Wavefront (.obj): its ``mtllib``
   library (``materials.mtl``, written by the usd stage's ``canopy-export --mtl``) gives each
   material the colour file's colour, linear, and ``s 1`` makes every polygon smooth.
+- Every other species' USD where it has been built (``make <species>``), at its first, middle
+  and last frame.
 - A small build whose faces change (a floret emerging, with faces of no material and two
   groups, ``--subsets floret``): Blender follows the changing faces and keeps every polygon's
   material in every frame.
@@ -82,29 +84,32 @@ def srgb_linear(rgb):
     return srgb_to_linear(rgb)
 
 
-def check_frames(report: dict, arrays: dict, parts: dict[str, list[Path]], colors: dict, start: int = 1):
-    """Every part's evaluated vertices, polygons and polygon materials against its OBJ frames."""
+def check_frames(report: dict, arrays: dict, parts: dict, colors: dict, frames=None, start: int = 1):
+    """Every part's evaluated vertices, polygons and polygon materials against its OBJ frames.
+
+    ``parts``: part name -> its OBJ frames (a list) or one OBJ file (a static part, the same in
+    every frame); ``frames``: the scene frames to check (default: every frame of the probe)."""
     from inflo.tools.canopy_render.colors import material_color
 
-    for name, paths in parts.items():
+    frames = frames or sorted(int(f) for f in next(iter(report["objects"].values()))["frames"])
+    for name, source in parts.items():
         obj = report["objects"][name]
-        assert obj["modifiers"] == ["MESH_SEQUENCE_CACHE"], obj["modifiers"]
+        static = not isinstance(source, list)
+        assert obj["modifiers"] == ([] if static else ["MESH_SEQUENCE_CACHE"]), (name, obj["modifiers"])
         slots = [m["name"] for m in obj["materials"]]
         for m in obj["materials"]:
             if not m["name"].endswith("_default"):
                 np.testing.assert_allclose(m["base_color"], srgb_linear(material_color(m["name"], colors)),
                                            atol=1e-6, err_msg=f"{name}: material {m['name']}")
         faces = None
-        for k, path in enumerate(paths):
-            f = start + k
-            mesh = read_obj(path)
+        for f in frames:
+            mesh = read_obj(source if static else source[f - start])
             assert_float32_equal(arrays[f"{name}/co/{f}"], mesh.vertices, f"{name} frame {f}")
             faces = arrays.get(f"{name}/faces/{f}", faces)
             np.testing.assert_array_equal(faces, mesh.faces, err_msg=f"{name} frame {f}: polygons")
-            want = ["" if m < 0 else mesh.materials[m] for m in
-                    (mesh.face_material if mesh.face_material is not None else np.full(mesh.n_faces, -1))]
-            got = [slots[i] for i in arrays[f"{name}/mat/{f}"]]
-            want = [w or f"{name}_default" for w in want]
+            fm = mesh.face_material if mesh.face_material is not None else np.full(mesh.n_faces, -1)
+            want = [f"{name}_default" if m < 0 else mesh.materials[m] for m in fm]
+            got = [slots[i] for i in arrays[f"{name}/mat/{f}"]] if slots else [f"{name}_default"] * mesh.n_faces
             assert got == want, f"{name} frame {f}: polygon materials differ at polygon " \
                                 f"{next(i for i, (a, b) in enumerate(zip(got, want)) if a != b)}"
 
@@ -174,6 +179,38 @@ def test_obj_frame_in_blender(bpy_python, lily_build, tmp_path):
         for m in obj["materials"]:
             np.testing.assert_allclose(m["base_color"], srgb_linear(material_color(m["name"], colors)), atol=2e-6,
                                        err_msg=f"{folder}: {m['name']} (Blender's default grey: no materials.mtl?)")
+
+
+# the parts of every species' usd stage (pipelines/*/Makefile): name -> sequence folder or OBJ file
+SPECIES_PARTS = {
+    "yarrow": {"heads": "canopy", "branches": "branches/branches.obj"},
+    "orlaya": {"florets": "canopy", "branches": "branches/branches.obj"},
+    "sunflower": {"florets": "canopy", "receptacle": "head/receptacle"},
+    "gaillardia": {"florets": "canopy", "receptacle": "head/receptacle"},
+    "dahlia": {"florets": "canopy", "receptacle": "head/receptacle"},
+    "dyssodia": {"florets": "canopy", "receptacle": "head/receptacles.obj"},
+}
+
+
+@pytest.mark.parametrize("species", sorted(SPECIES_PARTS))
+def test_species_usd_in_blender(bpy_python, species, tmp_path):
+    """Another species' build/<species>/<species>.usdc, where it has been built (``make
+    <species>``; not built here: minutes each): first, middle and last frame as in the lily test,
+    faces that change (florets emerging) included."""
+    from inflo.tools.canopy_render.colors import load_color_file
+
+    build = REPO / "build" / species
+    usd = build / f"{species}.usdc"
+    if not usd.is_file():
+        pytest.skip(f"{usd.relative_to(REPO)} not built (make {species})")
+    parts = {name: (build / src if src.endswith(".obj") else list_obj_sequence(build / src))
+             for name, src in SPECIES_PARTS[species].items()}
+    n = max(len(p) for p in parts.values() if isinstance(p, list))
+    frames = sorted({1, n // 2, n})
+    report, arrays = probe(bpy_python, usd, tmp_path / "probe", "--faces", "--frames", ",".join(map(str, frames)))
+    assert (report["frame_start"], report["frame_end"]) == (1, n)
+    assert sorted(report["objects"]) == sorted(parts)
+    check_frames(report, arrays, parts, load_color_file(REPO / "pipelines" / species / "colors.toml"), frames)
 
 
 def _frame(k: int) -> str:

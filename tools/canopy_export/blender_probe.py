@@ -106,6 +106,8 @@ def _render(bpy, args, root_matrix, report):
     scene.render.resolution_x, scene.render.resolution_y = w, h
     scene.render.resolution_percentage = 100
     scene.render.film_transparent = True
+    # colours as the file gives them (Blender's default view transform, AgX, desaturates bright ones)
+    scene.view_settings.view_transform = "Standard"
     scene.render.image_settings.file_format = "PNG"
     scene.render.image_settings.color_mode = "RGBA"
     scene.render.filepath = args.render
