@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +14,10 @@ from inflo.formats.errors import FormatError
 from inflo.formats.func import Function, write_func
 from inflo.formats.obj import read_obj
 from inflo.tools.venation.blade import Growth, blade_from_points, polygon_area, triangulate_blade
-from inflo.tools.venation.graph import check_forest, cycle_rank, strahler_orders, vein_widths
+from inflo.tools.venation.blade import _ear_clip
+from inflo.tools.venation.graph import (
+    check_forest, cycle_rank, elongation_widths, refine_veins, strahler_orders, vein_widths,
+)
 from inflo.tools.venation.neighbourhood import (
     NEAREST,
     RELATIVE,
@@ -407,3 +411,123 @@ def test_examples_parse():
         from inflo.tools.venation.params import read_params
 
         load_inputs(read_params(t))
+
+
+# --------------------------------------------------------------------------------------------
+# Runions ch. 5 refinements: areoles with blindly terminating veins, widths by elongation,
+# adaptive corner cutting; and veins kept inside a dissected blade
+
+
+def test_areole_algorithm_makes_blind_veinlets_and_only_after_the_event():
+    closed = _run("closed", "uniform", seed=2)
+    never = _run("closed", "uniform", seed=2, blind_after=10 ** 6)
+    assert np.array_equal(closed.node_pos, never.node_pos) and np.array_equal(closed.extra_edges, never.extra_edges)
+    blind = _run("closed", "uniform", seed=2, blind_after=0)  # every source after the event (sec. 5.2.4)
+    assert blind.stopped == "finished" and blind.sources_left == 0
+    assert len(blind.extra_edges) == 0 and cycle_rank(blind.n_nodes, blind.node_parent, blind.extra_edges) == 0
+    assert check_forest(blind.node_parent) and blind.blind_ends > 20
+    # a blind vein ends near, but not on, the node it headed for: its tip is within 1.5 D of
+    # another vein (the gap D plus the D/2 guard) that is not its own parent
+    parent = blind.node_parent
+    tips = np.setdiff1d(np.flatnonzero(parent >= 0), parent[parent >= 0])
+    d, j = cKDTree(blind.node_pos).query(blind.node_pos[tips], k=2)
+    near = (d[:, 1] < 1.5 + 1e-9) & (j[:, 1] != parent[tips])
+    assert near.sum() > 20
+    assert len(cKDTree(blind.node_pos).query_pairs(0.5 - 1e-9)) == 0
+    late = _run("closed", "uniform", seed=2, blind_after=60)  # loops first, blind veinlets later
+    assert 0 < len(late.extra_edges) < len(closed.extra_edges) and late.blind_ends > 0
+
+
+def test_widths_by_elongation():
+    pos = np.array([[0, 0], [0, 3], [0, 4], [2, 3]], float)
+    parent = np.array([-1, 0, 1, 1])
+    w = elongation_widths(pos, parent, 1.0, 0.5)
+    assert w.tolist() == [1.5, 1.5, 0.5, 1.0]  # w0 max(1, |v - parent| / D); the root: its longest child
+    marginal = _run("open", "marginal")  # marginal growth stretches no vein
+    assert np.allclose(elongation_widths(marginal.node_pos, marginal.node_parent, 1.0, 0.3), 0.3)
+    uni = _run("open", "uniform")
+    wu = elongation_widths(uni.node_pos, uni.node_parent, 1.0, 0.3)
+    assert wu.max() == pytest.approx(0.3 / 0.2, rel=0.05)  # the first segments grew from sigma 0.2 to 1
+    born = uni.node_iter[uni.node_parent >= 0]
+    wv = wu[uni.node_parent >= 0]
+    assert wv[born < 10].mean() > 2 * wv[born > 60].mean()  # older veins are wider
+
+
+def test_corner_cutting_follows_eqs_5_3_and_5_4():
+    pos = np.array([[0, 0], [2, 2], [4, 0]], float)
+    p, par, ext, own = refine_veins(pos, [-1, 0, 1], np.zeros((0, 2)), 3.5, alpha=0.75)  # one cut: 2.1 + 1 < 3.5
+    assert len(p) == 4 and np.allclose(p[0], [0, 0]) and np.allclose(p[1], [4, 0])  # the ends stay
+    assert np.allclose(p[2], 0.25 * pos[0] + 0.75 * pos[1]) and np.allclose(p[3], 0.25 * pos[2] + 0.75 * pos[1])
+    assert par.tolist() == [-1, 3, 0, 2] and own.tolist() == [0, 2, 1, 1]
+    r = _run("closed", "uniform", seed=5)
+    thr = 3.0
+    p, par, ext, own = refine_veins(r.node_pos, r.node_parent, r.extra_edges, thr, alpha=0.75)
+    assert len(p) > r.n_nodes and check_forest(par)
+    assert cycle_rank(len(p), par, ext) == cycle_rank(r.n_nodes, r.node_parent, r.extra_edges)
+    # every joint (root, branch point, tip, anastomosis end) keeps its position
+    kids = np.bincount(r.node_parent[r.node_parent >= 0], minlength=r.n_nodes)
+    joint = (kids != 1) | (r.node_parent < 0)
+    joint[r.extra_edges.ravel()] = True
+    assert np.allclose(p[ext], r.node_pos[r.extra_edges])
+    kept_joints = np.flatnonzero(joint)
+    assert all(np.any(np.all(np.isclose(p, r.node_pos[j]), axis=1)) for j in kept_joints[:200])
+    # afterwards no interior corner of a chain is longer than the threshold over its two segments
+    kids2 = np.bincount(par[par >= 0], minlength=len(p))
+    joint2 = (kids2 != 1) | (par < 0)
+    joint2[ext.ravel()] = True
+    inner = np.flatnonzero(~joint2)
+    child = np.full(len(p), -1)
+    child[par[par >= 0]] = np.flatnonzero(par >= 0)
+    a, b, c = p[par[inner]], p[inner], p[child[inner]]
+    assert np.all(np.linalg.norm(b - a, axis=1) + np.linalg.norm(c - b, axis=1) <= thr + 1e-9)
+    # stretched veins were cut; a pattern without stretching is left as it is
+    m = _run("open", "marginal")
+    q = refine_veins(m.node_pos, m.node_parent, m.extra_edges, 2.5)
+    assert np.array_equal(q[0], m.node_pos) and np.array_equal(q[1], m.node_parent)
+
+
+DISSECTED = np.array([[0, 0], [4, 0], [4, 30], [12, 50], [16, 50], [6, 28], [6, 0], [10, 0], [10, -4],
+                      [-6, -4], [-6, 0], [-2, 0], [-2, 28], [-12, 50], [-8, 50], [0, 30]], float)
+
+
+def test_veins_stay_inside_a_dissected_blade():
+    """Two narrow lobes, 8 D apart at their tips: without the constraint veins cut across the gap."""
+    blade = blade_from_points(DISSECTED, base=(2.0, -2.0))
+    growth = Growth("uniform", (0.3, 0.3), (1.0, 1.0), (0.01, 0.01))
+
+    def outside(r):
+        mid = 0.5 * (r.node_pos[1:] + r.node_pos[r.node_parent[1:]])
+        return int((~blade.contains(np.vstack([mid, r.node_pos]))).sum())
+
+    kw = dict(pattern="open", kill_distance=2.0, birth_source=1.5, birth_vein=1.5, darts=0.2, seed=3)
+    inside = simulate(blade, growth, SimParams(inside=True, **kw))
+    assert inside.stopped == "finished" and outside(inside) == 0 and inside.n_nodes > 40
+    assert check_forest(inside.node_parent)
+    assert outside(simulate(blade, growth, SimParams(**kw))) > 0
+
+
+def test_ear_clipping_a_dissected_margin():
+    t = np.linspace(0, 2 * np.pi, 3000, endpoint=False)
+    r = 1 + 0.6 * np.sin(41 * t)
+    poly = np.c_[r * np.cos(t), r * np.sin(t)]
+    f = _ear_clip(poly)
+    a = poly[f]
+    cross = (a[:, 1, 0] - a[:, 0, 0]) * (a[:, 2, 1] - a[:, 0, 1]) - (a[:, 1, 1] - a[:, 0, 1]) * (a[:, 2, 0] - a[:, 0, 0])
+    assert len(f) == len(poly) - 2 and np.all(cross > 0)
+    assert 0.5 * cross.sum() == pytest.approx(polygon_area(poly), rel=1e-9)
+
+
+@pytest.mark.parametrize("extra, what", [
+    ("[veins]\nblind_after = 5\n", "pattern = 'open'"),
+    ("[veins]\npattern = \"closed\"\nblind_after = -3\n", "veins.blind_after >= 0"),
+    ("[veins]\npattern = \"closed\"\nblind_gap = 0.2\n", "veins.blind_gap in [0.5, 100]"),
+    ("[refine]\nthreshold = 1.5\n", ">= 2 x veins.step"),
+    ("[refine]\nthreshold = 3\nalpha = 1.2\n", "refine.alpha in [0.5, 1)"),
+    ("[refine]\nthreshold = 3\njitter = -0.1\n", "refine.jitter in [0, 0.5]"),
+    ("[width]\nmodel = \"murray\"\n", "pipe"),
+    ("[veins]\ninside = 1\n", "veins.inside"),
+])
+def test_bad_chapter_5_parameters(tmp_path, extra, what):
+    with pytest.raises(FormatError, match=re.escape(what)) as exc:
+        parse_params(f"[blade]\npolygon = {POLY}\n" + extra, tmp_path / "p.toml")
+    assert "p.toml:" in str(exc.value) and "\n" not in str(exc.value)

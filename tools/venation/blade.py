@@ -319,36 +319,54 @@ def triangulate_blade(poly, spacing: float | None = None) -> tuple[np.ndarray, n
 
 
 def _ear_clip(p: np.ndarray) -> np.ndarray:
-    """Triangles of a simple counter-clockwise polygon by ear clipping (O(m^2))."""
-    idx = list(range(len(p)))
-    out = []
+    """Triangles of a simple counter-clockwise polygon by ear clipping (O(m^2) ear tests, each
+    against the reflex vertices only; compiled: a dissected leaf has thousands of margin points)."""
+    tri, n = _ear_clip_kernel(np.ascontiguousarray(p, dtype=np.float64))
+    return tri[:n].astype(np.int32).reshape(-1, 3)
 
-    def cross(a, b, c):
-        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 
-    guard = 0
-    while len(idx) > 3 and guard < 10 * len(p) ** 2:
-        guard += 1
-        n = len(idx)
-        for k in range(n):
-            i0, i1, i2 = idx[k - 1], idx[k], idx[(k + 1) % n]
-            a, b, c = p[i0], p[i1], p[i2]
-            if cross(a, b, c) <= 0:
-                continue
-            ok = True
-            for j in idx:
-                if j in (i0, i1, i2):
-                    continue
-                q = p[j]
-                if cross(a, b, q) >= 0 and cross(b, c, q) >= 0 and cross(c, a, q) >= 0:
-                    ok = False
-                    break
-            if ok:
-                out.append((i0, i1, i2))
-                del idx[k]
-                break
+@njit(cache=True)
+def _ear_clip_kernel(p):
+    m = p.shape[0]
+    nxt = np.empty(m, np.int64)
+    prv = np.empty(m, np.int64)
+    for i in range(m):
+        nxt[i] = (i + 1) % m
+        prv[i] = (i - 1) % m
+    out = np.empty((max(m - 2, 1), 3), np.int64)
+    n_out = 0
+    left = m
+    i = 0
+    miss = 0
+    while left > 3 and miss < left:
+        a, b, c = prv[i], i, nxt[i]
+        ax, ay, bx, by, cx, cy = p[a, 0], p[a, 1], p[b, 0], p[b, 1], p[c, 0], p[c, 1]
+        ok = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) > 0.0
+        if ok:
+            j = nxt[c]
+            while j != a:
+                qx, qy = p[j, 0], p[j, 1]
+                # only a reflex (or flat) vertex can lie in an ear
+                pj, nj = prv[j], nxt[j]
+                if (p[j, 0] - p[pj, 0]) * (p[nj, 1] - p[pj, 1]) - (p[j, 1] - p[pj, 1]) * (p[nj, 0] - p[pj, 0]) <= 0.0:
+                    if ((bx - ax) * (qy - ay) - (by - ay) * (qx - ax) >= 0.0
+                            and (cx - bx) * (qy - by) - (cy - by) * (qx - bx) >= 0.0
+                            and (ax - cx) * (qy - cy) - (ay - cy) * (qx - cx) >= 0.0):
+                        ok = False
+                        break
+                j = nxt[j]
+        if ok:
+            out[n_out, 0], out[n_out, 1], out[n_out, 2] = a, b, c
+            n_out += 1
+            nxt[a] = c
+            prv[c] = a
+            left -= 1
+            i = a
+            miss = 0
         else:
-            break
-    if len(idx) == 3:
-        out.append(tuple(idx))
-    return np.array(out, dtype=np.int32).reshape(-1, 3)
+            i = nxt[i]
+            miss += 1
+    if left == 3:
+        out[n_out, 0], out[n_out, 1], out[n_out, 2] = prv[i], i, nxt[i]
+        n_out += 1
+    return out, n_out

@@ -10,20 +10,20 @@
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from inflo.formats.atomic import frame_name
 
-from .graph import cycle_rank, strahler_orders, vein_widths
+from .graph import cycle_rank, elongation_widths, refine_veins, strahler_orders, vein_widths
 from .output import (TextureStyle, render_texture, save_png, stale_frames, texture_box, write_blade_mesh,
                      write_graph, write_margin, write_widths)
 from .params import Inputs, Params
 from .simulate import SimParams, Snapshot, VenationResult, simulate
 
-__all__ = ["run_venation", "VenationRun", "sim_params", "texture_style", "summary"]
+__all__ = ["run_venation", "VenationRun", "sim_params", "texture_style", "summary", "finish_graph"]
 
 
 @dataclass
@@ -37,6 +37,7 @@ class VenationRun:
     written: list
     mesh: tuple  # (vertices, triangles) of blade.obj
     header: str
+    simulated_nodes: int = 0  # before the refinement of sec. 5.2.6
 
 
 def sim_params(p: Params, inputs: Inputs, seed: int | None = None) -> SimParams:
@@ -45,7 +46,8 @@ def sim_params(p: Params, inputs: Inputs, seed: int | None = None) -> SimParams:
                      kill_distance=p.veins.kill_distance, birth_source=p.sources.birth_source,
                      birth_vein=p.sources.birth_vein, darts=p.sources.darts,
                      roots=tuple(map(tuple, inputs.roots.tolist())), settle=p.sources.settle,
-                     region=_region(p),
+                     region=_region(p), blind_after=p.veins.blind_after, blind_gap=p.veins.blind_gap,
+                     inside=p.veins.inside,
                      max_iterations=p.run.max_iterations, max_nodes=p.run.max_nodes,
                      seed=p.run.seed if seed is None else seed)
 
@@ -76,9 +78,30 @@ def _header(p: Params, sp: SimParams, inputs: Inputs) -> str:
         grow += f" {s0[0]:g}" + (f",{s0[1]:g}" if s0[1] != s0[0] else "") + f" -> {s1[0]:g}" + \
             (f",{s1[1]:g}" if s1[1] != s1[0] else "") + f" in {g.steps} steps"
     nb = f" ({sp.neighbourhood} neighbourhood)" if sp.pattern == "closed" else ""
+    nb += ", veins inside the blade" if sp.inside else ""
     return (f"venation (Runions ch. 4): {sp.pattern} pattern{nb}, growth {grow}; D {sp.step:g} d_k {sp.kill_distance:g} "
-            f"b_s {sp.birth_source:g} b_v {sp.birth_vein:g} rho {sp.darts:g} ({sp.region}); seed {sp.seed}\n"
-            f"widths: Murray's law, tip {p.width.tip:g} exponent {p.width.exponent:g} increment {p.width.increment:g}")
+            f"b_s {sp.birth_source:g} b_v {sp.birth_vein:g} rho {sp.darts:g} ({sp.region}); seed {sp.seed}"
+            + (f"; blind veinlets (areoles, sec. 5.2.4) from iteration {sp.blind_after}, gap {sp.blind_gap:g} D"
+               if sp.blind_after >= 0 else "")
+            + (f"; refined (sec. 5.2.6) at {p.refine.threshold:g}, alpha {p.refine.alpha:g}, jitter {p.refine.jitter:g}"
+               if p.refine.threshold > 0 else "") + "\n"
+            + (f"widths: elongation (sec. 5.2), tip {p.width.tip:g}" if p.width.model == "elongation" else
+               f"widths: Murray's law, tip {p.width.tip:g} exponent {p.width.exponent:g} increment {p.width.increment:g}"))
+
+
+def finish_graph(p: Params, pos, parent, extra, seed: int):
+    """Widths (pipe model, eq. 3.5, or elongation, sec. 5.2) and the optional refinement of sec.
+    5.2.6 of a graph in real coordinates: (pos, parent, extra, widths, owner), ``owner`` mapping
+    each node to the simulated node it stands for."""
+    if p.width.model == "elongation":
+        widths = elongation_widths(pos, parent, p.veins.step, p.width.tip)
+    else:
+        widths = vein_widths(parent, p.width.tip, p.width.exponent, p.width.increment)
+    r = p.refine
+    if r.threshold > 0:
+        pos, parent, extra, owner = refine_veins(pos, parent, extra, r.threshold, r.alpha, r.jitter, seed)
+        return pos, parent, extra, widths[owner], owner
+    return pos, parent, extra, widths, np.arange(len(parent))
 
 
 def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None, frame_step: int | None = None,
@@ -101,13 +124,13 @@ def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None,
     def on_frame(snap: Snapshot):
         name = frame_name(snap.iteration, prefix="veins_")
         fdir = out / "frames"
-        w = vein_widths(snap.node_parent, p.width.tip, p.width.exponent, p.width.increment)
+        fpos, fpar, fext, w, _ = finish_graph(p, snap.node_pos, snap.node_parent, snap.extra_edges, sp.seed)
         head = f"{header}\niteration {snap.iteration}: {len(snap.node_pos)} vein nodes, {len(snap.sources)} sources"
-        write_graph(fdir / name, snap.node_pos, snap.node_parent, snap.extra_edges, head)
+        write_graph(fdir / name, fpos, fpar, fext, head)
         write_widths(fdir / frame_name(snap.iteration, prefix="veins_", suffix=".widths"), w, head)
         write_margin(fdir / frame_name(snap.iteration, prefix="blade_"), snap.blade, head)
         if textures:
-            img = render_texture(snap.node_pos, snap.node_parent, w, snap.extra_edges, snap.blade, style, box=box)
+            img = render_texture(fpos, fpar, w, fext, snap.blade, style, box=box)
             save_png(img, fdir / frame_name(snap.iteration, prefix="texture_", suffix=".png"))
         frames.append(snap.iteration)
 
@@ -115,7 +138,10 @@ def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None,
     if step > 0:
         stale_frames(out / "frames", frames)
         written.append(out / "frames")
-    widths = vein_widths(res.node_parent, p.width.tip, p.width.exponent, p.width.increment)
+    simulated = res.n_nodes
+    pos, parent, extra, widths, owner = finish_graph(p, res.node_pos, res.node_parent, res.extra_edges, sp.seed)
+    if len(parent) != simulated or not np.array_equal(owner, np.arange(simulated)):
+        res = replace(res, node_pos=pos, node_parent=parent, extra_edges=extra, node_iter=res.node_iter[owner])
     orders = strahler_orders(res.node_parent)
     loops = cycle_rank(res.n_nodes, res.node_parent, res.extra_edges)
     head = (f"{header}\n{res.iterations} iterations, {res.n_nodes} vein nodes, {loops} loops, "
@@ -130,7 +156,7 @@ def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None,
     save_png(img, out / "texture.png")
     written += [out / n for n in ("veins.obj", "veins.widths", "blade.obj", "blade.mtl", "texture.png")]
     return VenationRun(result=res, widths=widths, orders=orders, loops=loops, written=written, mesh=mesh,
-                       header=header)
+                       header=header, simulated_nodes=simulated)
 
 
 def summary(run: VenationRun, out_dir) -> str:
@@ -143,6 +169,9 @@ def summary(run: VenationRun, out_dir) -> str:
         f"{r.iterations} iterations ({r.growth_steps} of growth), {r.n_nodes} vein nodes, {len(r.extra_edges)} "
         f"anastomoses, {run.loops} loops, {r.sources_placed} sources placed, {r.sources_left} left"
         + (f" ({r.sources_stalled} removed with their veins stopped short by the guards)" if r.sources_stalled else "")
+        + (f"; {r.blind_ends} blindly terminating veins (sec. 5.2.4)" if r.blind_ends else "")
+        + (f"; refined from {run.simulated_nodes} simulated nodes (sec. 5.2.6)"
+           if run.simulated_nodes and run.simulated_nodes != r.n_nodes else "")
         + ("" if r.stopped == "finished" else f"; stopped at {r.stopped.replace('_', ' ')}"),
         f"vein orders (Strahler, segments per order) {orders}; widths {run.widths.min():.4g}-{run.widths.max():.4g}; "
         f"blade mesh {run.mesh[0]} vertices, {run.mesh[1]} triangles",

@@ -13,9 +13,11 @@ Sections (Runions ch. 4):
 - top level: ``seed``, ``max_iterations``, ``max_nodes``;
 - ``[blade]``: the leaf blade (sec. 4.2.2) as a contour or a polygon, its size and base;
 - ``[growth]``: none, marginal, uniform (isogonic) or anisotropic growth (sec. 4.2.3, fig. 4.2);
-- ``[veins]``: open or closed patterns (secs. 4.2, 4.3), D, d_k, the initial vein nodes;
+- ``[veins]``: open or closed patterns (secs. 4.2, 4.3), D, d_k, the initial vein nodes, veins
+  kept inside the blade, blindly terminating veins (the areole algorithm, secs. 5.2.3-5.2.5);
 - ``[sources]``: auxin sources by dart throwing: b_s, b_v, rho (sec. 4.2.3);
-- ``[width]``: vein widths by Murray's law (sec. 4.2.5, eq. 3.5);
+- ``[width]``: vein widths by Murray's law (sec. 4.2.5, eq. 3.5) or by elongation (sec. 5.2);
+- ``[refine]``: adaptive corner cutting of stretched veins (sec. 5.2.6, eqs. 5.3-5.4);
 - ``[texture]``: the PNG of the veins over the blade;
 - ``[output]``: frames for an animation, the blade mesh.
 """
@@ -34,12 +36,13 @@ from inflo.formats.errors import FormatError, did_you_mean, read_bytes, shorten
 
 from .blade import GROWTH_TYPES, Blade, Growth, blade_from_points
 
-__all__ = ["SCHEMA", "Params", "Run", "BladeSpec", "GrowthSpec", "Veins", "Sources", "Width", "Texture", "Output",
+__all__ = ["SCHEMA", "Params", "Run", "BladeSpec", "GrowthSpec", "Veins", "Sources", "Width", "Texture", "Output", "Refine",
            "read_params", "parse_params", "load_inputs", "Inputs", "PATTERNS", "NEIGHBOURHOODS"]
 
 PATTERNS = ("open", "closed")
 NEIGHBOURHOODS = ("relative", "urquhart")
 REGIONS = ("auto", "blade", "margin")
+WIDTH_MODELS = ("pipe", "elongation")
 MAX_SAMPLES = 100_000
 MAX_TEXTURE = 16_384
 
@@ -101,6 +104,9 @@ class Veins:
     step: float = _key("float", 1.0)
     kill_distance: float = _key("float", 1.0)
     roots: list = _key("points", [])
+    inside: bool = _key("bool", False)
+    blind_after: int = _key("int", -1)
+    blind_gap: float = _key("float", 1.0)
 
 
 @dataclass(frozen=True)
@@ -121,6 +127,16 @@ class Width:
     tip: float = _key("float", 0.25)
     exponent: float = _key("float", 2.0)
     increment: float = _key("float", 0.0)
+    model: str = _key(("choice", WIDTH_MODELS), "pipe")
+
+
+@dataclass(frozen=True)
+class Refine:
+    """``[refine]``: adaptive vein refinement by corner cutting (Runions sec. 5.2.6, eqs. 5.3-5.4)."""
+
+    threshold: float = _key("float", 0.0)
+    alpha: float = _key("float", 0.75)
+    jitter: float = _key("float", 0.0)
 
 
 @dataclass(frozen=True)
@@ -154,13 +170,14 @@ class Params:
     veins: Veins = field(default_factory=Veins)
     sources: Sources = field(default_factory=Sources)
     width: Width = field(default_factory=Width)
+    refine: Refine = field(default_factory=Refine)
     texture: Texture = field(default_factory=Texture)
     output: Output = field(default_factory=Output)
     source: str = "<params>"
     text: str = ""
 
 
-_SECTIONS = {"blade": BladeSpec, "growth": GrowthSpec, "veins": Veins, "sources": Sources, "width": Width,
+_SECTIONS = {"blade": BladeSpec, "growth": GrowthSpec, "veins": Veins, "sources": Sources, "width": Width, "refine": Refine,
              "texture": Texture, "output": Output}
 
 
@@ -358,6 +375,12 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("veins", "kill_distance", "> 0")
     if v["kill_distance"] < v["step"]:
         fail("veins", "kill_distance", f">= veins.step {v['step']:g} (a vein would step over its source)")
+    if v["blind_after"] < -1:
+        fail("veins", "blind_after", ">= 0 (the iteration of the event of sec. 5.2.4), or -1 for never")
+    if v["blind_after"] >= 0 and v["pattern"] != "closed":
+        fail("veins", "blind_after", "-1 with pattern = 'open' (blind veinlets are areoles of a closed pattern)")
+    if not 0.5 <= v["blind_gap"] <= 100:
+        fail("veins", "blind_gap", "in [0.5, 100] (times D)")
     if v["pattern"] == "open" and v["neighbourhood"] == "urquhart":
         fail("veins", "neighbourhood", "only with pattern = 'closed' (an open source attracts its closest node)")
     s = p["sources"]
@@ -378,6 +401,15 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("width", "exponent", "> 0")
     if w["increment"] < 0:
         fail("width", "increment", ">= 0")
+    r = p["refine"]
+    if r["threshold"] < 0:
+        fail("refine", "threshold", ">= 0 (0: no refinement)")
+    if 0 < r["threshold"] < 2.0 * v["step"]:
+        fail("refine", "threshold", f">= 2 x veins.step = {2 * v['step']:g} (two segments of length D), or 0")
+    if not 0.5 <= r["alpha"] < 1.0:
+        fail("refine", "alpha", "in [0.5, 1) (the corner-cutting ratio of eqs. 5.3-5.4)")
+    if not 0.0 <= r["jitter"] <= 0.5:
+        fail("refine", "jitter", "in [0, 0.5] (times the new segment's length)")
     t = p["texture"]
     if not 16 <= t["size"] <= MAX_TEXTURE:
         fail("texture", "size", f"in [16, {MAX_TEXTURE}] pixels")

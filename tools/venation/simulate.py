@@ -25,6 +25,13 @@ Every iteration runs the three processes of fig. 4.8 in turn:
    closest to s), so the venation graph holds the loops. Nodes within d_k of a source no longer
    grow toward it.
 
+Runions ch. 5 (secs. 5.2.3-5.2.5, the *areole algorithm*): after the iteration ``blind_after``
+("the event leading to blindly terminating veins", sec. 5.2.4) a new closed-pattern source stores
+its relative neighbourhood, only its closest neighbour grows toward it (fig. 5.5 c-d), and when
+that vein reaches it the vein bifurcates toward the stored neighbours (:func:`grow_sprouts`,
+fig. 5.5 e-g), stopping short of each: a blindly terminating vein (fig. 5.4 i). With ``inside``
+the veins are kept in the blade (for dissected leaves, :func:`grow_veins`).
+
 Two guards keep the graph clean. A node whose new direction repeats its last one (its sources
 unchanged) grows toward its closest source instead (branch-gen's SCA does the same); a new node
 that would come closer than D/2 to an existing node grows toward the closest source instead, and
@@ -38,7 +45,8 @@ source, or one the Urquhart approximation keeps in V(s) although a node it did n
 the lune); such removals are counted (``sources_stalled``).
 
 The loop stops after the blade has stopped growing, when no source is left and no dart has been
-accepted for ``settle`` iterations (or at ``max_iterations`` / ``max_nodes``).
+accepted for ``settle`` iterations (or at ``max_iterations`` / ``max_nodes``); with veins kept
+inside the blade (``inside``), when no vein node has been added for ``settle`` iterations.
 """
 from __future__ import annotations
 
@@ -50,7 +58,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 from numba import njit
 
-from .blade import Blade, Growth, inside_blade
+from .blade import Blade, Growth, _inside, inside_blade
 from .neighbourhood import (
     MAX_NEIGHBOURS,
     NEAREST,
@@ -87,6 +95,13 @@ class SimParams:
     region : "blade" (darts anywhere in the blade) or "margin" (only in the blade new this step:
         sec. 4.2.3's marginal growth, where new sources appear only on the margin)
     settle : iterations without a new source after growth before the run stops
+    blind_after : closed patterns: the iteration of "the event leading to blindly terminating
+        veins" (sec. 5.2.4); sources placed from then on follow the areole algorithm (secs.
+        5.2.3-5.2.5) and their veins stop short of the nodes they head for; -1: never
+    blind_gap : the extending vein of an areole source stops when closer than ``blind_gap`` x D
+        to the relative neighbour it heads for (sec. 5.2.5: "less than D")
+    inside : veins stay in the blade (a new node and the middle of its segment inside it); an open
+        source whose closest node is stopped by this is removed (for dissected leaves)
     """
 
     pattern: str = "open"
@@ -99,6 +114,9 @@ class SimParams:
     roots: tuple = ()
     region: str = "blade"
     settle: int = 10
+    blind_after: int = -1
+    blind_gap: float = 1.0
+    inside: bool = False
     max_iterations: int = 100_000
     max_nodes: int = 2_000_000
     seed: int = 1
@@ -130,6 +148,7 @@ class Sources(NamedTuple):
     ntag: np.ndarray  # (cap,) int64
     near: np.ndarray  # (cap,) int64 nearest vein node (open patterns), -1 before the first search
     near_d2: np.ndarray  # (cap,) float64 squared distance to it
+    areole: np.ndarray  # (cap,) bool: placed after the event of sec. 5.2.4 (the areole algorithm)
 
 
 def _new_nodes(cap):
@@ -142,7 +161,7 @@ def _new_sources(cap):
     return Sources(np.zeros((cap, 2)), np.zeros(cap, np.bool_), np.full(cap, -1, np.int64),
                    np.full(cap, -1, np.int64), np.full(cap, -1, np.int64),
                    np.full((cap, MAX_NEIGHBOURS), -1, np.int64), np.zeros(cap, np.int64),
-                   np.full(cap, -1, np.int64), np.full(cap, np.inf))
+                   np.full(cap, -1, np.int64), np.full(cap, np.inf), np.zeros(cap, np.bool_))
 
 
 def _grow_rows(tup, cap):
@@ -205,6 +224,7 @@ def throw_darts(cand, base, scale, prev_scale, bands, src, n_src, src_grid, bs2,
         src.ntag[s] = 0
         src.near[s] = -1
         src.near_d2[s] = np.inf
+        src.areole[s] = False
         grid_insert(src_grid, src.pos, s, s + 1)
         n_src += 1
     return n_src
@@ -226,12 +246,20 @@ def _tag_root(v, s, src, nodes):
 
 
 @njit(cache=True)
-def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra):
+def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra, sprouts, n_sprouts, gap2,
+                   open_stall):
     """Source removal (open: a node within d_k; closed: sec. 4.3's tagging) after the
     neighbourhoods ``nbr`` of the ``live`` sources were found. In a closed pattern a node that was
     influenced in the previous iteration but did not grow (a guard of :func:`grow_veins` stopped
     it) counts as having reached its sources. Joins the veins that reached a removed closed-pattern source (``extra``
-    rows from ``n_extra``). Returns (removed, removed with no node within d_k, n_extra)."""
+    rows from ``n_extra``).
+
+    An areole source (sec. 5.2.5, fig. 5.5) stores its relative neighbourhood when first seen (c)
+    and only its closest node grows toward it (d; ``nbr_n`` is set to 1); when that vein comes
+    within d_k (or cannot grow) the source is removed and the vein bifurcates toward the stored
+    neighbours (e-f): a ``sprouts`` row (tip node, target node) for every stored neighbour but the
+    one the vein came from and those already within the gap. Returns (removed, removed with no
+    node within d_k, n_extra, n_sprouts)."""
     removed = 0
     stalled = 0
     reps = np.empty(MAX_NEIGHBOURS, np.int64)
@@ -244,8 +272,35 @@ def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra
         sx, sy = src.pos[s, 0], src.pos[s, 1]
         v0 = nbr[j, 0]
         d0 = (nodes.pos[v0, 0] - sx) ** 2 + (nodes.pos[v0, 1] - sy) ** 2
+        if src.areole[s]:
+            if src.tag_iter[s] < 0:  # (c) the relative neighbourhood at placement, stored
+                src.tag_iter[s] = it
+                src.ntag[s] = n
+                for k in range(n):
+                    src.tags[s, k] = nbr[j, k]
+            nbr_n[j] = 1  # (d) the closest relative neighbour wins
+            if d0 < dk2 or nodes.stalled[v0] == it - 1:
+                src.alive[s] = False
+                src.died[s] = it
+                removed += 1
+                if d0 >= dk2:
+                    stalled += 1
+                came = _tag_root(v0, s, src, nodes)
+                for k in range(src.ntag[s]):
+                    u = src.tags[s, k]
+                    if u == came or u == v0 or n_sprouts >= sprouts.shape[0]:
+                        continue
+                    du = (nodes.pos[u, 0] - nodes.pos[v0, 0]) ** 2 + (nodes.pos[u, 1] - nodes.pos[v0, 1]) ** 2
+                    if du < gap2:
+                        continue
+                    sprouts[n_sprouts, 0] = v0
+                    sprouts[n_sprouts, 1] = u
+                    n_sprouts += 1
+            continue
         if not closed:
-            if d0 < dk2:
+            # with veins kept inside the blade, an open source whose closest node cannot grow
+            # toward it (across a gap of the blade) is given up, as in a closed pattern
+            if d0 < dk2 or (open_stall and nodes.stalled[v0] == it - 1):
                 src.alive[s] = False
                 src.died[s] = it
                 removed += 1
@@ -316,14 +371,53 @@ def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra
                     extra[n_extra, 0] = min(r, r0)
                     extra[n_extra, 1] = max(r, r0)
                     n_extra += 1
-    return removed, stalled, n_extra
+    return removed, stalled, n_extra, n_sprouts
 
 
 @njit(cache=True)
-def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, it):
+def grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, step, gap2, grid, it):
+    """The veins of removed areole sources extending toward their stored relative neighbours
+    (sec. 5.2.5, fig. 5.5 f-g): each sprout's tip grows one node D toward its target; a sprout
+    closer than the gap to its target, or whose next node would come within D/2 of another node,
+    stops there without joining it (after the event of sec. 5.2.4: a blindly terminating vein,
+    fig. 5.4 i). Finished sprouts are dropped. Returns (n_nodes, n_sprouts, veins ended)."""
+    half2 = 0.25 * step * step
+    kept = 0
+    ended = 0
+    for q in range(n_sprouts):
+        t, u = sprouts[q, 0], sprouts[q, 1]
+        dx, dy = nodes.pos[u, 0] - nodes.pos[t, 0], nodes.pos[u, 1] - nodes.pos[t, 1]
+        d2 = dx * dx + dy * dy
+        if d2 < gap2 or d2 <= 0.0:
+            ended += 1
+            continue
+        d = math.sqrt(d2)
+        wx, wy = nodes.pos[t, 0] + step * dx / d, nodes.pos[t, 1] + step * dy / d
+        if _first_within(wx, wy, half2, nodes.pos, grid, t) >= 0:
+            ended += 1
+            continue
+        w = n_nodes
+        n_nodes += 1
+        nodes.pos[w, 0], nodes.pos[w, 1] = wx, wy
+        nodes.parent[w] = t
+        nodes.iteration[w] = it
+        nodes.last_dir[w, 0] = dx / d
+        nodes.last_dir[w, 1] = dy / d
+        nodes.stalled[w] = -1
+        grid_insert(grid, nodes.pos, w, w + 1)
+        sprouts[kept, 0] = w
+        sprouts[kept, 1] = u
+        kept += 1
+    return n_nodes, kept, ended
+
+
+@njit(cache=True)
+def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, it, inside, base, bscale, bands):
     """Vein development (eq. 3.1): every node influenced by a live source grows one node D along
     the normalized sum of the unit vectors toward its sources (with the guards of the module
-    docstring). New nodes are inserted into ``grid``; returns the node count."""
+    docstring). With ``inside``, a new node, and the middle of its segment, must lie in the blade
+    (scaled by ``bscale`` about ``base``): veins do not cross the gaps of a dissected leaf. New
+    nodes are inserted into ``grid``; returns the node count."""
     touched = np.empty(nbr.shape[0] * MAX_NEIGHBOURS + 1, np.int64)
     nt = 0
     for j in range(live.shape[0]):
@@ -375,6 +469,15 @@ def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, i
             if ux * nodes.last_dir[v, 0] + uy * nodes.last_dir[v, 1] > 1.0 - 1e-12:
                 continue
             wx, wy = vx + step * ux, vy + step * uy
+            if inside:
+                out = False
+                for f in (1.0, 0.5):
+                    x = base[0] + (vx + f * step * ux - base[0]) / bscale[0]
+                    y = base[1] + (vy + f * step * uy - base[1]) / bscale[1]
+                    if not _inside(x, y, bands.poly, bands.y0, bands.inv_dy, bands.nb, bands.start, bands.edge):
+                        out = True
+                if out:
+                    continue
             u = _first_within(wx, wy, half2, nodes.pos, grid, v)
             if u >= 0:
                 continue
@@ -436,6 +539,8 @@ class VenationResult:
     sources_stalled : int
         Sources removed with no vein node within d_k, because the nodes they influenced could not
         grow (the guards of :func:`grow_veins`).
+    blind_ends : int
+        Veins of areole sources that stopped short of the node they headed for (sec. 5.2.4).
     seconds : float
     """
 
@@ -451,6 +556,7 @@ class VenationResult:
     growth_steps: int
     stopped: str
     sources_stalled: int = 0
+    blind_ends: int = 0
     seconds: float = 0.0
     timings: dict = field(default_factory=dict)
 
@@ -511,6 +617,10 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
     n_src = 0
     extra = np.zeros((1024, 2), np.int64)
     n_extra = 0
+    sprouts = np.zeros((1024, 2), np.int64)
+    n_sprouts = 0
+    blind_ends = 0
+    gap2_1 = (sp.blind_gap * sp.step) ** 2 if closed and sp.blind_after >= 0 else 0.0
 
     lam = 1.0
     h = _grid_h(sp.step, sp.birth_vein, sp.kill_distance)
@@ -542,6 +652,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                         extra[:n_extra].copy(), margin, real(src.pos[alive], lam_now))
 
     last_frame = -1
+    idle = 0
     stalled_total = 0
     n_searched = 0  # nodes that the sources' nearest nodes were searched among
     while True:
@@ -592,6 +703,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         n_darts = int(math.floor(want))
         dart_carry = want - n_darts
         placed = 0
+        first_new = n_src
         margin_only = sp.region == "margin"
         if margin_only and it > 0 and not np.any(sc > prev_sc):
             n_darts = 0  # the margin did not move: no new blade
@@ -617,6 +729,8 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
             n_src = throw_darts(cand, base, np.ascontiguousarray(blade_scale, dtype=np.float64), prev_arg,
                                 blade.bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it)
             placed = n_src - before
+            if placed and closed and 0 <= sp.blind_after <= it:
+                src.areole[before:n_src] = True
             if placed:
                 live = np.concatenate([live, np.arange(before, n_src, dtype=np.int64)])
         timings["darts"] += time.perf_counter() - t0
@@ -638,18 +752,26 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         timings["neighbourhoods"] += t1 - t0
         if n_extra + k > len(extra):
             extra = np.concatenate([extra, np.zeros((len(extra) + k, 2), np.int64)])
-        _, n_stalled, n_extra = update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra)
+        if n_sprouts + k * MAX_NEIGHBOURS > len(sprouts):
+            sprouts = np.concatenate([sprouts, np.zeros((len(sprouts) + k * MAX_NEIGHBOURS, 2), np.int64)])
+        gap2 = gap2_1 * lam * lam
+        _, n_stalled, n_extra, n_sprouts = update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra,
+                                                          n_extra, sprouts, n_sprouts, gap2, sp.inside)
         t2 = time.perf_counter()
         timings["sources"] += t2 - t1
         stalled_total += n_stalled
-        need = n_nodes + int(nbr_n.sum()) + 1
+        need = n_nodes + int(nbr_n.sum()) + n_sprouts + 1
         if need > cap:
             cap = max(2 * cap, need + 1024)
             nodes = _grow_rows(nodes, cap)
             node_grid = Grid(node_grid.head, np.concatenate([node_grid.nxt, np.full(cap - len(node_grid.nxt), -1, np.int64)]),
                              node_grid.geom)
         n_before = n_nodes
-        n_nodes = grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, D, dk2, node_grid, it)
+        n_nodes = grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, D, dk2, node_grid, it, sp.inside, base,
+                             np.ascontiguousarray(blade_scale, dtype=np.float64), blade.bands)
+        if n_sprouts:
+            n_nodes, n_sprouts, ended = grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, D, gap2, node_grid, it)
+            blind_ends += ended
         if n_nodes > n_before:
             hull_support(nodes.pos, n_before, n_nodes, support)
             new = nodes.pos[n_before:n_nodes]
@@ -667,8 +789,15 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         if progress is not None:
             progress(1)
         n_alive = int(src.alive[:n_src].sum())
-        quiet = 0 if placed else quiet + 1
-        done = it >= n_growth and n_alive == 0 and quiet >= sp.settle
+        # a source removed in the iteration it was placed in (a dart between b_v and d_k from a
+        # vein, when b_v < d_k) did nothing: it does not keep the run going
+        quiet = 0 if placed and src.alive[first_new:n_src].any() else quiet + 1
+        idle = 0 if n_nodes > n_before else idle + 1
+        done = it >= n_growth and n_alive == 0 and n_sprouts == 0 and quiet >= sp.settle
+        if sp.inside and it >= n_growth and idle >= max(sp.settle, 2):
+            # veins kept in the blade: darts keep landing where no vein can reach (and their
+            # sources are given up); the pattern is done when no vein has grown for settle iterations
+            done = True
         if on_frame is not None and frame_step > 0 and ((it - 1) % frame_step == 0 or done):
             on_frame(snapshot(it - 1, lam, sc))
             last_frame = it - 1
@@ -683,7 +812,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         node_iter=nodes.iteration[:n_nodes].copy(), extra_edges=extra[:n_extra].copy(), blade=margin,
         source_pos=real(src.pos[:n_src], lam), source_born=src.born[:n_src].copy(),
         source_died=src.died[:n_src].copy(), iterations=it, growth_steps=n_growth, stopped=stopped,
-        sources_stalled=stalled_total,
+        sources_stalled=stalled_total, blind_ends=blind_ends,
         seconds=time.perf_counter() - t_start, timings=timings)
 
 

@@ -8,6 +8,12 @@
 - ``venation_closed.png``: the closed, reticulate poplar-like leaf of figs. 4.21/4.23 grown
   isogonically (poplar.toml), with the exact relative neighbourhood and with the Urquhart
   approximation, as the two models of fig. 4.23.
+- ``venation_leaves.png``: the species leaves: the sunflower leaf (sunflower.toml: closed, with the
+  ch. 5 refinements), a close-up of its areoles with and without the blind veinlets of sec. 5.2.4
+  (the same run with ``veins.blind_after = -1``), and the yarrow leaf (yarrow.toml: open, veins
+  kept inside the dissected blade);
+- ``venation_textured.png``: the two leaves' ``blade.obj`` drawn by ``canopy-render
+  --mtl-textures`` (the vein texture on the blade mesh, lit), face-on and tilted.
 
 Each panel is the run's ``texture.png`` (the veins drawn by width over the blade) on white, with a
 caption of the run's figures; 64-colour PNGs. The runs go to a temporary folder.
@@ -51,6 +57,8 @@ def run(name: str, work: Path, **overrides):
             lines += [f"{k} = {_toml(v)}" for k, v in table.items()]
     p = parse_params("\n".join(lines) + "\n", HERE / f"{name}.toml")
     out = work / (name + "".join(f"_{k.split('.')[1]}{v}" for k, v in overrides.items()))
+    if not overrides:
+        out = work / name
     r = run_venation(p, load_inputs(p), out)
     return r, Image.open(out / "texture.png").convert("RGBA")
 
@@ -104,6 +112,9 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     out_dir = Path(argv[0]) if argv else REPO / "docs"
     font = _font()
+    if len(argv) > 1 and argv[1] == "leaves":  # only the species leaves' pictures
+        leaves(out_dir, font)
+        return 0
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         panels = []
@@ -121,7 +132,62 @@ def main(argv=None) -> int:
             panels.append(_panel(img, 820, f"closed, isogonic growth: {what}\n{_figures(r)}", font))
             print(f"poplar {nb}: {_figures(r)}, {r.result.seconds:.2f} s", flush=True)
         _save(_row(panels), out_dir / "venation_closed.png")
+    leaves(out_dir, font)
     return 0
+
+
+def _crop(img: Image.Image, box) -> Image.Image:
+    """The part (x0, y0, x1, y1 as fractions, y down) of a texture, on white."""
+    w, h = img.size
+    c = img.crop((int(box[0] * w), int(box[1] * h), int(box[2] * w), int(box[3] * h)))
+    out = Image.new("RGBA", c.size, "white")
+    out.alpha_composite(c)
+    return out
+
+
+def leaves(out_dir: Path, font) -> None:
+    """``venation_leaves.png`` and ``venation_textured.png`` (module docstring)."""
+    from inflo.tools.canopy_render.job import RenderJob, run_job
+    from inflo.tools.canopy_render.render import RenderOptions
+
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        sun, sun_img = run("sunflower", work)
+        closed, closed_img = run("sunflower", work, **{"veins.blind_after": -1})
+        yar, yar_img = run("yarrow", work)
+        for name, r in (("sunflower", sun), ("sunflower closed", closed), ("yarrow", yar)):
+            print(f"{name}: {_figures(r)}, {r.result.blind_ends} blind veins, {r.result.seconds:.2f} s", flush=True)
+        box = (0.56, 0.42, 0.78, 0.62)
+        panels = [
+            _panel(sun_img, 820, f"sunflower (closed, sec. 4.3 + ch. 5)\n{_figures(sun)}", font),
+            _panel(_crop(closed_img, box), 400, "areoles, ch. 4: every vein joins", font),
+            _panel(_crop(sun_img, box), 400, f"ch. 5: blind veinlets (sec. 5.2.4)\n{sun.result.blind_ends:,} blind ends",
+                   font),
+            _panel(yar_img, 820, f"yarrow (open, inside the blade)\n{_figures(yar)}", font),
+        ]
+        top = _row(panels[:1] + [_column(panels[1:3])] + panels[3:])
+        _save(top, out_dir / "venation_leaves.png")
+        shots = []
+        for name, view, size in (("sunflower", "front", (700, 700)), ("sunflower", "iso", (700, 700)),
+                                 ("yarrow", "iso", (360, 700))):
+            png = work / f"{name}_{view}.png"
+            job = RenderJob(inputs=[str(work / name / "blade.obj")], output=png, size=size, view=view,
+                            ortho=view == "front", mtl_textures=True, quiet=True,
+                            options=RenderOptions(background=(1.0, 1.0, 1.0)))
+            print(run_job(job), flush=True)
+            shots.append(_panel(Image.open(png).convert("RGBA"), size[1],
+                                f"{name}: blade.obj + texture.png\ncanopy-render --mtl-textures --view {view}", font))
+        _save(_row(shots), out_dir / "venation_textured.png")
+
+
+def _column(panels) -> Image.Image:
+    w = max(p.width for p in panels)
+    out = Image.new("RGB", (w, sum(p.height for p in panels)), "white")
+    y = 0
+    for p in panels:
+        out.paste(p, (0, y))
+        y += p.height
+    return out
 
 
 if __name__ == "__main__":
