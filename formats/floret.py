@@ -627,6 +627,11 @@ def read_floret(path) -> Floret:
             lambda_=b.get("lambda"),
             eta=b.get("eta"),
         )
+        flat = cp.reshape(-1, 3)
+        if len(flat) and (flat == flat[0]).all():  # issue 14: such a key pose gave frames of nothing
+            raise err(b.key_lines.get("points", b.line), f"control points spanning a surface in organ {b.name!r} (an "
+                      "organ whose points all coincide has no size to interpolate or polygonize)",
+                      f"all {len(flat)} at {' '.join(f'{c:g}' for c in flat[0])}")
         try:
             organs.append(Organ(**fields))
         except _InvalidOrgan as exc:  # report it on the line of the key at fault

@@ -31,6 +31,12 @@ def inputs(tmp_path):
     k = text.index("points:") + 1
     text[k] = "1e300 " + " ".join(text[k].split()[1:])
     (tmp_path / "big.floret").write_text("\n".join(text) + "\n")
+    text = FLORET.read_text().splitlines()
+    k = text.index("points:") + 1
+    while k < len(text) and text[k].startswith("  "):
+        text[k] = "  " + "   ".join(["0 0 0"] * (len(text[k].split()) // 3))
+        k += 1
+    (tmp_path / "point.floret").write_text("\n".join(text) + "\n")
     (tmp_path / "garbage.toml").write_bytes(bytes(range(128, 256)) * 2)
     import shutil
     shutil.copytree(REPO / "pipelines" / "examples" / "fccompose", tmp_path / "fcc")
@@ -49,6 +55,9 @@ def inputs(tmp_path):
         lines[vs[178]] = lines[vs[177]]
         (dup / f.name).write_text("\n".join(lines) + "\n")
     (tmp_path / "fcc" / "dup.fcc").write_text(fcc.replace(" anim\n", " dup\n"))
+    (tmp_path / "step.toml").write_text("[rodkaew]\nstep = 1e-9\n")
+    far = Scene(placements=[Placement("o", 0, [1e300, 0, 0], [0.1] * 3, [0, 1, 0], [1, 0, 0])] + scene.placements[1:])
+    write_scn(tmp_path / "far.scn", far)
     return tmp_path
 
 
@@ -61,10 +70,14 @@ PROBES = [
     ("canopy-render", ["{d}/huge.obj", "-o", "{d}/r1.png"], "coordinates within +-1e+15", "{d}/r1.png"),
     ("floret-animate", ["{d}/big.floret", REPO / "pipelines" / "sunflower" / "draft" / "ray_open.floret", "-o", "{d}/f1"],
      "coordinates within +-1e+12", "{d}/f1"),
+    ("floret-animate", ["{d}/point.floret", REPO / "pipelines" / "sunflower" / "draft" / "ray_open.floret", "-o", "{d}/f3"],
+     "found all 40 at 0 0 0", "{d}/f3"),
     ("floret-animate", [REPO / "pipelines" / "examples" / "lu_bud.floret", "--lu", "{d}/garbage.toml", "-o", "{d}/f2"],
      "expected TOML (UTF-8 text)", "{d}/f2"),
     ("branch-gen", ["{d}/head.scn", "--base", "nan", "nan", "nan", "-o", "{d}/b1"], "--base must be three finite numbers",
      "{d}/b1"),
+    ("branch-gen", ["{d}/head.scn", "{d}/step.toml", "-o", "{d}/b2"], "rodkaew.step: expected a step >= ", "{d}/b2"),
+    ("branch-gen", ["{d}/far.scn", "-o", "{d}/b3"], "positions within +-1e+12, found 1e+300", "{d}/b3"),
     ("phyllotaxis", ["{d}/samples.toml", "-o", "{d}/h1"], "surface.samples in [16, 10000000]", "{d}/h1"),
     ("phyllotaxis", ["{d}/frames.toml", "-o", "{d}/h2"], "dynamics.frames in [1, 100000]", "{d}/h2"),
     ("phyllotaxis", ["{d}/interval.toml", "-o", "{d}/h3"], "dynamics.interval >= 0.001", "{d}/h3"),

@@ -185,6 +185,38 @@ def _frame_meshes(sk: Skeleton, params: Params, rba_frames, end_frame: float, fr
     return out
 
 
+#: Floret coordinates beyond this are refused (as floret-animate and canopy-render refuse theirs).
+COORD_LIMIT = 1e12
+
+
+def check_rodkaew_work(inp: RodkaewInput, params: Params) -> None:
+    """Refuse, before any work, a run that could not finish (issue 14: ``step = 1e-9`` or a floret
+    at 1e300 hung): floret or group coordinates beyond :data:`COORD_LIMIT`, and a ``step`` so short
+    that the farthest floret is more than ``max_steps`` steps from the base (each particle moves one
+    ``step`` per simulation step, eq. 7.1, so that is a lower bound of the steps the run needs).
+
+    Raises
+    ------
+    InputError
+        Naming the parameter, the bound and the value found.
+    """
+    pts = [np.asarray(inp.pos, float).reshape(-1, 3)]
+    if inp.birth_pos is not None:
+        pts.append(np.asarray(inp.birth_pos, float).reshape(-1, 3))
+    pts += [np.asarray(c, float).reshape(1, 3) for c, _ in inp.groups.values()]
+    pts = np.concatenate(pts)
+    big = ~np.isfinite(pts).all(axis=1) | (np.abs(pts) >= COORD_LIMIT).any(axis=1)
+    if big.any():
+        raise InputError(f"the scene: expected floret and group positions within +-{COORD_LIMIT:g}, found "
+                         f"{' '.join(f'{c:g}' for c in pts[int(np.argmax(big))])}")
+    rp = params.rodkaew
+    reach = float(np.linalg.norm(pts - np.asarray(params.base, float), axis=1).max())
+    if reach / rp.step > rp.max_steps:
+        raise InputError(f"{params.source or 'branch-gen parameters'}: rodkaew.step: expected a step >= {reach / rp.max_steps:.3g} (the "
+                         f"farthest floret is {reach:.4g} from the base, at most max_steps = {rp.max_steps} "
+                         f"steps of it), found {rp.step:g}")
+
+
 def branch_gen(scene, params: Params, *, rba_frames=None, algorithm: str | None = None, frame_step: int = 1,
                progress=None) -> BranchResult:
     """Grow the branching structure for ``scene`` (or a space-colonization tree) and its geometry.
@@ -212,6 +244,7 @@ def branch_gen(scene, params: Params, *, rba_frames=None, algorithm: str | None 
     else:
         _load_growth_functions(params)
         inp = rodkaew_input(scene, rba_frames)
+        check_rodkaew_work(inp, params)
         from .rodkaew import _end_frame
 
         sk = grow_rodkaew(inp, params, wb_table=_wb_table(params),
