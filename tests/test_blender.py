@@ -97,6 +97,7 @@ def check_frames(report: dict, arrays: dict, parts: dict, colors: dict, frames=N
         static = not isinstance(source, list)
         assert obj["modifiers"] == ([] if static else ["MESH_SEQUENCE_CACHE"]), (name, obj["modifiers"])
         slots = [m["name"] for m in obj["materials"]]
+        assert all(slots) and len(set(slots)) == len(slots), f"{name}: material slots {slots[:8]}"
         for m in obj["materials"]:
             if not m["name"].endswith("_default"):
                 np.testing.assert_allclose(m["base_color"], srgb_linear(material_color(m["name"], colors)),

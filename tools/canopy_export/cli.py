@@ -18,8 +18,8 @@ Examples::
         -o build/lily/lily.usdc
     canopy-export build/yarrow/canopy build/yarrow/branches --units mm --fps 30 -o yarrow.usda
     canopy-export build/lily/canopy --pc2 build/lily/pc2 -o lily.usdc   # + tepals' point cache
-    canopy-export build/yarrow/canopy --subsets floret --mtl -o yarrow.usdc   # a subset per floret;
-                                                             # + build/yarrow/canopy/materials.mtl
+    canopy-export build/yarrow/canopy --subsets floret --mtl -o yarrow.usdc   # + a subset per floret,
+                                                             # build/yarrow/canopy/materials.mtl
 
 Open it in Blender: File > Import > Universal Scene Description, press play.
 """
@@ -66,7 +66,7 @@ def _output(ctx, param, value):
 @click.option("--constant-topology", is_flag=True,
               help="Bad input if any frame's faces or vertex count differ from the first frame's.")
 @click.option("--subsets", type=click.Choice(["material", "floret"]), default="material", show_default=True,
-              help="GeomSubsets per material of a part, or per OBJ group (floret) and material.")
+              help="GeomSubsets per material of a part; 'floret': also one per OBJ group (family 'floret').")
 @click.option("--mtl", is_flag=True,
               help="Also write materials.mtl (the OBJ files' mtllib) beside each part's OBJ files, Kd linear.")
 @click.option("--pc2", "pc2_dir", type=click.Path(file_okay=False), default=None,

@@ -60,8 +60,8 @@ class ExportOptions:
     constant_topology : bool
         Fail (bad input) when any frame's faces or vertex count differ from the first frame's.
     subsets : str
-        ``"material"``: one GeomSubset per OBJ material of a part; ``"floret"``: one per OBJ group
-        (a floret of a canopy) and material, each bound to its material.
+        ``"material"``: one GeomSubset per OBJ material of a part (bound to it); ``"floret"``:
+        also one per OBJ group (a floret of a canopy), family ``floret``, bound to nothing.
     mtl : bool
         Also write ``materials.mtl`` (the name the OBJ frames' ``mtllib`` gives) beside each
         part's OBJ files: its materials with ``Kd`` the colour file's colour, linear.

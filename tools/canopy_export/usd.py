@@ -28,7 +28,10 @@ USD_SUFFIXES = (".usdc", ".usda", ".usd")
 """Output suffixes: binary crate, text, binary (usd-core's default for ``.usd``)."""
 
 SUBSET_MODES = ("material", "floret")
-"""``--subsets``: one GeomSubset per material of a part, or per OBJ group (floret) and material."""
+"""``--subsets``: GeomSubsets per material of a part only, or also one per OBJ group (floret)."""
+
+FLORET_FAMILY = "floret"
+"""The family name of the per-floret subsets (``--subsets floret``)."""
 
 RGB = tuple[float, float, float]
 
@@ -61,7 +64,8 @@ class _Topology:
     frame: int
     counts: np.ndarray  # (m,) int32
     indices: np.ndarray  # (3m,) int32
-    subsets: dict = field(default_factory=dict)  # subset key -> (k,) int32 face indices
+    subsets: dict = field(default_factory=dict)  # material name -> (k,) int32 face indices
+    florets: dict = field(default_factory=dict)  # OBJ group name -> (k,) int32 face indices
     face_material: np.ndarray | None = None  # (m,) int32 index into the part's materials, -1 none
     unbound: bool = False  # some faces have no material
 
@@ -73,7 +77,7 @@ class _PartState:
     default_color: RGB
     topology: list = field(default_factory=list)
     materials: list = field(default_factory=list)  # names in order of first appearance
-    subsets: dict = field(default_factory=dict)  # subset key -> material name, in order of appearance
+    groups: list = field(default_factory=list)  # OBJ group names with faces (--subsets floret), in order
 
 
 class UsdBuilder:
@@ -97,8 +101,10 @@ class UsdBuilder:
     normals : bool
         Also write per-vertex normals (time-sampled with the points).
     subsets : {"material", "floret"}
-        ``material``: one GeomSubset per OBJ material; ``floret``: one per OBJ group (``g``, a
-        floret of a canopy) and material, each bound to its material.
+        ``material``: one GeomSubset per OBJ material (family ``materialBind``, bound to it);
+        ``floret``: also one per OBJ group (``g``, a floret of a canopy), family ``floret``,
+        bound to nothing (Blender 4.5 gives every materialBind subset a slot of its own and
+        leaves all but the first of a material empty, so per-floret binding broke its colours).
     """
 
     def __init__(self, root_name: str, part_names: Sequence[str], static: Sequence[bool], *,
@@ -168,7 +174,9 @@ class UsdBuilder:
                     nrm = vertex_normals(mesh.vertices, mesh.faces)
                 usd_mesh.GetNormalsAttr().Set(Vt.Vec3fArray.FromNumpy(nrm), t)
             if change:
-                st.topology.append(self._topology(st, frame, mesh))
+                topo = self._topology(st, frame, mesh)
+                self._florets(st, topo, mesh)
+                st.topology.append(topo)
 
     def _topology(self, st: _PartState, frame: int, mesh: ObjMesh) -> _Topology:
         m = mesh.n_faces
@@ -188,34 +196,29 @@ class UsdBuilder:
         remap = np.array([st.materials.index(n) if n in st.materials else -1 for n in names], np.int32)
         topo.face_material = remap[face_mat]
         mesh = replace(mesh, materials=names, face_material=face_mat.astype(np.int32))
-        by_floret = self.subset_mode == "floret" and mesh.face_group is not None
-        if by_floret:
-            # runs of faces of one (group, material), keyed "<group>_<material>" in order of appearance
-            key = mesh.face_group.astype(np.int64) * (len(mesh.materials) + 1) + mesh.face_material
-            order = np.argsort(key, kind="stable")
-            bounds = np.flatnonzero(np.diff(key[order])) + 1
-            for run in np.split(order, bounds):
-                if not len(run):
-                    continue
-                g, k = int(mesh.face_group[run[0]]), int(mesh.face_material[run[0]])
-                name = mesh.materials[k]
-                sub = f"{mesh.groups[g]}_{name}" if g >= 0 else name
-                topo.subsets[sub] = np.sort(run).astype(np.int32)
-                st.subsets.setdefault(sub, name)
-            # subsets in the order their faces come in the file
-            topo.subsets = dict(sorted(topo.subsets.items(), key=lambda kv: int(kv[1][0])))
-        else:
-            for k, name in enumerate(mesh.materials):
-                faces = np.flatnonzero(mesh.face_material == k).astype(np.int32)
-                if len(faces):
-                    topo.subsets[name] = faces
-                    st.subsets.setdefault(name, name)
+        for k, name in enumerate(mesh.materials):
+            faces = np.flatnonzero(mesh.face_material == k).astype(np.int32)
+            if len(faces):
+                topo.subsets[name] = faces
         return topo
+
+    def _florets(self, st: _PartState, topo: _Topology, mesh: ObjMesh) -> None:
+        """``--subsets floret``: the faces of each OBJ group (a canopy's floret), in ``topo.florets``."""
+        if self.subset_mode != "floret" or mesh.face_group is None:
+            return
+        order = np.argsort(mesh.face_group, kind="stable")
+        bounds = np.flatnonzero(np.diff(mesh.face_group[order])) + 1
+        for run in np.split(order, bounds):
+            if len(run) and mesh.face_group[run[0]] >= 0:
+                name = mesh.groups[int(mesh.face_group[run[0]])]
+                topo.florets[name] = np.sort(run).astype(np.int32)
+                if name not in st.groups:
+                    st.groups.append(name)
 
     def _write_topology(self) -> None:
         """Faces and subsets of every part and the materials they bind (once, after the last
         frame); sets :attr:`material_names`."""
-        from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt
+        from pxr import Usd, UsdGeom, UsdShade, Vt
 
         if self._finished:
             return
@@ -247,37 +250,51 @@ class UsdBuilder:
                 key = default_material(st.name)
                 mat = material(key, st.default_color)
                 UsdShade.MaterialBindingAPI.Apply(prim).Bind(mat)
-            if not st.materials:
-                continue
-            binding = UsdShade.MaterialBindingAPI.Apply(prim)
             used: set[str] = set()
-            # subsets in the order of their material's first appearance (Blender numbers its
-            # material slots in the order it meets the subsets' materials)
-            rank = {name: i for i, name in enumerate(st.materials)}
-            keys = sorted(st.subsets, key=lambda key: rank[st.subsets[key]])
-            for key in keys:
-                name = st.subsets[key]
-                sub_name = _unique(_prim_name(key), used)
+            if st.materials:
+                self._write_material_subsets(st, usd_mesh, samples, one, times, used, material)
+            for group in st.groups:  # --subsets floret: selection sets, bound to nothing
+                sub_name = _unique(_prim_name(group), used)
                 used.add(sub_name)
                 subset = UsdGeom.Subset.Define(self.stage, prim.GetPath().AppendChild(sub_name))
                 subset.CreateElementTypeAttr(UsdGeom.Tokens.face)
-                subset.CreateFamilyNameAttr(UsdShade.Tokens.materialBind)
+                subset.CreateFamilyNameAttr(FLORET_FAMILY)
                 ind = subset.CreateIndicesAttr()
                 for s, t in zip(samples, times):
-                    ind.Set(Vt.IntArray.FromNumpy(s.subsets.get(key, np.zeros(0, np.int32))), t)
-                rgb = st.default_color if name == default_material(st.name) else self._material_color(name)
-                UsdShade.MaterialBindingAPI.Apply(subset.GetPrim()).Bind(material(name, rgb))
-            binding.SetMaterialBindSubsetsFamilyType(UsdGeom.Tokens.nonOverlapping)
-            if not one:
-                # Blender's Mesh Sequence Cache reads the subsets once, at import, and keeps those
-                # face numbers in every frame; where the faces change, each face's material also
-                # goes as a per-face primvar that it reads every frame (its attribute material_index)
-                pv = UsdGeom.PrimvarsAPI(prim).CreatePrimvar(
-                    "material_index", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.uniform)
-                for s, t in zip(samples, times):
-                    fm = s.face_material if s.face_material is not None else np.zeros(len(s.counts), np.int32)
-                    pv.Set(Vt.IntArray.FromNumpy(np.ascontiguousarray(fm, dtype=np.int32)), t)
+                    ind.Set(Vt.IntArray.FromNumpy(s.florets.get(group, np.zeros(0, np.int32))), t)
+            if st.groups:
+                UsdGeom.Subset.SetFamilyType(usd_mesh, FLORET_FAMILY, UsdGeom.Tokens.nonOverlapping)
         self.material_names = list(materials)
+
+    def _write_material_subsets(self, st, usd_mesh, samples, one, times, used, material) -> None:
+        """A part's materialBind subsets, and where its faces change the material_index primvar."""
+        from pxr import Sdf, UsdGeom, UsdShade, Vt
+
+        prim = usd_mesh.GetPrim()
+        binding = UsdShade.MaterialBindingAPI.Apply(prim)
+        # subsets in the order of their material's first appearance, which is the order in
+        # which Blender numbers its material slots
+        for name in st.materials:
+            sub_name = _unique(_prim_name(name), used)
+            used.add(sub_name)
+            subset = UsdGeom.Subset.Define(self.stage, prim.GetPath().AppendChild(sub_name))
+            subset.CreateElementTypeAttr(UsdGeom.Tokens.face)
+            subset.CreateFamilyNameAttr(UsdShade.Tokens.materialBind)
+            ind = subset.CreateIndicesAttr()
+            for s, t in zip(samples, times):
+                ind.Set(Vt.IntArray.FromNumpy(s.subsets.get(name, np.zeros(0, np.int32))), t)
+            rgb = st.default_color if name == default_material(st.name) else self._material_color(name)
+            UsdShade.MaterialBindingAPI.Apply(subset.GetPrim()).Bind(material(name, rgb))
+        binding.SetMaterialBindSubsetsFamilyType(UsdGeom.Tokens.nonOverlapping)
+        if not one:
+            # Blender's Mesh Sequence Cache reads the subsets once, at import, and keeps those
+            # face numbers in every frame; where the faces change, each face's material also
+            # goes as a per-face primvar that it reads every frame (its attribute material_index)
+            pv = UsdGeom.PrimvarsAPI(prim).CreatePrimvar(
+                "material_index", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.uniform)
+            for s, t in zip(samples, times):
+                fm = s.face_material if s.face_material is not None else np.zeros(len(s.counts), np.int32)
+                pv.Set(Vt.IntArray.FromNumpy(np.ascontiguousarray(fm, dtype=np.int32)), t)
 
     def save(self, path) -> None:
         """Write the stage to ``path`` atomically (format by suffix, :data:`USD_SUFFIXES`)."""
