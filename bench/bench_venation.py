@@ -7,7 +7,9 @@ nodes in a growing leaf, and how the run time grows with the node count.
 - ``venation_open_10k``: the open pattern of open_marginal.toml (marginal growth, sources on the
   margin) with the leaf 440 D long;
 - ``..._exponent_in_nodes``: the fitted exponent a of t ~ n^a over leaves of about 1/4, 1/2, 1
-  and 2 times that area (1.0 = linear).
+  and 2 times that area (1.0 = linear);
+- ``venation_sunflower_leaf``: the sunflower example (closed, blind veinlets, corner cutting of
+  Runions ch. 5), simulation and refinement, about 30,000 nodes (anchor scaled to its size).
 
 Anchor: issue 23's goal of 5 s for 10,000 nodes (Runions sec. 4.5: two hours for the exact
 poplar of fig. 4.23, two minutes with the Urquhart approximation). Times are the simulation's
@@ -74,4 +76,26 @@ def closed_urquhart(ctx: BenchContext) -> list[Result]:
 def open_marginal(ctx: BenchContext) -> list[Result]:
     return _pattern(ctx, "open", "open_marginal", 440.0)
 
-BENCHMARKS = [closed, closed_urquhart, open_marginal]
+def sunflower(ctx: BenchContext) -> list[Result]:
+    """The sunflower leaf of pipelines/examples/venation (closed, areoles with blind veinlets after
+    iteration 180, corner cutting of sec. 5.2.6): simulation plus refinement, at full size."""
+    import time
+
+    from inflo.tools.venation.generate import finish_graph
+
+    size = 200.0 if ctx.quick else 400.0
+    text = (EXAMPLES / "sunflower.toml").read_text().replace("size = 400.0", f"size = {size!r}", 1)
+    p = parse_params(text, EXAMPLES / "sunflower.toml")
+    inp = load_inputs(p)
+    sp = sim_params(p, inp)
+    simulate(inp.blade, inp.growth, sp)  # compile
+    t0 = time.perf_counter()
+    r = simulate(inp.blade, inp.growth, sp)
+    pos, parent, extra, widths, _ = finish_graph(p, r.node_pos, r.node_parent, r.extra_edges, sp.seed)
+    t = time.perf_counter() - t0
+    return [Result("venation_sunflower_leaf", t, "s", "issue 23 goal 5 s for 10k vein nodes", 5.0 * len(pos) / 1e4,
+                   f"{r.n_nodes} simulated vein nodes, {len(pos)} after refinement, {len(extra)} anastomoses, "
+                   f"{r.blind_ends} blind ends; simulation {r.seconds:.2f} s")]
+
+
+BENCHMARKS = [closed, closed_urquhart, open_marginal, sunflower]

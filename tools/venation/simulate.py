@@ -396,19 +396,25 @@ def grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, step, gap2, grid, it):
         if _first_within(wx, wy, half2, nodes.pos, grid, t) >= 0:
             ended += 1
             continue
-        w = n_nodes
+        w = _add_node(nodes, n_nodes, wx, wy, t, it, grid)
         n_nodes += 1
-        nodes.pos[w, 0], nodes.pos[w, 1] = wx, wy
-        nodes.parent[w] = t
-        nodes.iteration[w] = it
-        nodes.last_dir[w, 0] = dx / d
-        nodes.last_dir[w, 1] = dy / d
-        nodes.stalled[w] = -1
-        grid_insert(grid, nodes.pos, w, w + 1)
         sprouts[kept, 0] = w
         sprouts[kept, 1] = u
         kept += 1
     return n_nodes, kept, ended
+
+
+@njit(cache=True)
+def _add_node(nodes, w, x, y, parent, it, grid):
+    """Vein node ``w`` at (x, y), grown from ``parent`` in iteration ``it``, in ``grid``; returns w."""
+    nodes.pos[w, 0], nodes.pos[w, 1] = x, y
+    nodes.parent[w] = parent
+    nodes.iteration[w] = it
+    nodes.last_dir[w, 0] = 0.0
+    nodes.last_dir[w, 1] = 0.0
+    nodes.stalled[w] = -1
+    grid_insert(grid, nodes.pos, w, w + 1)
+    return w
 
 
 @njit(cache=True)
@@ -481,16 +487,9 @@ def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, i
             u = _first_within(wx, wy, half2, nodes.pos, grid, v)
             if u >= 0:
                 continue
-            w = n_nodes
+            _add_node(nodes, n_nodes, wx, wy, v, it, grid)
             n_nodes += 1
-            nodes.pos[w, 0], nodes.pos[w, 1] = wx, wy
-            nodes.parent[w] = v
-            nodes.iteration[w] = it
-            nodes.last_dir[w, 0] = 0.0
-            nodes.last_dir[w, 1] = 0.0
-            nodes.stalled[w] = -1
             nodes.last_dir[v, 0], nodes.last_dir[v, 1] = ux, uy
-            grid_insert(grid, nodes.pos, w, w + 1)
             grown = True
             break
         if not grown:

@@ -20,6 +20,7 @@ caption of the run's figures; 64-colour PNGs. The runs go to a temporary folder.
 """
 from __future__ import annotations
 
+import math
 import sys
 import tempfile
 import tomllib
@@ -68,8 +69,10 @@ def _panel(img: Image.Image, height: int, caption: str, font) -> Image.Image:
     leaf = img.resize((w, height), Image.Resampling.LANCZOS)
     pad = 16
     cap_h = 44
-    panel = Image.new("RGB", (w + 2 * pad, height + cap_h + 2 * pad), "white")
-    panel.paste(leaf, (pad, pad), leaf)
+    text_w = max(int(math.ceil(font.getlength(line))) for line in caption.splitlines()) if hasattr(font, "getlength") else 0
+    width = max(w + 2 * pad, text_w + 2 * pad)
+    panel = Image.new("RGB", (width, height + cap_h + 2 * pad), "white")
+    panel.paste(leaf, ((width - w) // 2, pad), leaf)
     d = ImageDraw.Draw(panel)
     for i, line in enumerate(caption.splitlines()):
         d.text((pad, height + pad + 6 + 18 * i), line, fill=(40, 40, 40), font=font)
@@ -157,7 +160,7 @@ def leaves(out_dir: Path, font) -> None:
         yar, yar_img = run("yarrow", work)
         for name, r in (("sunflower", sun), ("sunflower closed", closed), ("yarrow", yar)):
             print(f"{name}: {_figures(r)}, {r.result.blind_ends} blind veins, {r.result.seconds:.2f} s", flush=True)
-        box = (0.56, 0.42, 0.78, 0.62)
+        box = (0.60, 0.46, 0.74, 0.59)
         panels = [
             _panel(sun_img, 820, f"sunflower (closed, sec. 4.3 + ch. 5)\n{_figures(sun)}", font),
             _panel(_crop(closed_img, box), 400, "areoles, ch. 4: every vein joins", font),
