@@ -5,6 +5,9 @@ keyframes keep their topology, their organs' order and no intersecting triangle 
 from __future__ import annotations
 
 import math
+import re
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -12,13 +15,14 @@ from PIL import Image
 
 from click.testing import CliRunner
 
+from conftest import REPO
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.tools.collide import intersecting_pairs
 from inflo.tools.pbd import mesh_edges, mesh_hinges, signed_dihedral_angle
 from inflo.tools.pbd.solver import edge_lengths, hinge_angles
 from inflo.tools.petal_grow.cli import main
-from inflo.tools.petal_grow.bud import BudMesh, read_bud_obj, write_bud_obj
+from inflo.tools.petal_grow.bud import grid_bud, read_bud_obj, write_bud_obj
 from inflo.tools.petal_grow.growth import HINGE_SIGN, grow_rest_state
 from inflo.tools.petal_grow.maps import parse_direction_map, parse_scalar_map, triangle_directions, triangle_values
 from inflo.tools.petal_grow.params import parse_params
@@ -218,17 +222,9 @@ def _petal_bud(tmp_path, nu=5, nv=7):
     ang = -(s - 0.5) * 1.2 * (0.4 + 0.6 * t)
     r = 2.0 + 1.5 * np.sin(np.pi * t * 0.8) + 0.3 * ang
     x = np.stack([r * np.cos(ang), 6.0 * t, r * np.sin(ang)], axis=1)
-    f = []
-    for j in range(nv - 1):
-        for i in range(nu - 1):
-            a, b, c, d = j * nu + i, j * nu + i + 1, (j + 1) * nu + i, (j + 1) * nu + i + 1
-            f += [(a, b, d), (a, d, c)] if (i + j) % 2 == 0 else [(a, b, c), (b, d, c)]
-    f = np.array(f, np.int32)
-    n = np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]])
-    if np.sum(n[:, 0] * -x[f].mean(axis=1)[:, 0]) < 0:
-        f = f[:, [0, 2, 1]]
-    write_bud_obj(tmp_path / "petal.obj", BudMesh(x, np.stack([s, t], axis=1), f))
-    return x, f
+    bud = grid_bud(x, s, t, nu, nv)
+    write_bud_obj(tmp_path / "petal.obj", bud)
+    return x, bud.faces
 
 
 FLOWER = """
@@ -347,3 +343,37 @@ def test_declared_arrangement_is_checked(tmp_path):
     text = FLOWER.replace('beneath = "b"\n', "").replace('rotate = 60\n', 'rotate = 60\nbeneath = "a"\n')
     with pytest.raises(InputError, match="arrangement"):
         run(parse_params(text, tmp_path / "f.toml"), tmp_path / "out")
+
+
+# ---- the growth-map lily's inputs (pipelines/lily/growth_keys.py, growth.toml) ------------------
+
+LILY = REPO / "pipelines" / "lily"
+
+
+def test_growth_lily_inputs_and_resolution(tmp_path):
+    subprocess.run([sys.executable, str(LILY / "growth_keys.py"), "--params", "-o", str(tmp_path)], check=True)
+    assert (tmp_path / "growth.toml").read_text() == (LILY / "growth.toml").read_text()
+    subprocess.run([sys.executable, str(LILY / "growth_keys.py"), "-o", str(tmp_path)], check=True)
+    # Ijiri et al. sec. 6.3: petal 388 particles / 685 triangles / 1082 edges, sepal 323 / 567 / 889;
+    # table 1: average edge 1.3 and 1.4
+    for kind, paper, edge in (("petal", (388, 685, 1082), 1.3), ("sepal", (323, 567, 889), 1.4)):
+        bud = read_bud_obj(tmp_path / f"{kind}.obj")
+        e = mesh_edges(bud.faces)
+        for got, want in zip((len(bud.vertices), len(bud.faces), len(e)), paper):
+            assert abs(got - want) <= 0.02 * want, (kind, got, want)
+        mean = np.linalg.norm(bud.vertices[e[:, 0]] - bud.vertices[e[:, 1]], axis=1).mean()
+        assert mean == pytest.approx(edge, rel=0.1)
+    p = parse_params((LILY / "growth.toml").read_text().replace("../../build/lily/growth_bud", "."),
+                     tmp_path / "growth.toml")
+    assert p.flower.joint == [(1, 0.0), (60, 23.0)]
+    assert sorted((o.name, o.layer) for o in p.organs)[0] == ("petal_0", 0)  # petals inside the sepals
+
+
+def test_growth_lily_check_if_built():
+    check = REPO / "build" / "lily" / "growth" / "check.txt"
+    if not check.is_file():
+        pytest.skip("no growth-map lily build (make lily METHOD=growth)")
+    text = check.read_text()
+    assert text.strip().endswith("OK: no intersecting triangle pairs"), text
+    m = re.search(r"frame 100: 0 intersecting pairs; joint angle ([\d.]+) deg", text)
+    assert m and float(m.group(1)) == pytest.approx(23.0, abs=0.1)

@@ -12,6 +12,7 @@ in). Exits 1 on any intersection or changed topology.
 """
 from __future__ import annotations
 
+import argparse
 import math
 import sys
 from pathlib import Path
@@ -82,12 +83,14 @@ def main(build: Path) -> int:
         print(f"  bud: rim radius {s0['rim']:.2f}, widest {s0['widest']:.2f}, height {s0['height']:.2f}")
         print(f"  open: rim radius {s['rim']:.2f}, widest {s['widest']:.2f}, height {s['height']:.2f}, "
               f"radius at half height {s['mid']:.2f}, flare {s['rim'] / s['mid']:.2f}")
-    print("OK: every keyframe intersection-free" if bad == 0 else f"FAILED: {bad} intersecting pairs or changes")
-    return 0 if bad == 0 else 1
+    if bad:
+        print(f"FAILED: {bad} intersecting pairs or changes")
+        return 1
+    print("OK: every keyframe intersection-free")
+    return 0
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        print(__doc__.strip().splitlines()[2], file=sys.stderr)
-        sys.exit(2)
-    sys.exit(main(Path(sys.argv[1])))
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("build", type=Path, help="build/eustoma")
+    sys.exit(main(ap.parse_args().build))

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from inflo.tools.petal_grow.bud import BudMesh, write_bud_obj
+from inflo.tools.petal_grow.bud import BudMesh, grid_bud, write_bud_obj
 
 GRID = {"final": (13, 20), "draft": (9, 14)}
 SCALE = 1.2       # average edge length 2.0 at final (table 1)
@@ -54,22 +54,7 @@ def petal(quality: str) -> BudMesh:
     ang = -(s - 0.5) * A_MAX * width_fraction(t)
     r = bud_radius(t) + KAPPA * ang
     x = np.stack([r * np.cos(ang), H * t, r * np.sin(ang)], axis=1)
-    faces = []
-    for j in range(nv - 1):
-        for i in range(nu - 1):
-            a, b, c, d = j * nu + i, j * nu + i + 1, (j + 1) * nu + i, (j + 1) * nu + i + 1
-            if (i + j) % 2 == 0:
-                faces += [(a, b, d), (a, d, c)]
-            else:
-                faces += [(a, b, c), (b, d, c)]
-    f = np.array(faces, np.int32)
-    # wind counter-clockwise seen from the axis (normals point inwards, to the adaxial side)
-    n = np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]])
-    centre = x[f].mean(axis=1)
-    inward = -np.stack([centre[:, 0], np.zeros(len(f)), centre[:, 2]], axis=1)
-    if np.sum(np.einsum("ij,ij->i", n, inward)) < 0:
-        f = f[:, [0, 2, 1]]
-    return BudMesh(x, np.stack([s, t], axis=1), f)
+    return grid_bud(x, s, t, nu, nv)
 
 
 # The three cultivars (sec. 6.2, fig. 16): growth maps as functions of (u, v), an early set (steps

@@ -14,7 +14,7 @@ import numpy as np
 from inflo.formats.atomic import atomic_write
 from inflo.formats.errors import FormatError, read_lines, shorten
 
-__all__ = ["BudMesh", "read_bud_obj", "write_bud_obj"]
+__all__ = ["BudMesh", "read_bud_obj", "write_bud_obj", "grid_bud"]
 
 _SKIP = {"vn", "g", "o", "s", "usemtl", "mtllib", "l"}
 
@@ -108,3 +108,20 @@ def write_bud_obj(path, mesh: BudMesh, header: str | None = None) -> None:
     out.extend("f %d/%d %d/%d %d/%d\n" % (a, a, b, b, c, c) for a, b, c in (mesh.faces + 1).tolist())
     with atomic_write(path) as fh:
         fh.write("".join(out))
+
+
+def grid_bud(x: np.ndarray, s: np.ndarray, t: np.ndarray, nu: int, nv: int) -> BudMesh:
+    """A bud mesh on an ``nv`` x ``nu`` grid of particles (row-major from the base, ``x`` (nu nv, 3),
+    uv = (s, t)) with alternating diagonals (near-isotropic triangles), wound counter-clockwise
+    seen from the flower axis (+Y through the origin): the inner side, as petal-grow expects."""
+    faces = []
+    for j in range(nv - 1):
+        for i in range(nu - 1):
+            a, b, c, d = j * nu + i, j * nu + i + 1, (j + 1) * nu + i, (j + 1) * nu + i + 1
+            faces += [(a, b, d), (a, d, c)] if (i + j) % 2 == 0 else [(a, b, c), (b, d, c)]
+    f = np.array(faces, np.int32)
+    n = np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]])
+    centre = x[f].mean(axis=1)
+    if np.sum(n[:, 0] * -centre[:, 0] + n[:, 2] * -centre[:, 2]) < 0:
+        f = np.ascontiguousarray(f[:, [0, 2, 1]])
+    return BudMesh(np.asarray(x, dtype=np.float64), np.stack([s, t], axis=1), f)

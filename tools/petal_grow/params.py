@@ -22,7 +22,7 @@ __all__ = ["GrowthSet", "Organ", "Flower", "Params", "read_params", "parse_param
            "GROWTH_KEYS", "ORGAN_KEYS"]
 
 FLOWER_KEYS = {
-    "keyframes": 100, "iterations": 40, "match_every": 5, "collisions": True,
+    "keyframes": 100, "iterations": 40, "match_every": 5, "length_sweeps": 0, "collisions": True,
     "collision_distance": 0.05, "collision_iterations": 10, "collision_retries": 20,
     "joint": [[1, 0.0], [50, 15.0]], "base_v": 0.08, "check_every": 1,
 }
@@ -77,6 +77,7 @@ class Flower:
     keyframes: int
     iterations: int
     match_every: int
+    length_sweeps: int
     collisions: bool
     collision_distance: float
     collision_iterations: int
@@ -156,13 +157,11 @@ def _schedule(value, path, line, what, kind):
 
 def read_params(path) -> Params:
     """Read and check a parameter file; maps and paths are relative to its folder."""
-    path = os.fspath(path)
-    data = read_bytes(path)
     try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise FormatError(path, None, "UTF-8 TOML text", "undecodable bytes") from None
-    return parse_params(text, path)
+        text = read_bytes(path).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise FormatError(path, None, "UTF-8 TOML text", f"a byte that is not UTF-8 at offset {exc.start}") from None
+    return parse_params(text, os.fspath(path))
 
 
 def parse_params(text: str, path="<params>") -> Params:
@@ -192,6 +191,7 @@ def parse_params(text: str, path="<params>") -> Params:
         keyframes=_num(g["keyframes"], path, L("keyframes"), "keyframes", lo=1, integer=True),
         iterations=_num(g["iterations"], path, L("iterations"), "iterations", lo=0, integer=True),
         match_every=_num(g["match_every"], path, L("match_every"), "match_every", lo=1, integer=True),
+        length_sweeps=_num(g["length_sweeps"], path, L("length_sweeps"), "length_sweeps", lo=0, integer=True),
         collisions=bool(g["collisions"]) if isinstance(g["collisions"], bool) else
         _bad(path, L("collisions"), "collisions: true or false", g["collisions"]),
         collision_distance=_num(g["collision_distance"], path, L("collision_distance"), "collision_distance", lo=0.0),

@@ -380,7 +380,12 @@ class Simulation:
         self.edge_rest_theta = _rest_thetas_from(self.x, model.hinge_indices, model.hinge_edge,
                                                  len(model.edge_indices), HINGE_SIGN)
         self.rest0 = self.edge_rest_length.copy()
-        self.mean_area = float(_triangle_areas(self.x, model.tri_indices).mean())
+        areas = _triangle_areas(self.x, model.tri_indices)
+        self.mean_area = float(areas.mean())
+        et = model.edge_tris
+        self.edge_area = np.where(et[:, 1] >= 0, 0.5 * (areas[et[:, 0]] + areas[np.maximum(et[:, 1], 0)]),
+                                  areas[et[:, 0]])
+        self._last_blend = None
         ne, nh, nt = len(model.edge_indices), len(model.hinge_indices), len(model.tri_indices)
         self.edge_stiffness = np.ones(ne)
         self.hinge_stiffness = np.ones(nh)
@@ -392,12 +397,16 @@ class Simulation:
 
     # ---- 1. regional growth ------------------------------------------------------------------
     def _set_growth(self, step: int) -> None:
+        """The per-triangle growth values and the constraint stiffnesses of step ``step``; unchanged
+        (not recomputed) while every organ is on one key set."""
         m = self.m
-        areas = _triangle_areas(self.x, m.tri_indices)
-        et = m.edge_tris
-        edge_area = np.where(et[:, 1] >= 0, 0.5 * (areas[et[:, 0]] + areas[np.maximum(et[:, 1], 0)]), areas[et[:, 0]])
-        for o in m.organs:
-            g = _blend(o.keys, step)
+        blends = [_blend(o.keys, step) for o in m.organs]
+        ids = tuple(id(g) for g in blends)
+        if ids == self._last_blend and all(g is o.keys[0][1] or g is o.keys[-1][1] or
+                                           any(g is k[1] for k in o.keys) for g, o in zip(blends, m.organs)):
+            return
+        self._last_blend = ids
+        for o, g in zip(m.organs, blends):
             sl = slice(o.t0, o.t1)
             for k in ("e", "w", "e_in", "w_in"):
                 self.tri[k][sl] = g[k]
@@ -406,11 +415,11 @@ class Simulation:
             self.tri_dir[sl] = g["dir"]
             # sec. 5.1: k = a K c_uv as PBD stiffnesses in [0, 1] (formats/petal_grow.md, "Stiffness"):
             # distance: K_s c_uv / K_max (a PBD distance projection already scales with the edge);
-            # bending: K_b c_uv a / (K_max mean area), so small hinges do not dominate
+            # bending: K_b c_uv a / (K_max mean area), so small hinges do not dominate (the bud's areas)
             kmax = max(float(g["K_s"]), float(g["K_b"]), 1e-300)
             ks = float(g["K_s"]) * g["c_s"] / kmax
             hb = m.hinge_edge[g["hinges"]]
-            kb = float(g["K_b"]) * g["c_b"] * edge_area[hb] / (kmax * self.mean_area)
+            kb = float(g["K_b"]) * g["c_b"] * self.edge_area[hb] / (kmax * self.mean_area)
             self.edge_stiffness[g["edges"]] = np.clip(ks, 0.0, 1.0)
             self.hinge_stiffness[g["hinges"]] = np.clip(kb, 0.0, 1.0)
 
@@ -434,25 +443,36 @@ class Simulation:
             project_distance_constraints(x, self.w, m.edge_indices, self.edge_rest_length, self.edge_stiffness)
             project_bending_constraints(x, self.w, m.hinge_indices, self.hinge_rest_angle, self.hinge_stiffness)
 
-    def attach(self, x: np.ndarray, step: int) -> None:
-        """Shape matching of each organ's base particles to the bud's turned by the joint angle."""
-        for o in self.m.organs:
-            ang = joint_angle_at(o.joint, step)
-            target = (o.base_rest - o.pivot) @ rotation_matrix(o.axis, ang).T + o.pivot
+    def targets(self, step: int) -> list:
+        """Each organ's base-particle targets at ``step``: the bud's turned by the joint angle."""
+        return [(o.base_rest - o.pivot) @ rotation_matrix(o.axis, joint_angle_at(o.joint, step)).T + o.pivot
+                for o in self.m.organs]
+
+    def attach(self, x: np.ndarray, targets: list) -> None:
+        """Shape matching of each organ's base particles to its targets (sec. 5.3, fig. 11)."""
+        for o, target in zip(self.m.organs, targets):
             r, t = shape_match(x[o.base], target)
             x[o.v0:o.v1] = x[o.v0:o.v1] @ r.T + t
 
     def solve(self, step: int) -> np.ndarray:
         f = self.flower
         x = self.x.copy()
+        targets = self.targets(step)
         left = f.iterations
         while left > 0:
             n = min(f.match_every, left)
             self.sweep(x, n)
             left -= n
-            self.attach(x, step)
+            self.attach(x, targets)
         if f.iterations == 0:
-            self.attach(x, step)
+            self.attach(x, targets)
+        elif f.length_sweeps:
+            # the stiff part last: rest lengths (growth proper) over rest angles (bending), so that a
+            # rest state the surface cannot take bends less rather than stretching edges
+            m = self.m
+            for _ in range(f.length_sweeps):
+                project_distance_constraints(x, self.w, m.edge_indices, self.edge_rest_length, self.edge_stiffness)
+            self.attach(x, targets)
         return x
 
     # ---- 4. collisions -------------------------------------------------------------------------

@@ -1,0 +1,45 @@
+# The growth-map lily (issue 22; Ijiri et al. 2008, sec. 6.1, figs. 1, 2, 7): the bud grown into
+# the open flower by petal-grow's growth maps instead of the four key poses. Included by Makefile:
+#
+#   make lily METHOD=growth                 (top level)   or   make -C pipelines/lily growth
+#
+# Outputs under build/lily/growth/ (the key-pose lily's build/lily/ stays as it is).
+
+GB := $(B)/growth
+PY := $(if $(wildcard $(ROOT)/.venv/bin/python),$(ROOT)/.venv/bin/python,python3)
+GROWTH_SRC := $(call SRC,petal_grow pbd collide)
+
+.PHONY: growth growth-frames growth-pictures growth-check
+
+ifeq ($(METHOD),growth)
+.DEFAULT_GOAL := growth
+else ifneq ($(METHOD),)
+ifneq ($(METHOD),keys)
+$(error METHOD must be keys (the default) or growth, found '$(METHOD)')
+endif
+endif
+
+growth: growth-pictures growth-check
+growth-frames: $(GB)/canopy/frame_$(LAST).obj
+growth-pictures: $(GB)/lily_growth_sheet.png $(GB)/lily_growth_beside.png
+growth-check: $(GB)/check.txt
+
+# 1. the bud: petal (680 triangles) and sepal (560) meshes with uv, placed by growth.toml
+$(B)/growth_bud/petal.obj: growth_keys.py
+	$(PY) growth_keys.py -o $(B)/growth_bud
+
+# 2. petal-grow: 100 keyframes, the midrib reflexing early, the joint +23 deg over steps 1-60
+$(GB)/canopy/frame_$(LAST).obj: growth.toml $(B)/growth_bud/petal.obj $(GROWTH_SRC)
+	$(BIN)petal-grow -q growth.toml -o $(GB)/canopy
+
+# 3. pictures: frames 1, 10, ..., 100 (fig. 1), and the open growth-map lily beside the key-pose one
+$(GB)/lily_growth_sheet.png: $(GB)/canopy/frame_$(LAST).obj colors.toml
+	$(RENDER) $(GB)/canopy --sheet-every 10 --columns 6 --label 'frame {n}' --size $(TILE) --fit-all -o $@
+
+$(GB)/lily_growth_beside.png: $(GB)/canopy/frame_$(LAST).obj $(B)/smooth/.done $(B)/column_keyframes/.done colors.toml growth_beside.py
+	$(PY) growth_beside.py $(B) -o $@
+
+# 4. exact static test of every keyframe, joint angles, the midrib's reflex and the flat lamina
+$(GB)/check.txt: $(GB)/canopy/frame_$(LAST).obj check_growth.py
+	@$(PY) check_growth.py $(GB)/canopy > $@.tmp; status=$$?; cat $@.tmp; \
+		if [ $$status -eq 0 ]; then mv $@.tmp $@; else rm -f $@.tmp; exit 1; fi
