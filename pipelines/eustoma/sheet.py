@@ -14,7 +14,7 @@ import tempfile
 import tomllib
 from pathlib import Path
 
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 HERE = Path(__file__).resolve().parent
 CULTIVARS = {"mellow_yellow": "Mellow Yellow (bell)", "maite_lady": "Maite Lady (funnel)",
@@ -41,9 +41,9 @@ def main() -> int:
             cmd += ["--frame", frames[0]] if len(frames) == 1 else ["--sheet", a.frames, "--columns", str(len(frames))]
             subprocess.run(cmd, check=True)
             im = Image.open(out).convert("RGB")
-            band = Image.new("RGB", (im.width, im.height + 28), "white")
-            band.paste(im, (0, 28))
-            ImageDraw.Draw(band).text((10, 8), title, fill=(0, 0, 0))
+            band = Image.new("RGB", (im.width, im.height + 40), "white")
+            band.paste(im, (0, 40))
+            ImageDraw.Draw(band).text((12, 6), title, fill=(0, 0, 0), font=ImageFont.load_default(size=28))
             rows.append(band)
     if len(a.frames.split(",")) == 1:  # the open flowers side by side
         sheet = Image.new("RGB", (sum(r.width for r in rows), max(r.height for r in rows)), "white")

@@ -15,7 +15,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 from inflo.formats.atomic import write_bytes_atomic
 
@@ -43,7 +43,7 @@ def main() -> int:
     out = Image.new("RGB", (width * len(ims), max(i.height for i in ims) + 30), "white")
     for k, im in enumerate(ims):
         out.paste(im, (k * width, 30))
-        ImageDraw.Draw(out).text((k * width + 12, 10), PANELS[k][0], fill=(0, 0, 0))
+        ImageDraw.Draw(out).text((k * width + 12, 6), PANELS[k][0], fill=(0, 0, 0), font=ImageFont.load_default(size=20))
     buf = io.BytesIO()
     out.save(buf, format="PNG")
     write_bytes_atomic(a.output, buf.getvalue())
