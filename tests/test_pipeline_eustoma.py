@@ -116,5 +116,5 @@ def test_draft_build_checks_and_cultivar_shapes_if_built():
     bell, funnel, ball = shape["mellow_yellow"], shape["maite_lady"], shape["pinocchio"]
     assert bell["flare"] > 1.2 and funnel["flare"] > 1.2      # both open out at the rim
     assert ball["flare"] < 1.0                                 # the shallow ball curls in
-    assert funnel["rim"] > 1.4 * max(bell["rim"], ball["rim"])  # the funnel opens widest
+    assert funnel["rim"] > 1.25 * max(bell["rim"], ball["rim"])  # the funnel opens widest
     assert ball["height"] > 1.2 * funnel["height"]             # and the ball stays tallest

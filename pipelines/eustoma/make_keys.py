@@ -64,12 +64,13 @@ def petal(quality: str) -> BudMesh:
 STRETCH = "1"
 BEND = "1 - 0.5 * v"
 CULTIVARS = {
-    # bell: little change early; later the inner/upper region expands most and reflexes
+    # bell: little change early; later the inner/upper region expands most and reflexes (the lower
+    # inner side a little more than the outer: the tube widens upwards)
     "mellow_yellow": {
         "title": "Mellow Yellow (bell)",
         "early": dict(direction="0, 1", e="0.6", w="0.5", e_in="0.6 + 0.017", w_in="0.5 + 0.042"),
         "late": dict(direction="0, 1", e="0.8", w="0.7",
-                     e_in="0.8 + 0.25 * smoothstep(0.55, 0.9, v)",
+                     e_in="0.8 + 0.25 * smoothstep(0.55, 0.9, v) + 0.03 * (1 - smoothstep(0.2, 0.45, v))",
                      w_in="0.7 + 0.017 + 0.125 * smoothstep(0.5, 0.85, v)"),
     },
     # funnel: uniform rates, greater early; the veins fan out from the base (another venation)
