@@ -1,4 +1,4 @@
-# inflo top-level Makefile: make lily | make yarrow | make sunflower | make gaillardia | make dahlia | make dyssodia | make orlaya | make test | make test-blender | make bench | make golden | make clean
+# inflo top-level Makefile: make lily | make yarrow | make sunflower | make gaillardia | make dahlia | make dyssodia | make orlaya | make lilac | make test | make test-blender | make bench | make golden | make clean
 # The first target run on a fresh clone creates .venv and installs inflo with its test extras.
 
 QUALITY ?= draft
@@ -12,7 +12,7 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: all venv test test-blender bench golden golden-check lily yarrow sunflower gaillardia dahlia dyssodia orlaya eustoma clean distclean
+.PHONY: all venv test test-blender bench golden golden-check lily yarrow sunflower gaillardia dahlia dyssodia orlaya lilac eustoma clean distclean
 
 all: lily
 
@@ -69,6 +69,9 @@ dyssodia: $(STAMP)
 
 orlaya: $(STAMP)
 	$(MAKE) -C pipelines/orlaya QUALITY=$(QUALITY)
+
+lilac: $(STAMP)
+	$(MAKE) -C pipelines/lilac QUALITY=$(QUALITY)
 
 eustoma: $(STAMP)
 	$(MAKE) -C pipelines/eustoma QUALITY=$(QUALITY)

@@ -27,6 +27,9 @@ virtual environment's tools first on PATH:
 - ``pipeline_orlaya_final``: the whole Orlaya at ``QUALITY=final`` (a compound umbel; thesis table
   4.1: ~120k triangles, 45 min CPU); ``pipeline_orlaya_final_fccompose``: its canopy stage alone
   (goal under 3 min, issue 18).
+- ``pipeline_lilac_final``: the whole lilac at ``QUALITY=final`` (a branching-first thyrse; thesis
+  table 4.1: ~200k triangles, 120 min CPU); ``pipeline_lilac_final_fccompose``: its canopy stage
+  alone (goal under 3 min, issue 20).
 """
 from __future__ import annotations
 
@@ -131,4 +134,10 @@ def orlaya(ctx: BenchContext) -> list[Result]:
                     anchor_min=45.0)
 
 
-BENCHMARKS = [lily, yarrow, sunflower, gaillardia, dahlia, dyssodia, orlaya]
+def lilac(ctx: BenchContext) -> list[Result]:
+    return _species(ctx, "lilac", "thesis table 4.1: 120 min (CPU), ~200k triangles", "lilac.fcc",
+                    stage_anchor="thesis table 4.1: 120 min (goal under 3 min, issue 20)", stage_goal=3.0,
+                    anchor_min=120.0)
+
+
+BENCHMARKS = [lily, yarrow, sunflower, gaillardia, dahlia, dyssodia, orlaya, lilac]

@@ -19,6 +19,7 @@ CLI_NAMES = [
     "fccompose",
     "subdivide",
     "branch-gen",
+    "thyrse",
     "canopy-render",
     "canopy-export",
     "venation",

@@ -342,16 +342,23 @@ def _validate(p: Params, w: _Where) -> None:
     need(3 <= p.cylinder.sides <= 64, "cylinder", "sides", "3..64 sides", p.cylinder.sides)
 
 
-def read_params(path=None) -> Params:
-    """Read a branch-gen TOML parameter file (None: all defaults)."""
-    if path is None:
-        return params_from_dict({})
+def load_toml(path) -> tuple[dict, list]:
+    """The parsed TOML mapping of ``path`` and its lines (for the key lines of error messages);
+    invalid TOML is a :class:`FormatError` naming its line. Also read by ``thyrse``'s parameters."""
     lines = read_lines(path)
     try:
         data = tomllib.loads("\n".join(lines))
     except tomllib.TOMLDecodeError as exc:
         m = re.search(r"line (\d+)", str(exc))
         raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None
+    return data, lines
+
+
+def read_params(path=None) -> Params:
+    """Read a branch-gen TOML parameter file (None: all defaults)."""
+    if path is None:
+        return params_from_dict({})
+    data, lines = load_toml(path)
     return params_from_dict(data, path=path, lines=lines, folder=Path(path).parent)
 
 

@@ -1,0 +1,43 @@
+"""Command-line front end of ``thyrse`` (issue 20; thesis sec. 4.5, figs. 4.9, 4.10, ch. 7).
+
+    thyrse [PARAMS.toml] -o OUT_DIR [--base X Y Z]
+
+Branching first: lays out a thyrse (a main axis with decussate laterals whose length, branching
+order and floret density are functions of their position, ``.func`` files) and places the florets
+on it. Writes ``OUT_DIR/scene.scn`` (``ca:`` placements, lower florets first) and, as branch-gen
+does, ``OUT_DIR/skeleton.obj``, ``OUT_DIR/skeleton.radii`` and ``OUT_DIR/branches.obj``.
+Parameters: ``formats/thyrse.md``.
+"""
+from __future__ import annotations
+
+import math
+
+import click
+
+from inflo.formats.errors import InputError
+from inflo.tools.common.cli import inflo_command
+
+from .generate import thyrse, write_thyrse
+from .params import read_params
+
+
+@inflo_command("thyrse", help="Lay out a thyrse (branching first: main axis, decussate laterals from positional "
+                              "functions) and place its florets: scene.scn + branch meshes.")
+@click.argument("params", required=False, type=click.Path())
+@click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output folder.")
+@click.option("--base", type=float, nargs=3, default=None, help="Inflorescence base point (default 0 0 0).")
+def main(params, output, base, quiet, debug):
+    p = read_params(params)
+    if base is not None:
+        if not all(math.isfinite(b) and abs(b) < 1e12 for b in base):
+            raise InputError(f"--base must be three finite numbers (|x| < 1e12), found {' '.join(map(str, base))}")
+        p.base = list(base)
+    result = thyrse(p)
+    write_thyrse(output, result, p)
+    if not quiet:
+        click.echo(f"thyrse: {len(result.scene)} florets, {len(result.branches.chain_list)} branches, "
+                   f"{result.branches.branches_mesh.n_faces} triangles -> {output}", err=True)
+
+
+if __name__ == "__main__":  # python -m inflo.tools.thyrse.cli
+    main()

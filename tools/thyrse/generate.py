@@ -1,0 +1,309 @@
+"""thyrse as library functions: parameters in, the branching skeleton, the florets' scene and the
+generalized cylinders out (branching-first, thesis ch. 7's contrast with the florets-first
+branch-gen; sec. 4.5, figs. 4.9, 4.10).
+
+:func:`grow_thyrse` lays out the architecture: a main axis along +Y from ``base`` with
+``nodes`` decussate node pairs (opposite laterals, successive pairs turned by ``divergence``);
+the lateral at relative height x of the main axis has
+
+- length ``length * lateral_length(x)``, branch angle ``angle(x)`` from its parent axis,
+- branching order ``round(order(x))``: a lateral of order k > 0 carries decussate node pairs of
+  laterals of order k - 1 (length ``parent_length * lateral_length(t)``, t the node's relative
+  position on its parent: the same positional function, self-similarly; angle ``sub_angle(t)``
+  when given, else ``angle(x)``), one of order 0 carries node pairs of pedicels with a floret each,
+- with ``outward``, a lateral's children that would point towards the main axis not formed (the
+  florets fill the panicle's outside),
+- with ``min_distance`` > 0, a floret whose limb point (``pos + reach * size * up``) would come
+  closer than ``min_distance`` floret sizes to one placed before is not formed (no room: in the
+  order of the layout, basal first),
+- ``round(L * density(x))`` node pairs on a lateral of length L (the floret density; a lateral
+  that carries laterals: ``branch_density(x)`` when given),
+- a pedicel with a floret where a lateral of a lateral would be shorter than two pedicels,
+
+and every axis ends in a terminal floret. Positions are the positional information of
+Prusinkiewicz et al.'s lilac model (functions of the relative position along the axis, ``.func``
+files). :func:`thyrse_scene` places the florets (``ca:`` placements: ``up`` along the pedicel
+turned towards +Y by ``tropism`` (the florets face up and out),
+``right`` towards the tip of the parent axis, size ``floret_size(h)``, development window from
+``start(h)``, h the floret's relative height: the lower florets open first), and
+:func:`thyrse` adds the branch meshes with branch-gen's own code
+(:func:`inflo.tools.branch_gen.generate.skeleton_geometry`: pipe-model radii, generalized
+cylinders) and :func:`write_thyrse` writes them with branch-gen's writer.
+
+The layout is a few thousand nodes at most, built once: plain numpy, no kernel to compile.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from inflo.formats.scn import Placement, Scene, write_scn
+from inflo.tools.branch_gen.generate import BranchResult, skeleton_geometry, write_branch_gen
+from inflo.tools.branch_gen.skeleton import Skeleton
+
+from .params import Params
+
+__all__ = ["ThyrseLayout", "grow_thyrse", "thyrse_scene", "thyrse", "write_thyrse", "node_directions"]
+
+Y = np.array([0.0, 1.0, 0.0])
+#: ``outward``: a child whose unit direction steps more than this towards the main axis is not formed
+INWARD = math.sin(math.radians(10.0))
+
+
+@dataclass
+class ThyrseLayout:
+    """The architecture: a skeleton forest (branch-gen's conventions) and its florets.
+
+    Attributes
+    ----------
+    node_pos : (n, 3) float64
+    node_parent : (n,) int64, -1 at the base
+    node_tip : (n,) bool, a floret's attachment point
+    node_floret : (n,) int64, the floret index at a tip, -1 elsewhere
+    floret_node : (m,) int64
+    floret_up : (m, 3) float64, unit: the direction of its stalk turned towards +Y by ``tropism``
+    floret_right : (m, 3) float64, unit, orthogonal to ``floret_up``: towards the parent axis' tip
+    floret_order : (m,) int64, the order of the axis carrying it (-1: a pedicel's floret)
+    node_x : (n,) float64, the main-axis height (positional value) each node inherits
+    """
+
+    node_pos: np.ndarray
+    node_parent: np.ndarray
+    node_tip: np.ndarray
+    node_floret: np.ndarray
+    floret_node: np.ndarray
+    floret_up: np.ndarray
+    floret_right: np.ndarray
+    floret_order: np.ndarray
+    node_x: np.ndarray
+
+    @property
+    def floret_pos(self) -> np.ndarray:
+        return self.node_pos[self.floret_node]
+
+
+def _unit(v):
+    return v / np.linalg.norm(v)
+
+
+def perpendicular_basis(d):
+    """Two unit vectors (e1, e2) with (e1, e2, d) right-handed orthonormal; e1 horizontal where it can be."""
+    d = _unit(np.asarray(d, float))
+    ref = np.array([0.0, 0.0, 1.0]) if abs(d[1]) > 0.999 else Y
+    e1 = _unit(np.cross(ref, d))
+    e2 = np.cross(d, e1)
+    return e1, e2
+
+
+def node_directions(axis, angle_deg: float, azimuth_deg: float):
+    """The two opposite children of a decussate node: unit directions at ``angle_deg`` from ``axis``,
+    at azimuth ``azimuth_deg`` and ``azimuth_deg + 180`` about it (in :func:`perpendicular_basis`)."""
+    axis = _unit(np.asarray(axis, float))
+    e1, e2 = perpendicular_basis(axis)
+    a = math.radians(angle_deg)
+    out = []
+    for phi in (azimuth_deg, azimuth_deg + 180.0):
+        f = math.radians(phi)
+        out.append(_unit(math.cos(a) * axis + math.sin(a) * (math.cos(f) * e1 + math.sin(f) * e2)))
+    return out
+
+
+class _Builder:
+    """Collects nodes and florets in lists and turns them into arrays once (:meth:`finalize`)."""
+
+    def __init__(self, p: Params):
+        self.p = p
+        self.f = p.functions
+        self.pos, self.parent, self.x = [], [], []
+        self.fl_node, self.fl_up, self.fl_right, self.fl_order = [], [], [], []
+        self.limb = []  # (limb point, size) of the florets placed (min_distance)
+
+    def node(self, pos, parent: int, x: float) -> int:
+        self.pos.append(np.asarray(pos, float))
+        self.parent.append(parent)
+        self.x.append(x)
+        return len(self.pos) - 1
+
+    def fits(self, pos, up) -> bool:
+        """With ``min_distance`` > 0: is this floret's limb point (``pos + reach * size * up``) at
+        least ``min_distance`` floret sizes from every limb point placed before? (A floret that
+        does not fit is not formed: its pedicel is not either; an axis' terminal floret leaves a
+        bare tip.) Records the point when it fits."""
+        tp = self.p.thyrse
+        if tp.min_distance <= 0:
+            return True
+        h = min(max(float((np.asarray(pos) - np.asarray(self.p.base, float)) @ Y) / tp.length, 0.0), 1.0)
+        size = float(self.f["floret_size"](h))
+        q = np.asarray(pos, float) + tp.reach * size * _unit(np.asarray(up, float))
+        if self.limb:
+            pts = np.array([a for a, _ in self.limb])
+            sz = np.array([b for _, b in self.limb])
+            if np.any(np.linalg.norm(pts - q, axis=1) < tp.min_distance * 0.5 * (sz + size)):
+                return False
+        self.limb.append((q, size))
+        return True
+
+    def floret(self, node: int, up, axis, fallback, order: int) -> None:
+        up = _unit(np.asarray(up, float))
+        r = np.asarray(axis, float) - np.dot(axis, up) * up
+        if np.linalg.norm(r) < 1e-6:
+            r = np.asarray(fallback, float) - np.dot(fallback, up) * up
+        self.fl_node.append(node)
+        self.fl_up.append(up)
+        self.fl_right.append(_unit(r))
+        self.fl_order.append(order)
+
+    def outward(self, dirs, node: int, main: bool):
+        """With ``outward``, a lateral's children that would point towards the main axis (their
+        horizontal step towards it more than ``sin(10 deg)``) are not formed: the florets and
+        branches fill the panicle's outside, the inside keeps to the main axis."""
+        if main or not self.p.thyrse.outward:
+            return dirs
+        r = self.pos[node] - np.asarray(self.p.base, float)
+        r[1] = 0.0
+        if np.linalg.norm(r) < 1e-12:
+            return dirs
+        r = r / np.linalg.norm(r)
+        return [c for c in dirs if c @ r > -INWARD]
+
+    def turn_up(self, d):
+        """A floret's axis: its stalk's direction turned towards +Y by ``tropism``."""
+        t = self.p.thyrse.tropism
+        return _unit(d + t * Y) if t > 0 else d
+
+    def axis(self, start: int, d, length: float, order: int, x: float, phase: float, n_pairs: int,
+             node_t=None, main: bool = False) -> None:
+        """An axis from node ``start`` along ``d``: its node pairs, their children, its terminal floret."""
+        tp = self.p.thyrse
+        f = self.f
+        p0 = self.pos[start]
+        ts = node_t if node_t is not None else [(j + 1) / (n_pairs + 1) for j in range(n_pairs)]
+        prev = start
+        e1, _ = perpendicular_basis(d)
+        for j, t in enumerate(ts):
+            xj = t if main else x
+            k = self.node(p0 + d * (t * length), prev, xj)
+            prev = k
+            az = phase + j * tp.divergence
+            if main:
+                child_order = int(round(f["order"](xj)))
+                child_len = length * f["lateral_length"](xj)
+                ang = f["angle"](xj)
+            else:
+                child_order = order - 1
+                child_len = length * f["lateral_length"](t)
+                ang = f["sub_angle"](t) if "sub_angle" in f else f["angle"](x)
+            # pedicels with florets on an order-0 axis, and where a lateral would be shorter than
+            # two pedicels (the tip of a branched lateral)
+            if child_order < 0 or (not main and child_len < 2.0 * tp.pedicel_length):
+                for c in self.outward(node_directions(d, tp.pedicel_angle, az), k, main):
+                    end, u = self.pos[k] + c * tp.pedicel_length, self.turn_up(c)
+                    if self.fits(end, u):
+                        self.floret(self.node(end, k, xj), u, d, e1, -1)
+            else:
+                for c in self.outward(node_directions(d, ang, az), k, main):
+                    dens = f["branch_density"] if child_order > 0 and "branch_density" in f else f["density"]
+                    n = int(round(child_len * dens(xj)))
+                    self.axis(k, c, child_len, child_order, xj, az + 90.0, n)
+        tip = self.node(p0 + d * length, prev, x if not main else 1.0)
+        u = self.turn_up(d) if not main else d
+        if self.fits(self.pos[tip], u):
+            self.floret(tip, u, d, e1, order)
+
+    def finalize(self) -> ThyrseLayout:
+        """The arrays; direction components below 1e-12 (rounding noise of the rotations) set to 0."""
+        n = len(self.pos)
+        for lst in (self.fl_up, self.fl_right):
+            for v in lst:
+                v[np.abs(v) < 1e-12] = 0.0
+        node_floret = np.full(n, -1, np.int64)
+        fl = np.asarray(self.fl_node, np.int64)
+        node_floret[fl] = np.arange(len(fl))
+        return ThyrseLayout(node_pos=np.array(self.pos).reshape(n, 3), node_parent=np.asarray(self.parent, np.int64),
+                            node_tip=node_floret >= 0, node_floret=node_floret, floret_node=fl,
+                            floret_up=np.array(self.fl_up).reshape(-1, 3),
+                            floret_right=np.array(self.fl_right).reshape(-1, 3),
+                            floret_order=np.asarray(self.fl_order, np.int64), node_x=np.asarray(self.x, float))
+
+
+def grow_thyrse(p: Params) -> ThyrseLayout:
+    """The architecture of a thyrse (see the module docstring).
+
+    Node 0 is the base; the main axis' node pairs sit at relative heights
+    ``first_node + (1 - first_node) j / nodes``, j = 0..nodes-1, its terminal floret at the apex.
+    """
+    tp = p.thyrse
+    b = _Builder(p)
+    base = b.node(np.asarray(p.base, float), -1, 0.0)
+    ts = [tp.first_node + (1 - tp.first_node) * j / max(tp.nodes, 1) for j in range(tp.nodes)]
+    b.axis(base, Y.copy(), tp.length, 99, 0.0, 0.0, tp.nodes, node_t=ts, main=True)
+    return b.finalize()
+
+
+def floret_heights(layout: ThyrseLayout, p: Params) -> np.ndarray:
+    """Each floret's relative height h = (pos - base) . Y / length, clamped to [0, 1]."""
+    h = (layout.floret_pos - np.asarray(p.base, float)) @ Y / p.thyrse.length
+    return np.clip(h, 0.0, 1.0)
+
+
+def development_windows(h, p: Params):
+    """(frameStart, frameEnd) per floret: ``start(h) * (frames - 1 - window)`` rounded, + window."""
+    d = p.development
+    span = d.frames - 1 - d.window
+    s = np.rint(np.asarray(p.functions["start"](np.asarray(h, float))) * span).astype(np.int64)
+    s = np.clip(s, 0, span)
+    return s, s + d.window
+
+
+def thyrse_scene(layout: ThyrseLayout, p: Params) -> Scene:
+    """The florets as ``ca:`` placements in floret order, with ``#@ emergence`` (frameStart) and
+    ``#@ type: floret``."""
+    h = floret_heights(layout, p)
+    start, end = development_windows(h, p)
+    size = np.asarray(p.functions["floret_size"](h), float).reshape(-1)
+    out = []
+    for k in range(len(layout.floret_node)):
+        s = float(size[k])
+        out.append(Placement(kind="ca", id=p.thyrse.floret_id, pos=layout.floret_pos[k], scale=(s, s, s),
+                             up=layout.floret_up[k], right=layout.floret_right[k], frame_start=int(start[k]),
+                             frame_end=int(end[k]), emergence=float(start[k]), type="floret"))
+    return Scene(placements=out)
+
+
+@dataclass
+class ThyrseResult:
+    layout: ThyrseLayout
+    scene: Scene
+    branches: BranchResult
+
+
+def thyrse(p: Params) -> ThyrseResult:
+    """Layout, scene and branch geometry (branch-gen's pipe model and generalized cylinders)."""
+    lay = grow_thyrse(p)
+    scene = thyrse_scene(lay, p)
+    bp = p.branches
+    radius, chain_list, skel, mesh = skeleton_geometry(lay.node_pos, lay.node_parent, lay.node_tip, bp)
+    n = len(lay.node_pos)
+    sk = Skeleton(node_pos=lay.node_pos, node_parent=lay.node_parent, node_tip=lay.node_tip,
+                  node_floret=lay.node_floret, node_frame=np.zeros(n), node_link_frame=np.zeros(n),
+                  node_branch=np.full(n, -1, np.int64), base=np.asarray(p.base, float))
+    tp = p.thyrse
+    head = (f"thyrse: length {tp.length:g}, {tp.nodes} decussate node pairs, divergence {tp.divergence:g}; "
+            f"{len(scene)} florets, {n} nodes")
+    br = BranchResult(skeleton=sk, node_pos=lay.node_pos, node_parent=lay.node_parent, node_tip=lay.node_tip,
+                      node_radius=radius, chain_list=chain_list, skeleton_mesh=skel, branches_mesh=mesh, header=head)
+    return ThyrseResult(layout=lay, scene=scene, branches=br)
+
+
+def write_thyrse(out_dir, result: ThyrseResult, p: Params) -> list:
+    """Write ``scene.scn`` and branch-gen's ``skeleton.obj``, ``skeleton.radii``, ``branches.obj``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    d = p.development
+    head = (f"{result.branches.header}\nca: placements, frameStart..frameEnd = development window "
+            f"({d.window} frames of {d.frames}), lower florets first; written by thyrse")
+    write_scn(out / "scene.scn", result.scene, header=head)
+    return [out / "scene.scn"] + write_branch_gen(out, result.branches, p.branches)

@@ -1,0 +1,175 @@
+"""thyrse parameter files (TOML). Spec: ``formats/thyrse.md``.
+
+Two sections of their own, validated here, and branch-gen's mesh sections, validated by
+:func:`inflo.tools.branch_gen.params.params_from_dict` (one parser for the branch geometry):
+
+- ``[thyrse]``: the architecture, as positional information (thesis sec. 4.5: "a previously
+  published model of lilac inflorescence architecture" -- Prusinkiewicz et al.'s lilac, whose
+  laterals' length, branching order and floret density are functions of their position along the
+  main axis);
+- ``[development]``: each floret's development window from its position (lower florets first);
+- ``[pipe]``, ``[cylinder]``: branch widths (pipe model) and the generalized cylinders, as in
+  ``formats/branch_gen.md``.
+
+A positional key takes a number (constant) or a ``.func`` file name (relative to the parameter
+file), read with :mod:`inflo.formats.func`: y = f(x), x the relative position in [0, 1].
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from inflo.formats.errors import FormatError, did_you_mean
+from inflo.formats.func import Function, read_func
+from inflo.tools.branch_gen.params import Params as BranchParams
+from inflo.tools.branch_gen.params import _num, _vec, _Where, load_toml, params_from_dict
+
+__all__ = ["ThyrseParams", "DevelopmentParams", "Params", "read_params", "params_from_toml", "POSITIONAL"]
+
+#: the positional keys of [thyrse] and [development]: a number or a .func of x in [0, 1]
+POSITIONAL = ("lateral_length", "order", "density", "branch_density", "angle", "sub_angle", "floret_size", "start")
+
+
+@dataclass
+class ThyrseParams:
+    """The branching architecture (thesis sec. 4.5, fig. 4.10; ch. 7's branching-first model)."""
+
+    length: float = 1.0  # main axis, base -> apex along +Y (scene units)
+    nodes: int = 8  # decussate node pairs on the main axis
+    first_node: float = 0.2  # relative height of the lowest node (the bare peduncle below it)
+    divergence: float = 90.0  # degrees between successive node pairs (90: decussate)
+    lateral_length: object = 0.5  # child length / parent length, of the node's position on its parent
+    order: object = 1.0  # branching order of a main-axis lateral, of its node's height (rounded)
+    density: object = 10.0  # node pairs per unit length on the laterals, of the main-axis height
+    branch_density: object = None  # the same on laterals of order > 0 (None: density)
+    angle: object = 50.0  # branch angle from the parent axis (degrees), of the main-axis height
+    sub_angle: object = None  # laterals of laterals: angle of the node's position on its parent (None: angle)
+    outward: bool = False  # a lateral's children that would point towards the main axis are not formed
+    pedicel_length: float = 0.03  # from an order-0 axis' node to its floret
+    pedicel_angle: float = 60.0  # degrees from the parent axis
+    tropism: float = 0.0  # a floret's axis: its stalk's direction + tropism * Y, normalized
+    floret_size: object = 0.05  # floret scale (its model's unit diameter), of the floret's height
+    floret_id: int = 0  # the .fcc animation id of the florets
+    min_distance: float = 0.0  # floret sizes between limb points; a floret with less room is not formed (0: off)
+    reach: float = 0.7  # the limb point: pos + reach * size * up (floret units: where the open limb sits)
+
+
+@dataclass
+class DevelopmentParams:
+    """Development windows (``ca: frameStart frameEnd``) from position: lower florets open first."""
+
+    frames: int = 40  # canopy frames 0..frames-1
+    window: int = 20  # frameEnd - frameStart of every floret
+    start: object = "linear"  # frameStart / (frames - 1 - window), of the floret's height
+
+
+@dataclass
+class Params:
+    thyrse: ThyrseParams = field(default_factory=ThyrseParams)
+    development: DevelopmentParams = field(default_factory=DevelopmentParams)
+    branches: BranchParams = field(default_factory=BranchParams)
+    base: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    source: str | None = None
+    folder: Path = field(default_factory=Path)
+    functions: dict = field(default_factory=dict)  # key -> Function (constants included)
+
+
+_OWN = {"thyrse": ThyrseParams, "development": DevelopmentParams}
+_BRANCH = ("pipe", "cylinder")
+_TOP = ("base",)
+
+
+def _positional(w, sec, key, v, folder: Path):
+    """A number (a constant function) or a .func file."""
+    if isinstance(v, str):
+        if key == "start" and v == "linear":
+            return Function.from_points([(0.0, 0.0), (1.0, 1.0)], name="start")
+        q = Path(v) if Path(v).is_absolute() else folder / v
+        if not q.is_file():
+            raise w.error(sec, key, "a number or an existing .func file", repr(v))
+        return read_func(q)
+    return Function.constant(_num(w, sec, key, v), name=key)
+
+
+def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) -> Params:
+    """Build :class:`Params` from a parsed TOML mapping, validating every key.
+
+    Raises
+    ------
+    FormatError
+        Unknown key/section (naming the closest known one), wrong type, out-of-range value, a
+        positional key naming no file.
+    """
+    w = _Where(path, lines or [])
+    folder = Path(folder) if folder is not None else Path(".")
+    p = Params(source=str(path), folder=folder)
+    known = list(_TOP) + list(_OWN) + list(_BRANCH)
+    rest = {}
+    for key, v in data.items():
+        if key not in known:
+            raise FormatError(path, w.line(None, key) or w.line(key, ""),
+                              "a known key or section" + did_you_mean(key, known), repr(key))
+        if key == "base":
+            p.base = _vec(w, None, key, v)
+        elif key in _BRANCH:
+            rest[key] = v
+        else:
+            if not isinstance(v, dict):
+                raise w.error(None, key, "a [section]", repr(v))
+            obj = getattr(p, key)
+            names = list(obj.__dataclass_fields__)
+            for k, val in v.items():
+                if k not in names:
+                    raise FormatError(path, w.line(key, k), f"a key of [{key}]" + did_you_mean(k, names), repr(k))
+                default = getattr(obj, k)
+                if k in POSITIONAL:
+                    setattr(obj, k, val)
+                elif isinstance(default, bool):
+                    if not isinstance(val, bool):
+                        raise w.error(key, k, "true or false", repr(val))
+                    setattr(obj, k, val)
+                elif isinstance(default, int) and not isinstance(default, bool):
+                    setattr(obj, k, _num(w, key, k, val, integer=True))
+                else:
+                    setattr(obj, k, _num(w, key, k, val))
+    p.branches = params_from_dict(rest, path=path, lines=lines, folder=folder)
+    t, d = p.thyrse, p.development
+    for sec, obj in (("thyrse", t), ("development", d)):
+        for k in POSITIONAL:
+            if hasattr(obj, k) and getattr(obj, k) is not None:
+                p.functions[k] = _positional(w, sec, k, getattr(obj, k), folder)
+
+    def need(ok, sec, key, expected, found):
+        if not ok:
+            raise w.error(sec, key, expected, repr(found))
+
+    need(t.length > 0, "thyrse", "length", "a length > 0", t.length)
+    need(t.nodes >= 0, "thyrse", "nodes", "an integer >= 0", t.nodes)
+    need(0 <= t.first_node < 1, "thyrse", "first_node", "a relative height in [0, 1)", t.first_node)
+    need(t.pedicel_length > 0, "thyrse", "pedicel_length", "a length > 0", t.pedicel_length)
+    need(0 < t.pedicel_angle < 180, "thyrse", "pedicel_angle", "an angle in (0, 180) degrees", t.pedicel_angle)
+    need(t.tropism >= 0, "thyrse", "tropism", "a weight >= 0", t.tropism)
+    need(t.floret_id >= 0, "thyrse", "floret_id", "an id >= 0", t.floret_id)
+    need(t.min_distance >= 0, "thyrse", "min_distance", "a distance >= 0", t.min_distance)
+    need(t.reach >= 0, "thyrse", "reach", "a reach >= 0", t.reach)
+    need(d.frames >= 1, "development", "frames", "an integer >= 1", d.frames)
+    need(0 <= d.window <= d.frames - 1, "development", "window", "0 <= window <= frames - 1", d.window)
+    ranges = {"lateral_length": (0.0, 10.0), "order": (0.0, 6.0), "density": (0.0, 1e6), "branch_density": (0.0, 1e6),
+              "angle": (0.0, 180.0), "sub_angle": (0.0, 180.0), "floret_size": (1e-9, 1e6), "start": (0.0, 1.0)}
+    for k, (lo, hi) in ranges.items():
+        if k not in p.functions:
+            continue
+        ys = p.functions[k].sampled()[1]
+        sec = "development" if k == "start" else "thyrse"
+        need(all(lo <= y <= hi and math.isfinite(y) for y in ys), sec, k, f"values in [{lo:g}, {hi:g}]",
+             f"{min(ys):g}..{max(ys):g}")
+    return p
+
+
+def read_params(path=None) -> Params:
+    """Read a thyrse TOML parameter file (None: all defaults)."""
+    if path is None:
+        return params_from_toml({})
+    data, lines = load_toml(path)
+    return params_from_toml(data, path=path, lines=lines, folder=Path(path).parent)
