@@ -225,7 +225,16 @@ def random_soup(n, rng, size=0.3, extent=3.0):
     return x.reshape(-1, 3), np.arange(3 * n, dtype=np.int32).reshape(n, 3)
 
 
-def test_box_pairs_match_brute_force():
+@pytest.fixture(params=["serial", "parallel"])
+def query_kernel(request, monkeypatch):
+    """Both query kernels: box_pairs runs the serial one below SERIAL_QUERY_BELOW query boxes."""
+    from inflo.tools.collide import broad
+
+    monkeypatch.setattr(broad, "SERIAL_QUERY_BELOW", 10**9 if request.param == "serial" else 0)
+    return request.param
+
+
+def test_box_pairs_match_brute_force(query_kernel):
     rng = np.random.default_rng(3)
     x, tri = random_soup(250, rng)
     b = triangle_boxes(x, x + rng.normal(scale=0.05, size=x.shape), tri, 0.01)
@@ -234,7 +243,7 @@ def test_box_pairs_match_brute_force():
         np.testing.assert_array_equal(box_pairs(b[:40], b, cell_size=cell), box_pairs_brute(b[:40], b, False))
 
 
-def test_box_pairs_in_a_crowded_cell_match_brute_force():
+def test_box_pairs_in_a_crowded_cell_match_brute_force(query_kernel):
     """Hundreds of boxes on top of each other (far more pairs per query than the parallel query's
     per-block scratch space holds: its recount path) next to sparse ones."""
     rng = np.random.default_rng(8)

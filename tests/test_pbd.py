@@ -299,6 +299,41 @@ def test_solving_part_by_part_equals_the_serial_sweeps_and_stops_parts_at_rest()
     assert part_offsets(joined, part, 3) is None
 
 
+def test_serial_and_parallel_part_solves_give_the_same_positions(monkeypatch):
+    """solve_parts picks the serial kernels below SERIAL_CONSTRAINTS_BELOW constraints (waking the
+    thread pool costs more than a small system's sweeps); both kinds give identical positions and
+    sweep counts, for the whole system and for a list of parts."""
+    from inflo.tools.pbd import part_offsets, solver
+
+    rng = np.random.default_rng(5)
+    xs, tris = [], []
+    for p in range(5):
+        x, tri = strip(8, 5, rng=rng)
+        tris.append(tri + sum(len(a) for a in xs))
+        xs.append(x + [0.0, 0.0, 5.0 * p])
+    x = np.concatenate(xs)
+    part = np.repeat(np.arange(5), [len(a) for a in xs])
+    e = np.concatenate([mesh_edges(t) for t in tris]).astype(np.int32)
+    h = np.concatenate([mesh_hinges(t) for t in tris]).astype(np.int32)
+    rest_l = np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1)
+    rest_a = hinge_angles(x, h)
+    start = x + rng.normal(scale=0.05, size=x.shape)
+    args = (np.ones(len(x)), e, rest_l, np.full(len(e), 0.9), part_offsets(e, part, 5), h, rest_a,
+            np.full(len(h), 0.7), part_offsets(h, part, 5))
+    out = {}
+    for below in (10**9, 0):  # serial, then parallel
+        monkeypatch.setattr(solver, "SERIAL_CONSTRAINTS_BELOW", below)
+        a, b = start.copy(), start.copy()
+        sweeps = np.zeros(5, np.int64)
+        n_all = solver.solve_parts(a, *args, 9, 1e-12, sweeps)
+        n_some = solver.solve_parts(b, *args, 9, 1e-12, None, parts=np.array([3, 1], np.int64))
+        out[below] = (a, b, sweeps.copy(), n_all, n_some)
+    (a1, b1, s1, n1, m1), (a2, b2, s2, n2, m2) = out[10**9], out[0]
+    assert np.array_equal(a1, a2) and np.array_equal(b1, b2) and np.array_equal(s1, s2)
+    assert (n1, m1) == (n2, m2) == (int(s1.sum()), int(s1[1] + s1[3]))
+    assert np.array_equal(b1[part == 0], start[part == 0]) and not np.array_equal(b1[part == 3], start[part == 3])
+
+
 def test_overstretched_edges_finds_torn_and_non_finite_edges():
     x = np.array([[0.0, 0, 0], [1.0, 0, 0], [0.0, 60.0, 0], [np.nan, 0, 0]])
     e = np.array([[0, 1], [0, 2], [1, 3], [0, 1]], np.int32)

@@ -161,3 +161,20 @@ def test_separated_never_claims_an_intersecting_pair_and_decides_flat_facets():
         Q = P[rng.integers(0, 3, 3)] + rng.normal(size=(3, 3)) * 10.0 ** rng.integers(-12, 0)
         if separated(*P, *Q):
             assert not triangles_intersect_exact(*P, *Q)
+
+
+@pytest.mark.parametrize("below", [10**9, 0], ids=["serial", "parallel"])
+def test_serial_and_parallel_float_tests_find_the_same_pairs(below, monkeypatch):
+    """intersecting_pairs runs the float test serially below SERIAL_TEST_BELOW candidate pairs;
+    both kernels report the brute-force pairs of a random soup."""
+    from inflo.tools.collide import tritri
+
+    monkeypatch.setattr(tritri, "SERIAL_TEST_BELOW", below)
+    rng = np.random.default_rng(21)
+    x = rng.uniform(0, 1, (300, 3))
+    tri = np.arange(300, dtype=np.int32).reshape(100, 3)
+    x[tri[:, 1]] = x[tri[:, 0]] + rng.normal(scale=0.15, size=(100, 3))
+    x[tri[:, 2]] = x[tri[:, 0]] + rng.normal(scale=0.15, size=(100, 3))
+    got = intersecting_pairs(x, tri)
+    assert len(got) > 10
+    np.testing.assert_array_equal(got, intersecting_pairs_brute(x, tri))

@@ -357,7 +357,8 @@ def box_pairs(boxes_a: np.ndarray, boxes_b: np.ndarray | None = None, *,
     # guard against absurd cell counts for a too-small cell (an element spanning > 64 cells per axis)
     if span * inv > 64.0:
         inv = 64.0 / span
-    return _query(a, same, _NO_SKIP, _NO_VERTS, _NO_VERTS, origin, inv, *_build(b, origin, inv))
+    run = _query_serial if len(a) < SERIAL_QUERY_BELOW else _query
+    return run(a, same, _NO_SKIP, _NO_VERTS, _NO_VERTS, origin, inv, *_build(b, origin, inv))
 
 
 _NO_SKIP = np.zeros(0, np.bool_)

@@ -274,29 +274,46 @@ def _share_vertex(tri, i, j):
     return False
 
 
+@njit(cache=True, inline="always")
+def _test_pair(x, tri, pairs, flags, k):
+    """flags[k]: 0 disjoint, 1 intersecting (both certified), 2 undecided in float64."""
+    i = pairs[k, 0]
+    j = pairs[k, 1]
+    if _share_vertex(tri, i, j):
+        flags[k] = 0
+        return
+    a0, a1, a2 = x[tri[i, 0]], x[tri[i, 1]], x[tri[i, 2]]
+    b0, b1, b2 = x[tri[j, 0]], x[tri[j, 1]], x[tri[j, 2]]
+    if certified(a0, a1, a2, b0, b1, b2):
+        flags[k] = 1 if triangles_intersect(a0, a1, a2, b0, b1, b2) else 0
+    elif separated(a0, a1, a2, b0, b1, b2):
+        flags[k] = 0
+    else:
+        flags[k] = 2
+
+
 @njit(cache=True, parallel=True)
 def _test_pairs(x, tri, pairs, flags):
-    """flags[k]: 0 disjoint, 1 intersecting (both certified), 2 undecided in float64."""
+    """:func:`_test_pair` of every candidate pair, in parallel."""
     for k in prange(pairs.shape[0]):
-        i = pairs[k, 0]
-        j = pairs[k, 1]
-        if _share_vertex(tri, i, j):
-            flags[k] = 0
-            continue
-        a0, a1, a2 = x[tri[i, 0]], x[tri[i, 1]], x[tri[i, 2]]
-        b0, b1, b2 = x[tri[j, 0]], x[tri[j, 1]], x[tri[j, 2]]
-        if certified(a0, a1, a2, b0, b1, b2):
-            flags[k] = 1 if triangles_intersect(a0, a1, a2, b0, b1, b2) else 0
-        elif separated(a0, a1, a2, b0, b1, b2):
-            flags[k] = 0
-        else:
-            flags[k] = 2
+        _test_pair(x, tri, pairs, flags, k)
+
+
+@njit(cache=True)
+def _test_pairs_serial(x, tri, pairs, flags):
+    """:func:`_test_pairs` on one thread (the same flags), for the few pairs of a small canopy."""
+    for k in range(pairs.shape[0]):
+        _test_pair(x, tri, pairs, flags, k)
+
+
+#: below this many candidate pairs the float test runs on one thread
+SERIAL_TEST_BELOW = 20000
 
 
 def _exact_pairs(x, tri, pairs) -> np.ndarray:
     """The intersecting ones among candidate ``pairs`` (float test where certified, exact else)."""
     flags = np.zeros(len(pairs), np.int8)
-    _test_pairs(x, tri, pairs, flags)
+    (_test_pairs_serial if len(pairs) < SERIAL_TEST_BELOW else _test_pairs)(x, tri, pairs, flags)
     return _decide(x, tri, pairs, flags)
 
 

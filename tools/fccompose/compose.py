@@ -81,11 +81,10 @@ from inflo.tools.pbd.solver import (
     edge_stretch_range,
     overstretched_edges,
     parts_out_of_bounds,
-    project_internal_of_parts,
     project_bending_constraints_coloured,
     project_distance_constraints_coloured,
-    project_internal_by_part,
     part_offsets,
+    solve_parts,
 )
 
 from .log import FrameLog, read_log, write_log
@@ -470,11 +469,10 @@ class Simulation:
             # florets in contact need all the sweeps, the others one: hand out florets a few at a
             # time (dynamic schedule) rather than half the canopy to each thread
             with numba.parallel_chunksize(4):
-                project_internal_by_part(xp, w, m.edge_indices, self.edge_rest_length, m.edge_stiffness,
-                                         self.edge_parts, m.hinge_indices, self.hinge_rest_angle,
-                                         m.hinge_stiffness, self.hinge_parts, int(p.solver_iterations),
-                                         float(self.converged_below), self.sweeps)
-            timing["sweeps"] = timing.get("sweeps", 0) + int(self.sweeps.sum())
+                n = solve_parts(xp, w, m.edge_indices, self.edge_rest_length, m.edge_stiffness, self.edge_parts,
+                                m.hinge_indices, self.hinge_rest_angle, m.hinge_stiffness, self.hinge_parts,
+                                int(p.solver_iterations), float(self.converged_below), self.sweeps)
+            timing["sweeps"] = timing.get("sweeps", 0) + n
         self.check_whole(xp, frame_to)  # a diverged solve: stop before detecting collisions on it
         t2 = time.perf_counter()
         if not p.collisions:  # the growth alone (fcc key ``collisions: off``)
@@ -546,11 +544,10 @@ class Simulation:
             verts = (np.arange(len(xg)) if self.one_part
                      else np.concatenate([np.arange(off[f], off[f + 1]) for f in fl]))
             before = xg[verts]
-            n = project_internal_of_parts(xg, w, m.edge_indices, self.edge_rest_length, m.edge_stiffness,
-                                          self.edge_parts, m.hinge_indices, self.hinge_rest_angle,
-                                          m.hinge_stiffness, self.hinge_parts, parts, iterations,
-                                          float(self.converged_below))
-            timing["relax_sweeps"] = timing.get("relax_sweeps", 0) + int(n)
+            n = solve_parts(xg, w, m.edge_indices, self.edge_rest_length, m.edge_stiffness, self.edge_parts,
+                            m.hinge_indices, self.hinge_rest_angle, m.hinge_stiffness, self.hinge_parts,
+                            iterations, float(self.converged_below), None, parts=parts)
+            timing["relax_sweeps"] = timing.get("relax_sweeps", 0) + n
             _undo_runaway(xg, verts, before, m.vertex_floret[verts])
             if v is not None:
                 x1[:] = xp[v]

@@ -45,6 +45,9 @@ __all__ = [
     "project_bending_constraints_coloured",
     "project_internal_by_part",
     "project_internal_of_parts",
+    "project_internal_by_part_serial",
+    "project_internal_of_parts_serial",
+    "solve_parts",
     "part_offsets",
     "edge_lengths",
     "edge_stretch_range",
@@ -436,6 +439,57 @@ def project_internal_of_parts(vertex_x, vertex_inv_mass, edge_indices, edge_rest
                                 edge_offsets, hinge_indices, hinge_rest_angle, hinge_stiffness,
                                 hinge_offsets, parts[k], iterations, tolerance)
     return sweeps.sum()
+
+
+@njit(cache=True)
+def project_internal_by_part_serial(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness,
+                                    edge_offsets, hinge_indices, hinge_rest_angle, hinge_stiffness,
+                                    hinge_offsets, iterations, tolerance, sweeps):
+    """:func:`project_internal_by_part` on one thread (the same result: parts share no
+    constraint), for systems too small to pay for waking the thread pool."""
+    for f in range(edge_offsets.shape[0] - 1):
+        sweeps[f] = _solve_part(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness,
+                                edge_offsets, hinge_indices, hinge_rest_angle, hinge_stiffness,
+                                hinge_offsets, f, iterations, tolerance)
+
+
+@njit(cache=True)
+def project_internal_of_parts_serial(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness,
+                                     edge_offsets, hinge_indices, hinge_rest_angle, hinge_stiffness,
+                                     hinge_offsets, parts, iterations, tolerance):
+    """:func:`project_internal_of_parts` on one thread (the same result)."""
+    n = 0
+    for k in range(parts.shape[0]):
+        n += _solve_part(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness,
+                         edge_offsets, hinge_indices, hinge_rest_angle, hinge_stiffness,
+                         hinge_offsets, parts[k], iterations, tolerance)
+    return n
+
+
+#: below this many constraints (edges + hinges) in the parts a call solves, the serial kernels run:
+#: waking the thread pool costs more than the work (a small canopy's step, a collision round's
+#: relaxation of the few florets it moved; milliseconds per launch on a loaded 2-core machine)
+SERIAL_CONSTRAINTS_BELOW = 20000
+
+
+def solve_parts(vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness, edge_offsets,
+                hinge_indices, hinge_rest_angle, hinge_stiffness, hinge_offsets, iterations, tolerance,
+                sweeps, parts=None):
+    """Every part's internal constraints (``parts`` None: :func:`project_internal_by_part`, sweeps
+    per part into ``sweeps``) or the listed parts' (:func:`project_internal_of_parts`; returns the
+    sweeps run), in parallel or, below :data:`SERIAL_CONSTRAINTS_BELOW` constraints, serially --
+    the same positions either way."""
+    args = (vertex_x, vertex_inv_mass, edge_indices, edge_rest_length, edge_stiffness, edge_offsets,
+            hinge_indices, hinge_rest_angle, hinge_stiffness, hinge_offsets)
+    if parts is None:
+        small = len(edge_indices) + len(hinge_indices) < SERIAL_CONSTRAINTS_BELOW
+        run = project_internal_by_part_serial if small else project_internal_by_part
+        run(*args, iterations, tolerance, sweeps)
+        return int(sweeps.sum())
+    work = int((edge_offsets[parts + 1] - edge_offsets[parts]).sum()
+               + (hinge_offsets[parts + 1] - hinge_offsets[parts]).sum())
+    run = project_internal_of_parts_serial if work < SERIAL_CONSTRAINTS_BELOW else project_internal_of_parts
+    return int(run(*args, parts, iterations, tolerance))
 
 
 # --------------------------------------------------------------------------------------------------
