@@ -25,8 +25,11 @@ $(STAMP): pyproject.toml
 	@sh tools/canopy_render/ensure_system_gl.sh
 	@touch $(STAMP)
 
+# the suite runs on every core (pytest-xdist); the species builds and the tests that read them
+# (tests/test_golden.py, tests/test_pipeline_*.py: the xdist group "builds") stay on one worker, in order
+TEST_WORKERS ?= auto
 test: $(STAMP)
-	$(PY) -m pytest -q $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadgroup $(PYTEST_ARGS)
 
 # tests/test_blender.py in real Blender: bpy 4.5 LTS (a 370 MB wheel) in its own venv, not in CI's make test
 test-blender: $(STAMP)
