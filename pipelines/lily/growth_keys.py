@@ -56,21 +56,22 @@ def tepal(kind: str) -> BudMesh:
 
 
 # Growth maps (fig. 2, sec. 6.1): three regions by uv -- the midrib (|u - 1/2| < 0.12), the lamina,
-# the bottom (v < 0.08). e-growth elongates midrib and lamina equally; early (steps 1-40) e_in is
+# the bottom (v < 0.08). e-growth elongates midrib and lamina equally; early (steps 1-30) e_in is
 # much larger than e on the midrib and slightly larger on the lamina (the midrib reflexes and pulls
-# the lamina); late (50-100) e_in = e on the midrib (it stops warping) and slightly larger on the
-# lamina; blended over 40-50. w-growth and w_in rise slightly on the lamina (w_in a little more:
-# the bud's curl across flattens). The midrib is harder (stretch and bend maps).
+# the lamina); late (40-100) e_in = e everywhere (the warping stops; the shape still settles into
+# the rest angles gathered early, PBD converging over the following keyframes); blended over 30-40.
+# w-growth rises on the lamina and w_in more (0.6 early, 0.05 late): the bud's curl across unrolls
+# until the lamina's cross-section is flat. The midrib is harder (stretch and bend maps).
 MIDRIB = "(1 - smoothstep(0.1, 0.22, abs(u - 0.5)))"
 LAMINA = f"(1 - {MIDRIB})"
 BOTTOM = "smoothstep(0.04, 0.12, v)"
 GROWTH = {
     "early": dict(e=f"1.0 * {BOTTOM}", w=f"(0.3 + 0.2 * {LAMINA}) * {BOTTOM}",
-                  e_in=f"(1.0 + 0.58 * {MIDRIB} + 0.125 * {LAMINA}) * {BOTTOM}",
-                  w_in=f"(0.3 + 0.2 * {LAMINA} + 0.2 * {LAMINA}) * {BOTTOM}"),
+                  e_in=f"(1.0 + 0.4 * {MIDRIB} + 0.125 * {LAMINA}) * {BOTTOM}",
+                  w_in=f"(0.3 + 0.2 * {LAMINA} + 0.6 * {LAMINA}) * {BOTTOM}"),
     "late": dict(e=f"1.0 * {BOTTOM}", w=f"(0.3 + 0.2 * {LAMINA}) * {BOTTOM}",
-                 e_in=f"(1.0 + 0.042 * {LAMINA}) * {BOTTOM}",
-                 w_in=f"(0.3 + 0.2 * {LAMINA} + 0.008 * {LAMINA}) * {BOTTOM}"),
+                 e_in=f"(1.0 + 0.0 * {LAMINA}) * {BOTTOM}",
+                 w_in=f"(0.3 + 0.2 * {LAMINA} + 0.05 * {LAMINA}) * {BOTTOM}"),
 }
 STRETCH = f"0.7 + 0.3 * {MIDRIB}"
 BEND = f"0.9 + 0.6 * {MIDRIB}"
@@ -79,7 +80,7 @@ BEND = f"0.9 + 0.6 * {MIDRIB}"
 def growth_toml(mesh_dir: str) -> str:
     out = ["# The growth-map lily (Ijiri et al. 2008, sec. 6.1, figs. 1, 2, 7, table 1): petal-grow parameters",
            "# (formats/petal_grow.md). Written by growth_keys.py --params; edit GROWTH there.", "",
-           "[flower]", "keyframes = 100", "iterations = 40", "match_every = 5", "length_sweeps = 10", "base_v = 0.06",
+           "[flower]", "keyframes = 100", "iterations = 100", "match_every = 5", "length_sweeps = 10", "base_v = 0.06",
            "collision_distance = 0.08", "# the joint angle grows by 23 degrees from step 1 to 60, then stays",
            "joint = [[1, 0.0], [60, 23.0]]"]
     for stage, g in GROWTH.items():
@@ -90,7 +91,7 @@ def growth_toml(mesh_dir: str) -> str:
         for k in range(3):
             out += ["", "[[organ]]", f'name = "{kind}_{k}"', f'mesh = "{mesh_dir}/{kind}.obj"', f'material = "{mat}"',
                     f"rotate = {phase + 120 * k}", f"layer = {layer}",
-                    'growth = [[0, "early"], [40, "early"], [50, "late"]]']
+                    'growth = [[0, "early"], [30, "early"], [40, "late"]]']
     return "\n".join(out) + "\n"
 
 
