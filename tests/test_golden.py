@@ -545,11 +545,14 @@ def test_yarrow_goldens_are_small_and_complete():
     paths = [spec.golden_path(n) for n in names]
     assert all(p.is_file() for p in paths)
     assert sum(p.stat().st_size for p in paths) < 5 * 2**20
-    # every stage: key-pose frames, polygons, head before/after dimorph, head canopy, corymb
-    # pattern (static and growing), corymb canopy, branches, the smoothed final frame, the check
-    assert {"ray_frames/frame_0039.floret", "disk_obj/frame_0019.obj", "head/scene.scn", "head/typed.scn",
-            "head_canopy/frame_0039.obj", "corymb/scene.scn", "growth/rba/0204.rba", "canopy/frame_0039.obj",
-            "canopy/log.csv", "branches/branches.obj", "smooth/final.obj", "check.txt"} <= set(names)
+    # every stage: key-pose frames, polygons, the head, the growing pattern and the heads and
+    # florets on the canopy's clock (issue 19), dimorph, the canopy, branches, the smoothed final
+    # frame, the check
+    assert {"ray_frames/frame_0019.floret", "disk_obj/frame_0019.obj", "head/scene.scn", "growth/rba/0070.rba",
+            "heads/rba/0031.rba", "corymb/rba/0031.rba", "corymb/scene.scn", "corymb/typed.scn",
+            "canopy/frame_0031.obj", "canopy/log.csv", "branches/branches.obj",
+            "branches/frames/branches_0015.obj", "smooth/final.obj", "check.txt"} <= set(names)
     # the big frames are kept gzipped
     assert spec.golden_path("smooth/final.obj").name == "final.obj.gz"
-    assert listing["canopy/frame_*.obj"][-1] == "canopy/frame_0039.obj" and len(listing["canopy/frame_*.obj"]) == 40
+    assert listing["canopy/frame_*.obj"][-1] == "canopy/frame_0031.obj" and len(listing["canopy/frame_*.obj"]) == 32
+    assert len(listing["branches/frames/branches_*.obj"]) == 32  # one clock

@@ -300,7 +300,8 @@ def test_yarrow_example_dry_run_rebases_its_fcc_files(tmp_path):
     assert len(dirs) == 4
     for d in dirs:
         fcc = (d / "yarrow" / "yarrow.fcc").read_text()
-        assert "scene file path: ../build/corymb/scene.scn" in fcc and "../../build/yarrow" not in fcc
+        assert "rigid body animation: 9 1 1 1 ../build/corymb/rba ../build/corymb/typed.scn" in fcc
+        assert "../../build/yarrow" not in fcc
         params = json.loads((d / "params.json").read_text())["params"]
         assert f"growth_rate = {params['growth']!r}" in (d / "yarrow" / "draft" / "corymb.toml").read_text()
 

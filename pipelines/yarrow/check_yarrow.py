@@ -1,20 +1,42 @@
-"""Exact static intersection test of the yarrow build (the `check` stage of the Makefile).
+"""The checks of the yarrow build (the `check` stage of the Makefile).
 
 Usage: python check_yarrow.py BUILD_DIR   (BUILD_DIR = build/yarrow)
 
-Prints the number of intersecting triangle pairs (inflo.tools.collide.intersecting_pairs; touching
-counts) of the head canopy's last frame, of every canopy frame (every tenth listed), and of the
-smoothed last frame; and, for information, the triangle pairs between the canopy's last frame and
-the branches (the peduncles end at the heads' receptacle centres, under the florets). Exits 1 when
-any canopy frame checked has an intersection.
+Prints, and exits 1 when any fails:
+
+- one clock: the canopy, the branches' per-frame meshes and the heads' RBA frames have the same
+  number of frames;
+- intersecting triangle pairs (exact static test, inflo.tools.collide; touching counts) of every
+  canopy frame (every fourth listed), of the smoothed last frame, and between the branches of
+  frame k and the canopy of frame k, every frame;
+- the peduncles end at their heads in every frame: each emerged head's centre (its RBA position)
+  is a vertex of that frame's branch mesh (the distal cap's apex), to 1e-5;
+- the edge stretch over all frames (fccompose's log) within [0.5, 1.5] x rest;
+- every floret of every head present in the last frame;
+- the rays per head (dimorph over the whole corymb, fig. 6.4a): printed as a distribution; on
+  average 3-7 (real heads have about 5), every head with fewer rays than disk florets (a head
+  enclosed by its neighbours may have none);
+- the heads develop in order: at the frame where half the florets have started opening, the heads
+  that emerged first are further open (Spearman rank correlation of the heads' emergence frame
+  with the share of their florets past their window's start < -0.5).
 """
 from __future__ import annotations
 
 import sys
+from collections import Counter
 from pathlib import Path
 
-from inflo.formats.obj import list_obj_sequence, read_obj
-from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
+import numpy as np
+from scipy.spatial import cKDTree
+from scipy.stats import spearmanr
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from heads import BOUNDS  # noqa: E402  (pipelines/heads.py)
+
+from inflo.formats.obj import list_obj_sequence, read_obj  # noqa: E402
+from inflo.formats.rba import list_rba_sequence, read_rba  # noqa: E402
+from inflo.formats.scn import read_scn  # noqa: E402
+from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between  # noqa: E402
 
 
 def count(mesh) -> int:
@@ -23,38 +45,101 @@ def count(mesh) -> int:
 
 def cross_pairs(a, b) -> int:
     """Intersecting triangle pairs with one triangle in ``a`` and the other in ``b``."""
+    if len(a.faces) == 0 or len(b.faces) == 0:
+        return 0
     return len(intersecting_pairs_between(a.vertices, a.faces, b.vertices, b.faces))
 
 
+def stretch_range(log_path: Path) -> tuple[float, float, list]:
+    import csv
+
+    with open(log_path, newline="") as fh:
+        log = list(csv.DictReader(fh))
+    lo = min(float(r["min_edge_stretch"]) for r in log)
+    hi = max(float(r["max_edge_stretch"]) for r in log)
+    out = [r["frame"] for r in log if float(r["min_edge_stretch"]) < BOUNDS[0] or float(r["max_edge_stretch"]) > BOUNDS[1]]
+    return lo, hi, out
+
+
+def rays_per_head(scene) -> list:
+    rays = Counter(p.group for p in scene.placements if p.type == "ray")
+    return [rays.get(g, 0) for g in sorted({p.group for p in scene.placements})]
+
+
 def main(build: Path) -> int:
-    bad = 0
-    head = list_obj_sequence(build / "head_canopy")
-    mesh = read_obj(head[-1])
-    n = count(mesh)
-    bad += n
-    print(f"head canopy, frame {len(head)}: {len(mesh.faces)} triangles, {n} intersecting pairs")
+    fail = []
     canopy = list_obj_sequence(build / "canopy")
-    print(f"canopy: {len(canopy)} frames")
-    for i, path in enumerate(canopy):  # every written frame is tested; every tenth listed
+    branches = sorted((build / "branches" / "frames").glob("branches_*.obj"))
+    head_rba = list_rba_sequence(build / "heads" / "rba")
+    typed = read_scn(build / "corymb" / "typed.scn")
+    print(f"one clock: {len(canopy)} canopy frames, {len(branches)} branch frames, {len(head_rba)} head RBA frames")
+    if not len(canopy) == len(branches) == len(head_rba):
+        fail.append("the canopy, branch and head sequences differ in length")
+
+    bad = cross = far = 0
+    mesh = None
+    for i, path in enumerate(canopy):
         mesh = read_obj(path)
         n = count(mesh)
-        bad += n
-        if i % 10 and i != len(canopy) - 1 and not n:
-            continue
-        print(f"  frame {i + 1:3d}: {len(mesh.faces)} triangles, {len(mesh.groups)} heads, {n} intersecting pairs")
-    last = mesh
-    print(f"every canopy frame ({len(canopy)}) tested")
+        br = read_obj(branches[min(i, len(branches) - 1)])
+        nb = cross_pairs(mesh, br)
+        heads = read_rba(head_rba[min(i, len(head_rba) - 1)])
+        d = cKDTree(br.vertices).query(heads.pos)[0] if len(heads) and len(br.vertices) else np.zeros(len(heads))
+        nfar = int((d > 1e-5).sum()) if len(br.vertices) else len(heads)
+        bad, cross, far = bad + n, cross + nb, far + nfar
+        if i % 4 == 0 or i == len(canopy) - 1 or n or nb or nfar:
+            print(f"  frame {i:3d}: {len(mesh.faces):6d} triangles, {len(mesh.groups):4d} florets, {len(heads):3d} heads, "
+                  f"{len(br.faces):6d} branch triangles; {n} intersecting pairs, {nb} with the branches, "
+                  f"{nfar} heads off their peduncle tips")
+    print(f"every frame ({len(canopy)}) tested: {bad} intersecting pairs, {cross} canopy-branch pairs, "
+          f"{far} heads off their peduncle tips")
+    if bad:
+        fail.append(f"{bad} intersecting pairs in the canopy frames")
+    if cross:
+        fail.append(f"{cross} pairs between the canopy and the branches")
+    if far:
+        fail.append(f"{far} head-frames whose peduncle does not end at the head")
+
     smooth = read_obj(build / "smooth" / "final.obj")
     n = count(smooth)
-    bad += n
     print(f"smooth/final.obj: {len(smooth.faces)} triangles, {n} intersecting pairs")
-    branches = build / "branches" / "branches.obj"
-    if branches.is_file():
-        br = read_obj(branches)
-        print(f"branches.obj: {len(br.faces)} triangles; {cross_pairs(last, br)} pairs with the last canopy "
-              f"frame (information)")
-    print("OK: no intersecting triangle pairs" if bad == 0 else f"FAILED: {bad} intersecting pairs")
-    return 0 if bad == 0 else 1
+    if n:
+        fail.append(f"{n} intersecting pairs in smooth/final.obj")
+
+    lo, hi, out = stretch_range(build / "canopy" / "log.csv")
+    print(f"edge stretch over all frames: {lo:.3f}-{hi:.3f} x rest; frames outside [{BOUNDS[0]}, {BOUNDS[1]}]: {len(out)}")
+    if out:
+        fail.append(f"{len(out)} frames with edges outside {BOUNDS} x rest (frames {', '.join(out[:5])} ...)")
+
+    present = {int(g.split("_")[1]) for g in mesh.groups if g.startswith("floret_")}
+    print(f"florets in the last frame: {len(present)} of {len(typed)} ({len(typed.groups) - 1} heads)")
+    if len(present) != len(typed):
+        fail.append(f"{len(typed) - len(present)} florets missing in the last frame")
+
+    per = rays_per_head(typed)
+    size = Counter(p.group for p in typed.placements)
+    hist = ", ".join(f"{k}: {v}" for k, v in sorted(Counter(per).items()))
+    print(f"rays per head (fig. 6.4a, over the whole corymb): mean {np.mean(per):.1f}, min {min(per)}, max {max(per)}; "
+          f"heads by ray count {{{hist}}}")
+    if not 3 <= np.mean(per) <= 7 or any(r >= size[g] - r for g, r in zip(sorted(size), per)):
+        fail.append("rays per head off 3-7 on average, or a head with as many rays as disk florets")
+
+    # the heads open in the order they emerged: at the frame where half the florets have started
+    groups = np.array([p.group for p in typed.placements])
+    start = np.array([p.frame_start for p in typed.placements])
+    emerged = np.array([p.emergence for p in typed.placements])
+    k = int(np.median(start))
+    g = np.unique(groups)
+    share = np.array([(start[groups == h] <= k).mean() for h in g])
+    first = np.array([emerged[groups == h].min() for h in g])
+    rho = float(spearmanr(first, share).statistic)
+    print(f"development at frame {k}: heads' share of florets opening {share.min():.2f}-{share.max():.2f}, "
+          f"rank correlation with the heads' emergence {rho:.2f} (the first heads open first)")
+    if not rho < -0.5:
+        fail.append(f"the heads do not open in the order they emerged (rank correlation {rho:.2f})")
+
+    print("OK: every check passed" if not fail else "FAILED: " + "; ".join(fail))
+    return 0 if not fail else 1
 
 
 if __name__ == "__main__":
