@@ -143,3 +143,16 @@ def read_lines(path) -> list[str]:
         line = text[: text.index("\x00")].count("\n") + 1
         raise FormatError(path, line, "text", "a NUL byte (binary file?)")
     return text.splitlines()
+
+
+def parse_toml(text: str, path) -> dict:
+    """``tomllib.loads(text)``; a TOML syntax error is a :class:`FormatError` naming its line (the
+    TOML parameter files of phyllotaxis, branch-gen, thyrse, venation and petal-grow)."""
+    import re
+    import tomllib
+
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"line (\d+)", str(exc))
+        raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None

@@ -20,12 +20,11 @@ from __future__ import annotations
 import math
 import os
 import re
-import tomllib
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, InputError, did_you_mean, read_lines
+from inflo.formats.errors import FormatError, InputError, did_you_mean, parse_toml, read_lines
 
 __all__ = [
     "Params",
@@ -346,12 +345,7 @@ def load_toml(path) -> tuple[dict, list]:
     """The parsed TOML mapping of ``path`` and its lines (for the key lines of error messages);
     invalid TOML is a :class:`FormatError` naming its line. Also read by ``thyrse``'s parameters."""
     lines = read_lines(path)
-    try:
-        data = tomllib.loads("\n".join(lines))
-    except tomllib.TOMLDecodeError as exc:
-        m = re.search(r"line (\d+)", str(exc))
-        raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None
-    return data, lines
+    return parse_toml("\n".join(lines), path), lines
 
 
 def read_params(path=None) -> Params:

@@ -10,11 +10,10 @@ from __future__ import annotations
 import math
 import os
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, did_you_mean, read_bytes, shorten
+from inflo.formats.errors import FormatError, did_you_mean, parse_toml, read_bytes, shorten
 
 from .maps import DirectionMap, ScalarMap, parse_direction_map, parse_scalar_map
 
@@ -167,11 +166,7 @@ def read_params(path) -> Params:
 def parse_params(text: str, path="<params>") -> Params:
     """Parse and check TOML ``text`` (see formats/petal_grow.md)."""
     path = os.fspath(path)
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        m = re.search(r"line (\d+)", str(exc))
-        raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None
+    raw = parse_toml(text, path)
     base = Path(path).resolve().parent
     for k in raw:
         if k not in ("flower", "growth", "organ"):

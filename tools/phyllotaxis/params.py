@@ -20,11 +20,10 @@ from __future__ import annotations
 import math
 import os
 import re
-import tomllib
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, InputError, did_you_mean, shorten
+from inflo.formats.errors import FormatError, InputError, did_you_mean, parse_toml, shorten
 
 from .receptacle import ReceptacleOptions
 
@@ -206,11 +205,7 @@ def parse_params(text: str, path="<params>") -> Params:
         TOML syntax errors, unknown sections or keys (naming the closest known one), values of
         the wrong type or out of range, both ``[dynamics]`` and ``[hierarchy]``.
     """
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        m = re.search(r"line (\d+)", str(exc))
-        raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None
+    raw = parse_toml(text, path)
     base = Path(os.fspath(path)).resolve().parent
     out: dict = {}
     for section, table in raw.items():

@@ -26,13 +26,12 @@ from __future__ import annotations
 import math
 import os
 import re
-import tomllib
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
-from inflo.formats.errors import FormatError, did_you_mean, read_bytes, shorten
+from inflo.formats.errors import FormatError, did_you_mean, parse_toml, read_bytes, shorten
 
 from .blade import GROWTH_TYPES, Blade, Growth, blade_from_points
 
@@ -221,11 +220,7 @@ def parse_params(text: str, path="<params>") -> Params:
         wrong type or out of range.
     """
     path = os.fspath(path)
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        m = re.search(r"line (\d+)", str(exc))
-        raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None
+    raw = parse_toml(text, path)
     base = Path(path).resolve().parent
     known = [k for k in SCHEMA[""]] + list(_SECTIONS)
     tables = {"": {}}
