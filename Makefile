@@ -25,11 +25,23 @@ $(STAMP): pyproject.toml
 	@sh tools/canopy_render/ensure_system_gl.sh
 	@touch $(STAMP)
 
-# the suite runs on every core (pytest-xdist); the species builds and the tests that read them
-# (tests/test_golden.py, tests/test_pipeline_*.py: the xdist group "builds") stay on one worker, in order
-TEST_WORKERS ?= auto
+# make test runs two pytest processes side by side (2 cores): the species builds and the tests that
+# read build/<species> (tests/test_golden.py first, then tests/test_pipeline_*.py, in one process, in
+# order), and every other test file; each process's report is printed whole, and the target fails if
+# either does. With PYTEST_ARGS (a selection: -k, a file) it is one plain pytest run.
+BUILD_TESTS := tests/test_golden.py $(sort $(wildcard tests/test_pipeline_*.py))
 test: $(STAMP)
-	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadgroup $(PYTEST_ARGS)
+ifeq ($(strip $(PYTEST_ARGS)),)
+	@mkdir -p build; \
+	$(PY) -m pytest -q -p no:cacheprovider $(BUILD_TESTS) > build/.test-builds.log 2>&1 & builds=$$!; \
+	$(PY) -m pytest -q $(foreach f,$(BUILD_TESTS),--ignore=$(f)) > build/.test-rest.log 2>&1; rest=$$?; \
+	wait $$builds; b=$$?; \
+	echo "== tests that build species or read their builds: $(BUILD_TESTS)"; cat build/.test-builds.log; \
+	echo "== every other test"; cat build/.test-rest.log; \
+	test $$b -eq 0 -a $$rest -eq 0
+else
+	$(PY) -m pytest -q $(PYTEST_ARGS)
+endif
 
 # tests/test_blender.py in real Blender: bpy 4.5 LTS (a 370 MB wheel) in its own venv, not in CI's make test
 test-blender: $(STAMP)

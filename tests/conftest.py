@@ -28,18 +28,6 @@ CLI_NAMES = [
 ]
 
 
-#: Test files that build species into build/<species> (the golden tests) or read those builds
-#: (the pipeline tests): one xdist group, so under ``make test``'s workers they run on one worker, in
-#: collection order (the golden tests' builds first), never two makes in one build folder at once.
-BUILD_GROUP_FILES = ("test_golden.py", "test_pipeline_")
-
-
-def pytest_collection_modifyitems(config, items):
-    for item in items:
-        if item.path.name.startswith(BUILD_GROUP_FILES):
-            item.add_marker(pytest.mark.xdist_group("builds"))
-
-
 def cli_path(name: str) -> str:
     """The console script ``name`` installed beside the running interpreter."""
     return str(Path(sys.executable).parent / name)

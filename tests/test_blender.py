@@ -36,17 +36,7 @@ import pytest
 from conftest import REPO, run_cli
 from inflo.formats.obj import list_obj_sequence, read_obj
 
-def _builds_group() -> list:
-    """With pytest-xdist (``make test``'s workers), the group of the tests that build species
-    into build/<species> (tests/conftest.py): this file runs make on the lily and on built species."""
-    try:
-        import xdist  # noqa: F401  (registers the xdist_group marker)
-    except ImportError:
-        return []
-    return [pytest.mark.xdist_group("builds")]
-
-
-pytestmark = [pytest.mark.blender, *_builds_group()]
+pytestmark = pytest.mark.blender
 
 PROBE = REPO / "tools" / "canopy_export" / "blender_probe.py"
 LILY = REPO / "pipelines" / "lily"
