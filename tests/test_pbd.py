@@ -257,6 +257,21 @@ def test_colouring_separates_constraints_and_coloured_sweeps_converge_determinis
     assert np.abs(np.linalg.norm(runs[0][e[:, 0]] - runs[0][e[:, 1]], axis=1) - target_l).max() < 1e-4
 
 
+def _strips(n, nu, nv, rng):
+    """``n`` disjoint random strips (parts) 5 apart: positions, part per vertex, edges, hinges and
+    their rest lengths and angles (the positions given)."""
+    xs, tris = [], []
+    for p in range(n):
+        x, tri = strip(nu, nv, rng=rng)
+        tris.append(tri + sum(len(a) for a in xs))
+        xs.append(x + [0.0, 0.0, 5.0 * p])
+    x = np.concatenate(xs)
+    part = np.repeat(np.arange(n), [len(a) for a in xs])
+    e = np.concatenate([mesh_edges(t) for t in tris]).astype(np.int32)
+    h = np.concatenate([mesh_hinges(t) for t in tris]).astype(np.int32)
+    return x, part, e, h, np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1), hinge_angles(x, h)
+
+
 def test_solving_part_by_part_equals_the_serial_sweeps_and_stops_parts_at_rest():
     """project_internal_by_part on three disjoint strips (parts) gives, part by part, exactly the
     serial Gauss-Seidel sweeps; a part already at rest stops after one sweep; part_offsets refuses
@@ -264,17 +279,7 @@ def test_solving_part_by_part_equals_the_serial_sweeps_and_stops_parts_at_rest()
     from inflo.tools.pbd import part_offsets, project_internal_by_part
 
     rng = np.random.default_rng(11)
-    xs, tris = [], []
-    for p in range(3):
-        x, tri = strip(6, 4, rng=rng)
-        tris.append(tri + sum(len(a) for a in xs))
-        xs.append(x + [0.0, 0.0, 5.0 * p])
-    x = np.concatenate(xs)
-    part = np.repeat(np.arange(3), [len(a) for a in xs])
-    e = np.concatenate([mesh_edges(t) for t in tris]).astype(np.int32)
-    h = np.concatenate([mesh_hinges(t) for t in tris]).astype(np.int32)
-    rest_l = np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1)
-    rest_a = hinge_angles(x, h)
+    x, part, e, h, rest_l, rest_a = _strips(3, 6, 4, rng)
     w = np.ones(len(x))
     start = x.copy()
     moved = part != 1  # part 1 stays at rest
@@ -306,17 +311,7 @@ def test_serial_and_parallel_part_solves_give_the_same_positions(monkeypatch):
     from inflo.tools.pbd import part_offsets, solver
 
     rng = np.random.default_rng(5)
-    xs, tris = [], []
-    for p in range(5):
-        x, tri = strip(8, 5, rng=rng)
-        tris.append(tri + sum(len(a) for a in xs))
-        xs.append(x + [0.0, 0.0, 5.0 * p])
-    x = np.concatenate(xs)
-    part = np.repeat(np.arange(5), [len(a) for a in xs])
-    e = np.concatenate([mesh_edges(t) for t in tris]).astype(np.int32)
-    h = np.concatenate([mesh_hinges(t) for t in tris]).astype(np.int32)
-    rest_l = np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1)
-    rest_a = hinge_angles(x, h)
+    x, part, e, h, rest_l, rest_a = _strips(5, 8, 5, rng)
     start = x + rng.normal(scale=0.05, size=x.shape)
     args = (np.ones(len(x)), e, rest_l, np.full(len(e), 0.9), part_offsets(e, part, 5), h, rest_a,
             np.full(len(h), 0.7), part_offsets(h, part, 5))
