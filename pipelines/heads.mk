@@ -28,7 +28,8 @@ FCC_SRC := $(call SRC,fccompose pbd collide)
 RENDER_SRC := $(call SRC,canopy_render)
 EXPORT_SRC := $(call SRC,canopy_export) $(ROOT)/tools/canopy_render/colors.py
 
-BACKGROUND := 0.55,0.70,0.86
+# a pipeline may set its own BACKGROUND before including this file
+BACKGROUND ?= 0.55,0.70,0.86
 RENDER := $(BIN)canopy-render -q --background $(BACKGROUND) --colors colors.toml
 
 $(B)/quality.txt: FORCE
