@@ -445,6 +445,77 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
         assert len(ref_vt) and len(ref_ee)
 
 
+def test_box_grid_part_filter_matches_brute_force():
+    """A grid query keeping pairs within one part only, or of two parts only, gives the brute-force
+    pairs so filtered; the two together are the unfiltered query."""
+    from inflo.tools.collide.broad import PARTS_CROSS, PARTS_SAME, BoxGrid, box_pairs_brute
+
+    rng = np.random.default_rng(3)
+    lo = rng.random((300, 3))
+    b = np.concatenate([lo, lo + rng.random((300, 3)) * 0.15], axis=1)
+    part = rng.integers(0, 7, 300).astype(np.int32)
+    grid = BoxGrid(b, 0.1, b[:, :3].min(axis=0), parts=part)
+    ref = box_pairs_brute(b, b, True)
+    same = ref[part[ref[:, 0]] == part[ref[:, 1]]]
+    cross = ref[part[ref[:, 0]] != part[ref[:, 1]]]
+    np.testing.assert_array_equal(grid.query(b, same=True, parts=part, parts_mode=PARTS_SAME), same)
+    np.testing.assert_array_equal(grid.query(b, same=True, parts=part, parts_mode=PARTS_CROSS), cross)
+    np.testing.assert_array_equal(grid.query(b, same=True), ref)
+    assert len(same) and len(cross)
+
+
+def test_split_broad_phase_finds_the_same_contacts():
+    """Parts carried far over a step (a head's growth carrying its florets): pairs within a part are
+    found in the part's moving frame, pairs of two parts in the scene's (``_SplitBroadPhase``). The
+    contacts, in their order, are those of the one-frame broad phase, at round 0 and over retry
+    rounds, with far fewer candidate pairs."""
+    from inflo.tools.collide.resolve import _narrow, _SplitBroadPhase, _StepBroadPhase, step_broad_phase
+    from inflo.tools.pbd import mesh_edges
+
+    rng = np.random.default_rng(11)
+    n = 10
+    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    grid = np.stack([u.ravel(), v.ravel(), np.zeros(n * n)], axis=1)
+    quads = [(i * n + j, i * n + j + 1, (i + 1) * n + j, (i + 1) * n + j + 1)
+             for i in range(n - 1) for j in range(n - 1)]
+    tri = np.array([(a, b, c) for a, b, c, d in quads] + [(b, d, c) for a, b, c, d in quads], np.int32)
+    # three sheets (parts), the second just above the first, the third beside them
+    x0 = np.concatenate([grid, grid + [0.03, 0.02, 0.04], grid + [1.5, 0.0, 0.0]])
+    tri = np.concatenate([tri, tri + n * n, tri + 2 * n * n]).astype(np.int32)
+    edges = mesh_edges(tri)
+    part = np.repeat(np.arange(3), n * n).astype(np.int32)
+    # each sheet carried by about its own width, the second through the first, and crumpled
+    carry = np.array([[2.0, 0.5, 0.3], [2.0, 0.5, 0.2], [1.0, -1.0, 0.0]])
+    x1 = x0 + carry[part] + rng.normal(0, 0.03, x0.shape)
+    pad, cell, tol = 1e-4, 0.15, 2e-4
+    plain = _StepBroadPhase(x0, tri, edges, pad, cell)
+    split = step_broad_phase(x0, x1, tri, edges, pad, cell, part)
+    assert isinstance(split, _SplitBroadPhase)
+    assert isinstance(step_broad_phase(x0, x0 + rng.normal(0, 1e-3, x0.shape), tri, edges, pad, cell, part),
+                      _StepBroadPhase)  # nothing carried: one frame
+
+    def same(a, b):
+        ca, _ = _narrow(x0, x1, tri, edges, a[0], a[1], tol)
+        cb, _ = _narrow(x0, x1, tri, edges, b[0], b[1], tol)
+        for name in ("kind", "indices", "coef", "normal", "toi", "element"):
+            np.testing.assert_array_equal(getattr(ca, name), getattr(cb, name))
+        return len(ca)
+
+    rounds = [(plain.first(x1), split.first(x1))]
+    # (the two sheets carried together still pair along their common path: a part of two parts)
+    assert len(rounds[0][1][0]) + len(rounds[0][1][1]) < 0.7 * (len(rounds[0][0][0]) + len(rounds[0][0][1]))
+    found = same(*rounds[0])
+    for scale in (0.0003, 0.05, 0.002):
+        active = rng.random(len(x0)) < 0.2
+        x1[active] += rng.normal(0, scale, (int(active.sum()), 3))
+        found += same(plain.again(x1, active), split.again(x1, active))
+    assert found > 0
+    # the pairs of two parts and of one part both occur among the contacts
+    c, _ = _narrow(x0, x1, tri, edges, *split.again(x1, np.ones(len(x0), bool)), tol)
+    pa = part[c.indices]
+    assert (pa[:, 0] == pa[:, 3]).any() and (pa[:, 0] != pa[:, 3]).any()
+
+
 # ----------------------------------------------------------------------------------------------
 # The whole-part fallback (issue 13)
 # ----------------------------------------------------------------------------------------------

@@ -26,6 +26,9 @@ __all__ = [
     "box_pairs",
     "box_pairs_brute",
     "BoxGrid",
+    "PARTS_ANY",
+    "PARTS_SAME",
+    "PARTS_CROSS",
     "lattice_cell_size",
 ]
 
@@ -179,10 +182,19 @@ def _overlap(a, i, b, j):
     return True
 
 
+#: part filters of the grid queries (:class:`BoxGrid`)
+PARTS_ANY = 0
+PARTS_SAME = 1
+PARTS_CROSS = 2
+
+
 @njit(cache=True)
-def _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-               mask, out, base, limit):
-    """Count query ``a``'s pairs; write them at ``out[base:]`` while below row ``limit``."""
+def _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, part_a, part_b, mode, origin,
+               inv, starts, elem, key, ebox, mask, out, base, limit):
+    """Count query ``a``'s pairs; write them at ``out[base:]`` while below row ``limit``.
+
+    ``mode`` filters by part (``part_a[a]``, ``part_b[b]``): :data:`PARTS_ANY` none,
+    :data:`PARTS_SAME` pairs within one part only, :data:`PARTS_CROSS` pairs of two parts only."""
     lx = _cell(boxes_a[a, 0], origin[0], inv)
     ly = _cell(boxes_a[a, 1], origin[1], inv)
     lz = _cell(boxes_a[a, 2], origin[2], inv)
@@ -198,9 +210,11 @@ def _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, 
                 for k in range(starts[h], starts[h + 1]):
                     if key[k] != ck:
                         continue
+                    b = elem[k]
+                    if mode != PARTS_ANY and (part_a[a] == part_b[b]) != (mode == PARTS_SAME):
+                        continue
                     if not _overlap(boxes_a, a, ebox, k):
                         continue
-                    b = elem[k]
                     if same and b <= a:
                         continue
                     if skip_b.shape[0] and skip_b[b]:
@@ -235,7 +249,8 @@ def _sort_partners(out, base, n):
 
 
 @njit(cache=True, parallel=True)
-def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask):
+def _query(boxes_a, same, skip_b, verts_a, verts_b, part_a, part_b, mode, origin, inv, starts, elem,
+           key, ebox, mask):
     """Pairs of every query box with the grid's boxes, in (a, b) order, in one scan.
 
     The queries are cut into blocks solved in parallel; each writes its pairs into its block's
@@ -254,8 +269,8 @@ def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, k
         base = blk * cap
         n = 0
         for a in range(blk * per, min(na, (blk + 1) * per)):
-            k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key,
-                           ebox, mask, buf, base + n, base + cap)
+            k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, part_a, part_b, mode, origin,
+                           inv, starts, elem, key, ebox, mask, buf, base + n, base + cap)
             if n + k > cap:
                 over[blk] = True
                 break
@@ -266,8 +281,8 @@ def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, k
         if over[blk]:
             n = 0
             for a in range(blk * per, min(na, (blk + 1) * per)):
-                n += _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem,
-                                key, ebox, mask, dummy, 0, 0)
+                n += _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, part_a, part_b, mode, origin,
+                                inv, starts, elem, key, ebox, mask, dummy, 0, 0)
             cnt[blk] = n
     offsets = np.zeros(nblk + 1, np.int64)
     for blk in range(nblk):
@@ -277,8 +292,8 @@ def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, k
         o = offsets[blk]
         if over[blk]:
             for a in range(blk * per, min(na, (blk + 1) * per)):
-                k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem,
-                               key, ebox, mask, out, o, offsets[blk + 1])
+                k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, part_a, part_b, mode, origin,
+                               inv, starts, elem, key, ebox, mask, out, o, offsets[blk + 1])
                 _sort_partners(out, o, k)
                 o += k
         else:
@@ -290,7 +305,8 @@ def _query(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, k
 
 
 @njit(cache=True)
-def _query_serial(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox, mask):
+def _query_serial(boxes_a, same, skip_b, verts_a, verts_b, part_a, part_b, mode, origin, inv, starts,
+                  elem, key, ebox, mask):
     """:func:`_query` on one thread (same output): for the few boxes of a retry round, where waking
     the thread pool costs more than the queries (milliseconds on a loaded 2-core machine). Pairs
     are written as found; a query that overflows the buffer is redone after growing it."""
@@ -298,14 +314,14 @@ def _query_serial(boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, 
     out = np.empty((max(64, 4 * na), 2), np.int32)
     n = 0
     for a in range(na):
-        k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-                       mask, out, n, out.shape[0])
+        k = _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, part_a, part_b, mode, origin,
+                       inv, starts, elem, key, ebox, mask, out, n, out.shape[0])
         if n + k > out.shape[0]:
             grown = np.empty((max(2 * out.shape[0], n + k), 2), np.int32)
             grown[:n] = out[:n]
             out = grown
-            _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, origin, inv, starts, elem, key, ebox,
-                       mask, out, n, out.shape[0])
+            _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, part_a, part_b, mode, origin,
+                       inv, starts, elem, key, ebox, mask, out, n, out.shape[0])
         _sort_partners(out, n, k)
         n += k
     return out[:n].copy()
@@ -358,11 +374,13 @@ def box_pairs(boxes_a: np.ndarray, boxes_b: np.ndarray | None = None, *,
     if span * inv > 64.0:
         inv = 64.0 / span
     run = _query_serial if len(a) < SERIAL_QUERY_BELOW else _query
-    return run(a, same, _NO_SKIP, _NO_VERTS, _NO_VERTS, origin, inv, *_build(b, origin, inv))
+    return run(a, same, _NO_SKIP, _NO_VERTS, _NO_VERTS, _NO_PARTS, _NO_PARTS, PARTS_ANY, origin, inv,
+               *_build(b, origin, inv))
 
 
 _NO_SKIP = np.zeros(0, np.bool_)
 _NO_VERTS = np.zeros((0, 1), np.int32)
+_NO_PARTS = np.zeros(0, np.int32)
 
 
 @njit(cache=True, inline="always")
@@ -389,22 +407,29 @@ class BoxGrid:
         The mesh vertices of each box's element (a vertex: one column, an edge: two, a triangle:
         three); with them, queries that give theirs skip pairs sharing a vertex (a triangle's own
         vertices, two edges of one fan: never a collision) before they are written.
+    parts : (nb,) int32 or None
+        The part (floret) of each box's element; with them, queries that give theirs and a
+        ``parts_mode`` keep only pairs within one part or only pairs of two parts.
     """
 
     def __init__(self, boxes: np.ndarray, cell_size: float, origin: np.ndarray,
-                 vertices: np.ndarray | None = None):
+                 vertices: np.ndarray | None = None, parts: np.ndarray | None = None):
         self.boxes = np.ascontiguousarray(boxes, dtype=np.float64).reshape(-1, 6)
         self.vertices = _NO_VERTS if vertices is None else np.ascontiguousarray(vertices, dtype=np.int32)
         self.origin = np.ascontiguousarray(origin, dtype=np.float64)
+        self.parts = _NO_PARTS if parts is None else np.ascontiguousarray(parts, dtype=np.int32)
         self.inv = 1.0 / float(cell_size)
         self.tables = _build(self.boxes, self.origin, self.inv) if len(self.boxes) else None
 
     def query(self, boxes: np.ndarray, *, skip: np.ndarray | None = None, same: bool = False,
-              vertices: np.ndarray | None = None) -> np.ndarray:
+              vertices: np.ndarray | None = None, parts: np.ndarray | None = None,
+              parts_mode: int = PARTS_ANY) -> np.ndarray:
         """(k, 2) int32 pairs ``(i, j)``: query box i overlaps grid box j (not ``skip[j]``), in (i, j)
         order; ``same``: the query boxes are the grid's own boxes, pairs ``i < j`` only;
         ``vertices``: the query elements' mesh vertices, pairs sharing one with the grid's element
-        are left out (needs the grid's ``vertices``)."""
+        are left out (needs the grid's ``vertices``); ``parts`` with ``parts_mode``
+        (:data:`PARTS_SAME`, :data:`PARTS_CROSS`): the query elements' parts, pairs of two parts /
+        within one part left out (needs the grid's ``parts``)."""
         q = np.ascontiguousarray(boxes, dtype=np.float64).reshape(-1, 6)
         if self.tables is None or len(q) == 0:
             return np.zeros((0, 2), np.int32)
@@ -413,8 +438,14 @@ class BoxGrid:
         vb = self.vertices if len(va) else _NO_VERTS
         if len(va) and len(vb) != len(self.boxes):
             raise ValueError("vertex filter needs the grid's element vertices")
+        pa, pb = _NO_PARTS, _NO_PARTS
+        if parts_mode != PARTS_ANY:
+            pa = np.ascontiguousarray(parts, dtype=np.int32)
+            pb = self.parts
+            if len(pa) != len(q) or len(pb) != len(self.boxes):
+                raise ValueError("part filter needs the query's and the grid's element parts")
         run = _query_serial if len(q) < SERIAL_QUERY_BELOW else _query
-        return run(q, same, sk, va, vb, self.origin, self.inv, *self.tables)
+        return run(q, same, sk, va, vb, pa, pb, int(parts_mode), self.origin, self.inv, *self.tables)
 
 
 @njit(cache=True)

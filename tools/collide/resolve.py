@@ -25,7 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
-from .broad import BoxGrid, box_pairs, edge_boxes, triangle_boxes, vertex_boxes
+from .broad import (PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, box_pairs, edge_boxes, triangle_boxes,
+                    vertex_boxes)
 from .ccd import edge_edge_ccd, vertex_triangle_ccd
 from .response import project_collision_constraints
 
@@ -40,8 +41,13 @@ REPAIR_PASSES = 2
 REPAIR_RELAXATIONS = 4
 #: detect/solve rounds without fewer crossing pairs after which the retries stop early
 STALL_ROUNDS = 4
-#: slack of the round-0 broad-phase boxes, in grid cells (:class:`_StepBroadPhase`)
-BROAD_SLACK = 0.02
+#: slack of the round-0 broad-phase boxes, in mean triangle box extents (:class:`_StepBroadPhase`;
+#: about what a collision round moves a vertex: more slack keeps more vertices inside their round-0
+#: boxes but pairs more boxes; flat, densely packed florets (the yarrow's) pair many more)
+BROAD_SLACK = 0.05
+#: parts (florets) whose mean motion over a step is over this many times the mean triangle box
+#: extent have their own pairs found in the part's moving frame (:class:`_SplitBroadPhase`)
+SPLIT_MOTION = 0.25
 
 
 @dataclass
@@ -282,7 +288,7 @@ def _candidates(x0, x1, tri, edges, pad, cell_size, active):
     vt = _merge_vt(box_pairs(vb[av], tb, cell_size=cell_size), av, None,
                    box_pairs(tb[at], vb, cell_size=cell_size), at, active)
     ee = _merge_ee(box_pairs(eb[ae], eb, cell_size=cell_size), ae, None, active[edges].any(axis=1))
-    return vt, ee
+    return _sorted_pairs(vt), _sorted_pairs(ee)
 
 
 def _merge_vt(p_vert, av, t_map, p_tri, at, v_active, v_map=None):
@@ -362,7 +368,7 @@ class _StepBroadPhase:
     """The broad phase of one step's detection rounds (Alg. 1 lines 10-20).
 
     Round 0 builds grids over every element's box (from ``x0`` to the predicted ``x1``), grown by
-    a slack of ``BROAD_SLACK`` grid cells, pairs them all and keeps the pairs. Later rounds test
+    a slack of ``BROAD_SLACK`` mean triangle extents, pairs them all and keeps the pairs. Later rounds test
     only pairs with an active element (one with a vertex the last round's constraints moved, or in
     a pair still crossing). A vertex that has moved by no more than the slack in any coordinate
     since round 0 is still inside its grown round-0 box, and so are its elements' boxes: the pairs
@@ -372,7 +378,7 @@ class _StepBroadPhase:
     grids, and every active one against a small grid over the current boxes of those that left.
     """
 
-    def __init__(self, x0, tri, edges, pad, cell_size):
+    def __init__(self, x0, tri, edges, pad, cell_size, vertex_part=None, parts_mode=PARTS_ANY):
         self.x0 = x0
         self.tri = tri
         self.edges = edges
@@ -380,6 +386,28 @@ class _StepBroadPhase:
         self.cell_size = cell_size
         self.moved = np.zeros(len(x0), np.bool_)
         """vertices that have left their round-0 box (the slack), in some round since round 0"""
+        self.mode = parts_mode
+        """pairs kept: any (``PARTS_ANY``), within one part only, or of two parts only"""
+        if parts_mode != PARTS_ANY:
+            vp = np.ascontiguousarray(vertex_part, dtype=np.int32)
+            self.vpart, self.tpart, self.epart = vp, vp[tri[:, 0]], vp[edges[:, 0]]
+        else:
+            self.vpart = self.tpart = self.epart = None
+
+    def _parts(self, of, idx=None):
+        """The parts of elements (``of``: vpart/tpart/epart; ``idx``: a subset), None for any."""
+        if of is None:
+            return None
+        return of if idx is None else of[idx]
+
+    def _filter(self, pairs_vt, pairs_ee):
+        """Pairs found without the part filter (the far-moved fallback), filtered."""
+        if self.mode == PARTS_ANY:
+            return pairs_vt, pairs_ee
+        same = self.mode == PARTS_SAME
+        kv = (self.vpart[pairs_vt[:, 0]] == self.tpart[pairs_vt[:, 1]]) == same
+        ke = (self.epart[pairs_ee[:, 0]] == self.epart[pairs_ee[:, 1]]) == same
+        return np.ascontiguousarray(pairs_vt[kv]), np.ascontiguousarray(pairs_ee[ke])
 
     def first(self, x1):
         x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
@@ -394,19 +422,20 @@ class _StepBroadPhase:
             cell = span / 64.0
         self.cell = cell
         self.origin = origin
-        self.slack = BROAD_SLACK * cell
+        self.slack = BROAD_SLACK * (mean if mean > 0 else cell)
         self.x1_ref = x1.copy()
         grow = pad + self.slack
         self.vb = vertex_boxes(x0, x1, grow)
         self.tb = triangle_boxes(x0, x1, tri, grow)
         self.eb = edge_boxes(x0, x1, edges, grow)
         self.vid = np.arange(len(x0), dtype=np.int32)[:, None]
-        self.grid_t = BoxGrid(self.tb, cell, self.origin, tri)
-        self.grid_e = BoxGrid(self.eb, cell, self.origin, edges)
+        m = self.mode
+        self.grid_t = BoxGrid(self.tb, cell, self.origin, tri, parts=self.tpart)
+        self.grid_e = BoxGrid(self.eb, cell, self.origin, edges, parts=self.epart)
         self.grid_v = None
         # the grown boxes' pairs, for the later rounds; this round tests those of the true boxes
-        self.vt0 = self.grid_t.query(self.vb, vertices=self.vid)
-        self.ee0 = self.grid_e.query(self.eb, same=True, vertices=edges)
+        self.vt0 = self.grid_t.query(self.vb, vertices=self.vid, parts=self.vpart, parts_mode=m)
+        self.ee0 = self.grid_e.query(self.eb, same=True, vertices=edges, parts=self.epart, parts_mode=m)
         none = np.zeros(len(x0), np.bool_)
         no_t = np.zeros(len(tri), np.bool_)
         no_e = np.zeros(len(edges), np.bool_)
@@ -428,8 +457,10 @@ class _StepBroadPhase:
         ee = [_live_pairs(self.ee0, edges, edges, x0, x1, pad, active, moved_e, moved_e, True)]
         mv = np.nonzero(moved)[0]
         if len(mv):
+            m, P = self.mode, self._parts
+            vpart, tpart, epart = self.vpart, self.tpart, self.epart
             if self.grid_v is None:
-                self.grid_v = BoxGrid(self.vb, self.cell, self.origin, self.vid)
+                self.grid_v = BoxGrid(self.vb, self.cell, self.origin, self.vid, parts=vpart)
             mt = np.nonzero(moved_t)[0]
             me = np.nonzero(moved_e)[0]
             vb_m = vertex_boxes(x0[mv], x1[mv], pad)
@@ -438,7 +469,7 @@ class _StepBroadPhase:
             if max(_box_stats(vb_m, tb_m, eb_m)[2], 0.0) > 64.0 * self.cell:
                 # a response moved something far (boxes of many cells): the cell-based grids would
                 # take absurd memory; pair the active elements afresh with box_pairs' own cell guard
-                return _candidates(x0, x1, tri, edges, pad, self.cell, active)
+                return self._filter(*_candidates(x0, x1, tri, edges, pad, self.cell, active))
             av = np.nonzero(active)[0]
             at = np.nonzero(active_t)[0]
             ae = np.nonzero(active_e)[0]
@@ -449,22 +480,92 @@ class _StepBroadPhase:
             vb_s = vertex_boxes(x0[sv], x1[sv], pad)
             tb_s = triangle_boxes(x0, x1, tri[st], pad)
             eb_s = edge_boxes(x0, x1, edges[se], pad)
-            vt.append(_merge_vt(self.grid_t.query(vb_s, skip=moved_t, vertices=self.vid[sv]), sv, None,
-                                self.grid_v.query(tb_s, skip=moved, vertices=tri[st]), st, active))
-            ee.append(_merge_ee(self.grid_e.query(eb_s, skip=moved_e, vertices=edges[se]), se, None,
-                                active_e))
+            vt.append(_merge_vt(
+                self.grid_t.query(vb_s, skip=moved_t, vertices=self.vid[sv], parts=P(vpart, sv), parts_mode=m),
+                sv, None,
+                self.grid_v.query(tb_s, skip=moved, vertices=tri[st], parts=P(tpart, st), parts_mode=m),
+                st, active))
+            ee.append(_merge_ee(
+                self.grid_e.query(eb_s, skip=moved_e, vertices=edges[se], parts=P(epart, se), parts_mode=m),
+                se, None, active_e))
             # every active element against those that left
             vb_a = vertex_boxes(x0[av], x1[av], pad)
             tb_a = triangle_boxes(x0, x1, tri[at], pad)
             eb_a = edge_boxes(x0, x1, edges[ae], pad)
-            small_t = BoxGrid(tb_m, self.cell, self.origin, tri[mt])
-            small_v = BoxGrid(vb_m, self.cell, self.origin, self.vid[mv])
-            small_e = BoxGrid(eb_m, self.cell, self.origin, edges[me])
-            vt.append(_merge_vt(small_t.query(vb_a, vertices=self.vid[av]), av, mt,
-                                small_v.query(tb_a, vertices=tri[at]), at, active, v_map=mv))
-            ee.append(_merge_ee(small_e.query(eb_a, vertices=edges[ae]), ae, me, active_e))
-        return (np.ascontiguousarray(np.concatenate(vt), dtype=np.int32),
-                np.ascontiguousarray(np.concatenate(ee), dtype=np.int32))
+            small_t = BoxGrid(tb_m, self.cell, self.origin, tri[mt], parts=P(tpart, mt))
+            small_v = BoxGrid(vb_m, self.cell, self.origin, self.vid[mv], parts=P(vpart, mv))
+            small_e = BoxGrid(eb_m, self.cell, self.origin, edges[me], parts=P(epart, me))
+            vt.append(_merge_vt(small_t.query(vb_a, vertices=self.vid[av], parts=P(vpart, av), parts_mode=m),
+                                av, mt,
+                                small_v.query(tb_a, vertices=tri[at], parts=P(tpart, at), parts_mode=m),
+                                at, active, v_map=mv))
+            ee.append(_merge_ee(small_e.query(eb_a, vertices=edges[ae], parts=P(epart, ae), parts_mode=m),
+                                ae, me, active_e))
+        return (_sorted_pairs(np.concatenate(vt)), _sorted_pairs(np.concatenate(ee)))
+
+
+class _SplitBroadPhase:
+    """The broad phase of a step in which parts (florets) are carried far by their own motion.
+
+    The motion from ``x0`` to ``x1`` is linear in t, so taking the same vector ``t u`` from two
+    elements' positions at every t changes no distance between them at any t: whether they come
+    within the tolerance is decided as well in any frame that moves by a common ``t u``. Pairs
+    within one part are therefore found in the part's moving frame (``x1 - u_part``, ``u_part``
+    the part's mean motion over the step): a floret that a head's growth carries several of its
+    triangles' widths in a step no longer pairs every triangle with every other along its path
+    (the draft yarrow's emergence: 99.7 % of the candidate pairs were of one floret). Pairs of
+    two parts are found in the scene's frame. The two sets are disjoint; every pair that either
+    broad phase alone would report as touching is reported (the same contacts), in (a, b) order.
+    """
+
+    def __init__(self, x0, tri, edges, pad, cell_size, vertex_part, shift):
+        self.shift = shift
+        self.world = _StepBroadPhase(x0, tri, edges, pad, cell_size, vertex_part, PARTS_CROSS)
+        self.local = _StepBroadPhase(x0, tri, edges, pad, cell_size, vertex_part, PARTS_SAME)
+
+    def first(self, x1):
+        return _joined(self.world.first(x1), self.local.first(x1 - self.shift))
+
+    def again(self, x1, active):
+        return _joined(self.world.again(x1, active), self.local.again(x1 - self.shift, active))
+
+
+def _joined(a, b):
+    return (_sorted_pairs(np.concatenate([a[0], b[0]])), _sorted_pairs(np.concatenate([a[1], b[1]])))
+
+
+def step_broad_phase(x0, x1, tri, edges, pad, cell_size, vertex_part=None):
+    """The broad phase of one step's rounds: :class:`_SplitBroadPhase` where parts (given by the
+    (n,) ``vertex_part``, each owning its triangles and edges) move on average more than
+    :data:`SPLIT_MOTION` times their triangles' mean box extent over the step, else
+    :class:`_StepBroadPhase`. Both report the same pairs in the same order."""
+    plain = _StepBroadPhase(x0, tri, edges, pad, cell_size)
+    if vertex_part is None or len(tri) == 0 or len(x0) == 0:
+        return plain
+    vp = np.ascontiguousarray(vertex_part, dtype=np.int64)
+    if (vp[tri] != vp[tri[:, :1]]).any() or (len(edges) and (vp[edges] != vp[edges[:, :1]]).any()):
+        return plain  # an element joins two parts: no common frame for it
+    n_parts = int(vp.max()) + 1
+    d = x1 - x0
+    count = np.maximum(np.bincount(vp, minlength=n_parts), 1)
+    u = np.stack([np.bincount(vp, weights=d[:, k], minlength=n_parts) for k in range(3)], axis=1)
+    u /= count[:, None]
+    shift = u[vp]
+    motion = float(np.sqrt((shift ** 2).sum(axis=1)).mean())
+    extent = _box_stats(np.zeros((0, 6)), triangle_boxes(x0, x0, tri, 0.0), np.zeros((0, 6)))[1]
+    if not motion > SPLIT_MOTION * extent:
+        return plain
+    return _SplitBroadPhase(x0, tri, edges, pad, cell_size, vp, np.ascontiguousarray(shift))
+
+
+def _sorted_pairs(pairs: np.ndarray) -> np.ndarray:
+    """(k, 2) int32 pairs in (a, b) order: the order of the contacts (and so of the Gauss-Seidel
+    projection) does not depend on which of the broad phase's lists found a pair."""
+    p = np.ascontiguousarray(pairs, dtype=np.int32)
+    if len(p) < 2:
+        return p
+    key = p[:, 0].astype(np.int64) << np.int64(32) | p[:, 1].astype(np.int64)
+    return np.ascontiguousarray(p[np.argsort(key, kind="stable")])
 
 
 @njit(cache=True)
@@ -683,7 +784,7 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
                        stiffness: float = 1.0, iterations: int = 10, max_retries: int = 20,
                        tolerance: float | None = None, cell_size: float | None = None,
                        relax=None, relax_rounds: int | None = None,
-                       fallback: str = "vertices", parts=None) -> CollisionResult:
+                       fallback: str = "vertices", parts=None, vertex_part=None) -> CollisionResult:
     """Move ``x1`` (in place) until the step from ``x0`` is collision-free (Alg. 1 lines 10-20).
 
     Parameters
@@ -729,6 +830,10 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         carried positions, called only when needed), ``misshapen`` (callable or None: parts out of
         shape are moved back too, also when no pair is left) and ``crossing`` (bool: also move back
         the parts of pairs still crossing; False leaves those to the caller, e.g. to substep).
+    vertex_part : (n,) int or None
+        The part of every vertex (default: ``parts["vertex_part"]``): where parts are carried far
+        over the step, pairs within a part are found in its moving frame (:func:`step_broad_phase`;
+        the same contacts, found faster).
 
     Returns
     -------
@@ -745,7 +850,9 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
     tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
     edges = np.ascontiguousarray(edge_indices, dtype=np.int32)
     x0 = np.ascontiguousarray(x0, dtype=np.float64)
-    broad = _StepBroadPhase(x0, tri, edges, 0.5 * tol, cell_size)
+    vp = parts.get("vertex_part") if parts else None
+    broad = step_broad_phase(x0, np.ascontiguousarray(x1, dtype=np.float64), tri, edges, 0.5 * tol, cell_size,
+                             vp if vertex_part is None else vertex_part)
     state = {"constraints": Contacts.empty()}
 
     def detect(active):
