@@ -529,6 +529,27 @@ def test_a_torn_floret_stops_the_run_with_a_clear_error(inputs):
         sim.check_whole(x, 3.0)
 
 
+def test_undo_runaway_puts_back_only_florets_flung_over_half_their_size():
+    """The guard after the internal solve (and each relaxation): a floret one of whose vertices the
+    solve sent more than half the floret's size away takes back its positions from before the
+    solve, every vertex of it; a floret moved less, and the other florets, keep the solve's."""
+    from inflo.tools.fccompose.compose import _undo_runaway
+
+    rng = np.random.default_rng(5)
+    before = rng.random((30, 3))  # three florets of 10 vertices, each about 1 wide
+    floret = np.repeat(np.arange(3), 10)
+    x = before + rng.normal(0, 0.01, before.shape)
+    solved = x.copy()
+    x[3] += [0.2, 0.0, 0.0]  # floret 0: moved, but by less than half its size
+    x[15] += [0.0, 5.0, 0.0]  # floret 1: flung
+    expect = x.copy()
+    expect[10:20] = before[10:20]
+    assert _undo_runaway(x, np.arange(30), before, floret) == 1
+    np.testing.assert_array_equal(x, expect)
+    assert not np.array_equal(x[:10], solved[:10])
+    assert _undo_runaway(x, np.arange(0), before[:0], floret[:0]) == 0
+
+
 def test_phase_effect_each_floret_at_the_stage_its_age_gives(inputs, tmp_path):
     """phyllotaxis with ``development_frames`` -> fccompose: florets that emerged at staggered
     frames each sit, at the last frame, at their own developmental stage: every floret, mapped

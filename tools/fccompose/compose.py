@@ -236,6 +236,7 @@ class Simulation:
             self.edge_parts = np.array([0, len(model.edge_indices)], np.int64)
             self.hinge_parts = np.array([0, len(model.hinge_indices)], np.int64)
         self.one_part = len(self.edge_parts) - 1 != nf
+        self._all_vertices = np.arange(model.n_vertices, dtype=np.int64)
         self.sweeps = np.zeros(len(self.edge_parts) - 1, np.int64)
         self._sched = None  # (frame, Schedule) of the last schedule() call
         # measured on the first positions detected from (the module doc of inflo.tools.collide)
@@ -466,6 +467,7 @@ class Simulation:
                 project_bending_constraints_coloured(xp, w, m.hinge_indices, self.hinge_rest_angle,
                                                      m.hinge_stiffness, *self.hinge_colours)
         elif p.solver_iterations > 0:
+            predicted = xp.copy()
             # florets in contact need all the sweeps, the others one: hand out florets a few at a
             # time (dynamic schedule) rather than half the canopy to each thread
             with numba.parallel_chunksize(4):
@@ -473,6 +475,12 @@ class Simulation:
                                 m.hinge_indices, self.hinge_rest_angle, m.hinge_stiffness, self.hinge_parts,
                                 int(p.solver_iterations), float(self.converged_below), self.sweeps)
             timing["sweeps"] = timing.get("sweeps", 0) + n
+            if not self.one_part:
+                # a floret the collision response left crumpled can send the bending projection
+                # off (each hinge may move a vertex by pi x its size): such a floret keeps its
+                # prediction (its shape carried by its placement) rather than ending the run
+                timing["runaway"] = timing.get("runaway", 0) + _undo_runaway(
+                    xp, self._all_vertices, predicted, m.vertex_floret)
         self.check_whole(xp, frame_to)  # a diverged solve: stop before detecting collisions on it
         t2 = time.perf_counter()
         if not p.collisions:  # the growth alone (fcc key ``collisions: off``)
@@ -555,13 +563,15 @@ class Simulation:
         return relax
 
 
-def _undo_runaway(x: np.ndarray, verts: np.ndarray, before: np.ndarray, floret: np.ndarray) -> None:
-    """Put back the florets a relaxation moved by more than half their own size: the bending
-    projection can run away on a floret the collision response left badly out of shape, and one
-    flung vertex would make the next detection round's boxes span the canopy."""
+def _undo_runaway(x: np.ndarray, verts: np.ndarray, before: np.ndarray, floret: np.ndarray) -> int:
+    """Put back the florets a solve or relaxation moved by more than half their own size: the
+    bending projection can run away on a floret the collision response left badly out of shape,
+    and one flung vertex would make the next detection round's boxes span the canopy. Returns the
+    number of florets put back."""
     if len(verts):
-        _undo_runaway_kernel(x, np.ascontiguousarray(verts, dtype=np.int64), before,
-                             np.ascontiguousarray(floret, dtype=np.int64))
+        return int(_undo_runaway_kernel(x, np.ascontiguousarray(verts, dtype=np.int64), before,
+                                        np.ascontiguousarray(floret, dtype=np.int64)))
+    return 0
 
 
 @numba.njit(cache=True)
@@ -594,6 +604,7 @@ def _undo_runaway_kernel(x, verts, before, floret):
         if bad[floret[k]]:
             for c in range(3):
                 x[verts[k], c] = before[k, c]
+    return np.count_nonzero(bad)
 
 
 def _merged(failed: CollisionResult, a: CollisionResult, b: CollisionResult) -> CollisionResult:
@@ -907,6 +918,10 @@ def _run_frames(run: _Run, bar) -> None:
             if run.strict:
                 raise CollisionError(msg)
             run.warn(msg)
+        if timing.get("runaway", 0):
+            run.warn(f"frame {k}: the internal solve ran away on florets out of shape {timing['runaway']} "
+                     f"times (a vertex sent over half its floret's size); each kept its predicted shape for "
+                     f"that step")
         sim.check_whole(st.vertex_x, k)
         st.frame = k
         row["substeps"] = timing.get("substeps", 0)
