@@ -381,6 +381,16 @@ def test_fallback_reverts_when_retries_run_out():
     assert len(intersecting_pairs(x1, tri)) == 0
 
 
+def _sheet(n):
+    """An n x n grid of vertices over the unit square in z = 0 and its 2 (n-1)^2 triangles."""
+    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    grid = np.stack([u.ravel(), v.ravel(), np.zeros(n * n)], axis=1)
+    quads = [(i * n + j, i * n + j + 1, (i + 1) * n + j, (i + 1) * n + j + 1)
+             for i in range(n - 1) for j in range(n - 1)]
+    tri = np.array([(a, b, c) for a, b, c, d in quads] + [(b, d, c) for a, b, c, d in quads], np.int32)
+    return grid, tri
+
+
 def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
     """The retry rounds' incremental broad phase (round 0's grids of boxes grown by the slack + a
     small grid over what moved out of them) finds every pair a brute-force test of every box pair
@@ -406,11 +416,7 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
 
     rng = np.random.default_rng(7)
     n = 12
-    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
-    grid = np.stack([u.ravel(), v.ravel(), np.zeros(n * n)], axis=1)
-    quads = [(i * n + j, i * n + j + 1, (i + 1) * n + j, (i + 1) * n + j + 1)
-             for i in range(n - 1) for j in range(n - 1)]
-    tri = np.array([(a, b, c) for a, b, c, d in quads] + [(b, d, c) for a, b, c, d in quads], np.int32)
+    grid, tri = _sheet(n)
     # two sheets, the second above the first
     x0 = np.concatenate([grid, grid + [0.03, 0.02, 0.05]])
     tri = np.concatenate([tri, tri + n * n]).astype(np.int32)
@@ -474,11 +480,7 @@ def test_split_broad_phase_finds_the_same_contacts():
 
     rng = np.random.default_rng(11)
     n = 10
-    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
-    grid = np.stack([u.ravel(), v.ravel(), np.zeros(n * n)], axis=1)
-    quads = [(i * n + j, i * n + j + 1, (i + 1) * n + j, (i + 1) * n + j + 1)
-             for i in range(n - 1) for j in range(n - 1)]
-    tri = np.array([(a, b, c) for a, b, c, d in quads] + [(b, d, c) for a, b, c, d in quads], np.int32)
+    grid, tri = _sheet(n)
     # three sheets (parts), the second just above the first, the third beside them
     x0 = np.concatenate([grid, grid + [0.03, 0.02, 0.04], grid + [1.5, 0.0, 0.0]])
     tri = np.concatenate([tri, tri + n * n, tri + 2 * n * n]).astype(np.int32)
