@@ -68,8 +68,12 @@ def _run(ctx: BenchContext, name: str, n_florets: int, n_frames: int, run_frames
     per_frame = {k: sum(float(r[f"t_{k}_s"]) for r in rows[1:]) / max(steps, 1)
                  for k in ("rest", "internal", "collide", "sanity", "write")}
     phase = ", ".join(f"{k} {v:.3f}" for k, v in per_frame.items())
+    lo = min(float(r["min_edge_stretch"]) for r in rows[1:])
+    hi = max(float(r["max_edge_stretch"]) for r in rows[1:])
+    out_of = sum(1 for r in rows[1:] if float(r["min_edge_stretch"]) < 0.5 or float(r["max_edge_stretch"]) > 1.5)
     note = (f"{tris:,} triangles, {steps} frames; {found} collisions found, {left} left after retries, "
-            f"intersecting pairs at sanity checks {max(inter) if inter else 'n/a'}; peak memory "
+            f"intersecting pairs at sanity checks {max(inter) if inter else 'n/a'}; edge stretch "
+            f"{lo:.2f}-{hi:.2f}, {out_of} frames outside [0.5, 1.5]; peak memory "
             f"{peak_gb:.2f} GB (max over benchmark subprocesses so far); s/frame by phase: {phase}")
     return seconds, tris, steps, note
 
