@@ -200,6 +200,22 @@ def test_contact_sheet_has_the_grid_size():
     assert contact_sheet(tiles[:2]).shape[0] < sheet.shape[0]  # no labels: no label rows
 
 
+def test_contact_sheet_title_and_labels_read_on_a_dark_background():
+    """On a dark background (the yarrow's and the lilac's sheets) the title and the labels are
+    drawn light, on a light one dark."""
+    from inflo.tools.canopy_render.sheet import text_color_for
+
+    tiles = [np.zeros((30, 40, 3), np.uint8)] * 2
+    for bg, light in (((0.08, 0.09, 0.12), True), ((1.0, 1.0, 1.0), False), ((0.55, 0.6, 0.5), False)):
+        assert (min(text_color_for(bg)) > 0.5) == light
+        sheet = contact_sheet(tiles, ["frame 1", "frame 2"], gap=5, font_size=12, background=bg, title="A title")
+        title_rows = sheet[:5 + 24]
+        if light:
+            assert (title_rows.max(axis=2) > 180).any()
+        else:
+            assert (title_rows.min(axis=2) < 80).any()
+
+
 def test_gif_has_one_frame_per_image_and_mp4_pads_odd_sizes(tmp_path):
     frames = [np.full((21, 31, 3), (40 * k, 100, 200 - 20 * k), np.uint8) for k in range(7)]
     data, n = encode_gif(frames, fps=10)

@@ -109,7 +109,7 @@ def _font(size: int):
 
 def contact_sheet(images: Sequence[np.ndarray], labels: Sequence[str] | None = None, *,
                   columns: int | None = None, gap: int | None = None, background=(1.0, 1.0, 1.0),
-                  text_color=(0.15, 0.15, 0.15), title: str | None = None, font_size: int | None = None) -> np.ndarray:
+                  text_color=None, title: str | None = None, font_size: int | None = None) -> np.ndarray:
     """Lay images out in a grid, each with its label centred below it.
 
     Parameters
@@ -123,7 +123,8 @@ def contact_sheet(images: Sequence[np.ndarray], labels: Sequence[str] | None = N
     gap : int or None
         Pixels between tiles and around the sheet (default: 3 % of the tile width, at least 4).
     background, text_color : (3,) float
-        sRGB in 0..1.
+        sRGB in 0..1; ``text_color`` None: dark grey on a light background, light grey on a dark
+        one (:func:`text_color_for`), so the title and labels read on either.
     title : str or None
         A line above the grid.
     font_size : int or None
@@ -154,7 +155,7 @@ def contact_sheet(images: Sequence[np.ndarray], labels: Sequence[str] | None = N
     W = cols * w + (cols + 1) * gap
     H = title_h + rows * (h + label_h) + (rows + 1) * gap
     bg = tuple(int(round(255 * c)) for c in background)
-    fg = tuple(int(round(255 * c)) for c in text_color)
+    fg = tuple(int(round(255 * c)) for c in (text_color_for(background) if text_color is None else text_color))
     sheet = Image.new("RGB", (W, H), bg)
     draw = ImageDraw.Draw(sheet)
     if title:
@@ -167,6 +168,14 @@ def contact_sheet(images: Sequence[np.ndarray], labels: Sequence[str] | None = N
         if label:
             _centred_text(draw, x + w / 2, y + h + label_h / 2, label, fg, font)
     return np.asarray(sheet).copy()
+
+
+def text_color_for(background) -> tuple:
+    """Text colour that reads on ``background`` (sRGB 0..1): dark grey where its relative luminance
+    (WCAG, linear Rec. 709 weights) is over 0.18, light grey below."""
+    lin = [c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4 for c in map(float, background)]
+    lum = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
+    return (0.15, 0.15, 0.15) if lum > 0.18 else (0.9, 0.9, 0.9)
 
 
 def _centred_text(draw: ImageDraw.ImageDraw, cx: float, cy: float, text: str, fill, font) -> None:
