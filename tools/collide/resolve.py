@@ -513,7 +513,7 @@ class _SplitBroadPhase:
     within one part are therefore found in the part's moving frame (``x1 - u_part``, ``u_part``
     the part's mean motion over the step): a floret that a head's growth carries several of its
     triangles' widths in a step no longer pairs every triangle with every other along its path
-    (the draft yarrow's emergence: 99.7 % of the candidate pairs were of one floret). Pairs of
+    (the final yarrow's emergence: 99.7 % of the candidate pairs were of one floret). Pairs of
     two parts are found in the scene's frame. The two sets are disjoint; every pair that either
     broad phase alone would report as touching is reported (the same contacts), in (a, b) order.
     """
