@@ -15,9 +15,11 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from inflo.formats.obj import list_obj_sequence, read_obj
+from inflo.tools.canopy_render.output import write_png
 from inflo.tools.collide import intersecting_pairs
 
 HERE = Path(__file__).resolve().parent
@@ -50,9 +52,7 @@ def main(build: Path, size: str, out: Path) -> int:
         for k, img in enumerate(tiles):
             sheet.paste(img, (i * (w // 2), k * (h // 2)))
         draw.text((i * (w // 2) + 12, h + 10), caption, fill=(0, 0, 0), font=font)
-    tmp_out = out.with_suffix(".part.png")
-    sheet.save(tmp_out)
-    tmp_out.replace(out)
+    write_png(out, np.asarray(sheet))
     print(f"{out}: " + "; ".join(c for _, c in panels))
     return 0
 

@@ -14,7 +14,10 @@ import tempfile
 import tomllib
 from pathlib import Path
 
+import numpy as np
 from PIL import Image, ImageDraw, ImageFont
+
+from inflo.tools.canopy_render.output import write_png
 
 HERE = Path(__file__).resolve().parent
 CULTIVARS = {"mellow_yellow": "Mellow Yellow (bell)", "maite_lady": "Maite Lady (funnel)",
@@ -58,9 +61,7 @@ def main() -> int:
             sheet.paste(r, (0, y))
             y += r.height
     a.output.parent.mkdir(parents=True, exist_ok=True)
-    tmp_out = a.output.with_name("." + a.output.name + ".part.png")
-    sheet.save(tmp_out)
-    tmp_out.replace(a.output)
+    write_png(a.output, np.asarray(sheet.convert("RGB")))
     return 0
 
 

@@ -27,6 +27,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 from inflo.formats.obj import ObjMesh, list_obj_sequence, read_obj, write_obj
 from inflo.formats.scn import read_scn
+from inflo.tools.canopy_render.output import write_png
 from inflo.tools.collide import intersecting_pairs
 
 HERE = Path(__file__).resolve().parent
@@ -137,9 +138,7 @@ def main(build: Path, size: str, out: Path) -> int:
     for i, (img, caption) in enumerate(panels):
         sheet.paste(img, (i * (w // 2), 0))
         draw.multiline_text((i * (w // 2) + 10, h + 8), caption, fill=(0, 0, 0), font=font)
-    tmp_out = out.with_suffix(".part.png")
-    sheet.save(tmp_out)
-    tmp_out.replace(out)
+    write_png(out, np.asarray(sheet))
     print(f"{out}: florets {mark[0]} and {mark[1]}; " + "; ".join(c.replace("\n", " ") for _, c in panels))
     return 0
 
