@@ -138,6 +138,18 @@ def check_head(build: Path, *, rays: int | None, failures: list, per_frame=None,
     return head
 
 
+def frames_with_contacts(canopy_dir: Path) -> tuple[int, int]:
+    """Collisions deform petals: (frames with contacts found after the first third of the run,
+    those frames), from fccompose's ``log.csv``; prints them with the run's total contacts."""
+    with open(Path(canopy_dir) / "log.csv", newline="") as fh:
+        log = list(csv.DictReader(fh))
+    late = log[len(log) // 3:]
+    pressed = sum(1 for r in late if int(r["collisions_found"]) > 0)
+    print(f"frames with contacts after the first third: {pressed} of {len(late)}; "
+          f"contacts over the run: {sum(int(r['collisions_found']) for r in log)}")
+    return pressed, len(late)
+
+
 def check_phase(head: Head, *, bud: float, failures: list) -> None:
     """The phase effect at two thirds of the run: disk florets' heights fall from rim to centre
     (Spearman rank correlation with the distance from the centre > 0.5), some still in bud."""

@@ -20,7 +20,6 @@ Prints, and fails (exit 1) on any of:
 """
 from __future__ import annotations
 
-import csv
 import sys
 from pathlib import Path
 
@@ -28,7 +27,7 @@ import numpy as np
 from scipy.stats import spearmanr
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from heads import check_head, floret_faces  # noqa: E402  (pipelines/heads.py)
+from heads import check_head, floret_faces, frames_with_contacts  # noqa: E402  (pipelines/heads.py)
 
 from inflo.formats.obj import read_obj  # noqa: E402
 
@@ -81,14 +80,9 @@ def main(build: Path) -> int:
         failures.append("fewer than 4 outer heads with ray florets")
 
     # neighbours press on each other
-    with open(build / "canopy" / "log.csv", newline="") as fh:
-        log = list(csv.DictReader(fh))
-    late = log[len(log) // 3:]
-    pressed = sum(1 for r in late if int(r["collisions_found"]) > 0)
-    print(f"frames with contacts after the first third: {pressed} of {len(late)}; "
-          f"contacts over the run: {sum(int(r['collisions_found']) for r in log)}")
-    if pressed < len(late) // 2:
-        failures.append(f"the florets touch in only {pressed} of the last {len(late)} frames")
+    pressed, late = frames_with_contacts(build / "canopy")
+    if pressed < late // 2:
+        failures.append(f"the florets touch in only {pressed} of the last {late} frames")
 
     # the phase effect in every head
     k = (2 * len(head.canopy)) // 3

@@ -23,7 +23,6 @@ collide the florets with the branch mesh, whose tubes meet inside each other at 
 """
 from __future__ import annotations
 
-import csv
 import sys
 from pathlib import Path
 
@@ -31,7 +30,7 @@ import numpy as np
 from scipy.stats import spearmanr
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from heads import check_head, floret_faces  # noqa: E402  (pipelines/heads.py)
+from heads import check_head, floret_faces, frames_with_contacts  # noqa: E402  (pipelines/heads.py)
 
 from inflo.formats.obj import read_obj  # noqa: E402
 from inflo.tools.collide import intersecting_pairs_between  # noqa: E402
@@ -108,14 +107,9 @@ def main(build: Path) -> int:
         failures.append(f"{sum(v < OPEN for v in s_end.values())} florets not open at the end (spread < {OPEN})")
 
     # collisions deform petals
-    with open(head.canopy_dir / "log.csv", newline="") as fh:
-        log = list(csv.DictReader(fh))
-    later = log[len(log) // 3:]
-    contacts = sum(1 for r in later if int(r["collisions_found"]) > 0)
-    print(f"frames with contacts after the first third: {contacts} of {len(later)}; contacts over the run: "
-          f"{sum(int(r['collisions_found']) for r in log)}")
-    if contacts < len(later) / 2:
-        failures.append(f"contacts in only {contacts} of {len(later)} frames after the first third")
+    contacts, later = frames_with_contacts(head.canopy_dir)
+    if contacts < later / 2:
+        failures.append(f"contacts in only {contacts} of {later} frames after the first third")
 
     print("OK" if not failures else "FAILED:\n  " + "\n  ".join(failures))
     return 0 if not failures else 1
