@@ -539,12 +539,14 @@ def step_broad_phase(x0, x1, tri, edges, pad, cell_size, vertex_part=None):
     (n,) ``vertex_part``, each owning its triangles and edges) move on average more than
     :data:`SPLIT_MOTION` times their triangles' mean box extent over the step, else
     :class:`_StepBroadPhase`. Both report the same pairs in the same order."""
-    plain = _StepBroadPhase(x0, tri, edges, pad, cell_size)
+    def plain():
+        return _StepBroadPhase(x0, tri, edges, pad, cell_size)
+
     if vertex_part is None or len(tri) == 0 or len(x0) == 0:
-        return plain
+        return plain()
     vp = np.ascontiguousarray(vertex_part, dtype=np.int64)
     if (vp[tri] != vp[tri[:, :1]]).any() or (len(edges) and (vp[edges] != vp[edges[:, :1]]).any()):
-        return plain  # an element joins two parts: no common frame for it
+        return plain()  # an element joins two parts: no common frame for it
     n_parts = int(vp.max()) + 1
     d = x1 - x0
     count = np.maximum(np.bincount(vp, minlength=n_parts), 1)
@@ -554,7 +556,7 @@ def step_broad_phase(x0, x1, tri, edges, pad, cell_size, vertex_part=None):
     motion = float(np.sqrt((shift ** 2).sum(axis=1)).mean())
     extent = _box_stats(np.zeros((0, 6)), triangle_boxes(x0, x0, tri, 0.0), np.zeros((0, 6)))[1]
     if not motion > SPLIT_MOTION * extent:
-        return plain
+        return plain()
     return _SplitBroadPhase(x0, tri, edges, pad, cell_size, vp, np.ascontiguousarray(shift))
 
 
