@@ -518,6 +518,148 @@ def test_split_broad_phase_finds_the_same_contacts():
     assert (pa[:, 0] == pa[:, 3]).any() and (pa[:, 0] != pa[:, 3]).any()
 
 
+def test_box_pairs_by_part_match_the_grid_and_brute_force():
+    """The part-by-part sweep gives the grid's pairs, in the same (a, b) order, for pairs of two
+    box sets and within one set, with the vertex-sharing filter and every part mode; parts that
+    overlap, parts far apart, an empty part and a part of one box included."""
+    from inflo.tools.collide.broad import (PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, box_pairs_brute,
+                                           box_pairs_by_part, parts_grouped)
+
+    rng = np.random.default_rng(5)
+    sizes = [40, 0, 1, 60, 35, 50]  # part 1 empty, part 2 a single box
+    part = np.repeat(np.arange(len(sizes)), sizes).astype(np.int32)
+    centre = rng.random((len(sizes), 3)) * 0.6
+    centre[5] += 3.0  # far from every other part
+    lo = centre[part] + rng.random((len(part), 3)) * 0.3
+    b = np.concatenate([lo, lo + rng.random((len(part), 3)) * 0.08], axis=1)
+    verts = rng.integers(0, 120, (len(part), 2)).astype(np.int32)
+    assert parts_grouped(part) and not parts_grouped(part[::-1])
+    ref = box_pairs_brute(b, b, True)
+    same_part = part[ref[:, 0]] == part[ref[:, 1]]
+    for mode, keep in ((PARTS_ANY, np.ones(len(ref), bool)), (PARTS_SAME, same_part), (PARTS_CROSS, ~same_part)):
+        got = box_pairs_by_part(b, part, None, None, parts_mode=mode)
+        np.testing.assert_array_equal(got, ref[keep])
+        grid = BoxGrid(b, 0.1, b[:, :3].min(axis=0), verts, parts=part)
+        want = grid.query(b, same=True, vertices=verts, parts=part, parts_mode=mode)
+        np.testing.assert_array_equal(box_pairs_by_part(b, part, None, None, vertices_a=verts, parts_mode=mode),
+                                      want)
+    # two sets: 'vertices' (points' boxes) against these boxes
+    pts = rng.random((200, 3)) * 0.9
+    vpart = np.sort(rng.integers(0, len(sizes), 200)).astype(np.int32)
+    pb = np.concatenate([pts - 0.01, pts + 0.01], axis=1)
+    got = box_pairs_by_part(pb, vpart, b, part)
+    np.testing.assert_array_equal(got, box_pairs_brute(pb, b, False))
+    assert len(got) and len(ref) and same_part.any() and (~same_part).any()
+
+
+def _crowd(seed=2):
+    """Six crumpled sheets (parts) in a stack, two of them passing through each other over the step,
+    one carried far: contacts within and between parts."""
+    from inflo.tools.pbd import mesh_edges
+
+    rng = np.random.default_rng(seed)
+    n = 8
+    grid, tri1 = _sheet(n)
+    offsets = np.array([[0, 0, 0], [0.05, 0.03, 0.02], [0.4, 0.1, 0.05], [0.9, 0, 0], [0.9, 0.05, 0.1], [3, 0, 0]])
+    x0 = np.concatenate([grid * 0.8 + o for o in offsets])
+    x0 += rng.normal(0, 0.002, x0.shape)
+    tri = np.concatenate([tri1 + k * n * n for k in range(len(offsets))]).astype(np.int32)
+    part = np.repeat(np.arange(len(offsets)), n * n).astype(np.int32)
+    x1 = x0 + rng.normal(0, 0.01, x0.shape)
+    x1[part == 1] += [0, 0, -0.06]  # through sheet 0
+    x1[part == 5] += [2.0, 0.5, 0.0]  # carried far: its pairs in its moving frame
+    # a fold inside sheet 3: its far half swings down through its near half
+    fold = (part == 3) & (x0[:, 0] > 1.3)
+    x1[fold, 2] -= 0.3 * (x0[fold, 0] - 1.3)
+    return x0, x1, tri, mesh_edges(tri), part
+
+
+def test_probe_finds_round_0s_contacts_and_counts():
+    """The round-0 probe (pairs tested as the part-by-part sweep finds them, none written) gives
+    the contacts of the step broad phase's round 0 and its log counts, in the one-frame and in the
+    moving-frame (split) case, and none where nothing crosses."""
+    from inflo.tools.collide.probe import can_probe, probe_contacts
+    from inflo.tools.collide.resolve import _narrow, _SplitBroadPhase, step_broad_phase
+
+    x0, x1, tri, edges, part = _crowd()
+    pad, cell, tol = 1e-4, 0.1, 2e-4
+    assert can_probe(tri, edges, part)
+    assert not can_probe(tri, edges, part[::-1].copy())
+    kinds = set()
+    for xs in (x1, x0 + 1e-6):
+        for vp in (part, np.zeros_like(part)):  # six parts (split: one is carried far), one part
+            broad = step_broad_phase(x0, xs, tri, edges, pad, cell, vp)
+            kinds.add(type(broad).__name__)
+            shift = broad.shift if isinstance(broad, _SplitBroadPhase) else None
+            ref, ref_stats = _narrow(x0, xs, tri, edges, *broad.first(xs), tol)
+            vt, ee, stats = probe_contacts(x0, xs, tri, edges, pad, tol, vp, shift)
+            got, _ = _narrow(x0, xs, tri, edges, vt, ee, tol)
+            assert stats == ref_stats
+            for name in ("kind", "indices", "coef", "normal", "toi", "element"):
+                np.testing.assert_array_equal(getattr(got, name), getattr(ref, name))
+            if xs is x1:
+                assert len(ref) > 20
+            else:
+                assert len(ref) == 0
+    assert kinds == {"_SplitBroadPhase", "_StepBroadPhase"}
+
+
+def test_probe_overflow_of_a_parts_slots(monkeypatch):
+    """A part with more crossing pairs than its first-pass slots is run again with room for all."""
+    from inflo.tools.collide import probe
+    from inflo.tools.collide.resolve import _narrow, step_broad_phase
+
+    x0, x1, tri, edges, part = _crowd()
+    pad, cell, tol = 1e-4, 0.1, 2e-4
+    full = probe.probe_contacts(x0, x1, tri, edges, pad, tol, part)
+    monkeypatch.setattr(probe, "_PART_CAP", 1)
+    small = probe.probe_contacts(x0, x1, tri, edges, pad, tol, part)
+    np.testing.assert_array_equal(full[0], small[0])
+    np.testing.assert_array_equal(full[1], small[1])
+    broad = step_broad_phase(x0, x1, tri, edges, pad, cell, part)
+    ref, _ = _narrow(x0, x1, tri, edges, *broad.first(x1), tol)
+    assert len(ref) == len(full[0]) + len(full[1]) > 5
+
+
+def test_resolve_collisions_the_same_with_and_without_the_probe():
+    """resolve_collisions ends on the same positions whether round 0 is probed (the retry rounds'
+    broad phase started later, from round 0's positions) or not."""
+    x0, x1, tri, edges, part = _crowd()
+    w = np.ones(len(x0))
+    out = []
+    for probe in (True, False):
+        xs = x1.copy()
+        res = resolve_collisions(x0, xs, w, tri, edges, thickness=1e-3, max_retries=6, fallback="none",
+                                 vertex_part=part, probe=probe)
+        out.append((xs, res.rounds, res.found))
+    np.testing.assert_array_equal(out[0][0], out[1][0])
+    assert out[0][1:] == out[1][1:] and out[0][1] > 1
+
+
+def test_culled_is_the_full_tests_early_exit():
+    """vertex_triangle_culled / edge_edge_culled (the cubic's cull on rows of the position arrays)
+    say True only where the full tests return no crossing, and are False wherever those find one."""
+    from inflo.tools.collide.ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
+
+    rng = np.random.default_rng(8)
+    culled = crossing = 0
+    out = np.zeros(4)
+    for _ in range(3000):
+        x0 = rng.random((4, 3))
+        x1 = x0 + rng.normal(0, rng.choice([0.01, 0.3]), (4, 3))
+        if rng.random() < 0.1:
+            x1[:] = x0  # no motion
+        h = vertex_triangle_ccd(x0[0], x0[1], x0[2], x0[3], x1[0], x1[1], x1[2], x1[3], 1e-6, out)
+        c = vertex_triangle_culled(x0, x1, 0, 1, 2, 3)
+        assert not (c and h), (x0, x1)
+        g = edge_edge_ccd(x0[0], x0[1], x0[2], x0[3], x1[0], x1[1], x1[2], x1[3], 1e-6, out)
+        e = edge_edge_culled(x0, x1, 0, 1, 2, 3)
+        assert not (e and g), (x0, x1)
+        culled += c + e
+        crossing += (h > 0) + (g > 0)
+    assert culled > 1000 and crossing > 50
+
+
 # ----------------------------------------------------------------------------------------------
 # The whole-part fallback (issue 13)
 # ----------------------------------------------------------------------------------------------

@@ -49,6 +49,8 @@ __all__ = [
     "segment_segment_distance",
     "vertex_triangle_ccd",
     "edge_edge_ccd",
+    "vertex_triangle_culled",
+    "edge_edge_culled",
 ]
 
 # relative size below which all cubic coefficients count as zero (coplanar motion)
@@ -103,19 +105,13 @@ def cubic_vertex_triangle(p0, a0, b0, c0, p1, a1, b1, c1):
     k0, k1, k2, k3 : float
         ``f(t) = k0 + k1 t + k2 t^2 + k3 t^3``.
     """
-    pa0 = np.empty(3)
-    pav = np.empty(3)
-    ba0 = np.empty(3)
-    bav = np.empty(3)
-    ca0 = np.empty(3)
-    cav = np.empty(3)
-    for i in range(3):
-        pa0[i] = p0[i] - a0[i]
-        ba0[i] = b0[i] - a0[i]
-        ca0[i] = c0[i] - a0[i]
-        pav[i] = (p1[i] - a1[i]) - pa0[i]
-        bav[i] = (b1[i] - a1[i]) - ba0[i]
-        cav[i] = (c1[i] - a1[i]) - ca0[i]
+    # tuples, not arrays: no allocation per query (the narrow phase runs millions)
+    pa0 = (p0[0] - a0[0], p0[1] - a0[1], p0[2] - a0[2])
+    ba0 = (b0[0] - a0[0], b0[1] - a0[1], b0[2] - a0[2])
+    ca0 = (c0[0] - a0[0], c0[1] - a0[1], c0[2] - a0[2])
+    pav = ((p1[0] - a1[0]) - pa0[0], (p1[1] - a1[1]) - pa0[1], (p1[2] - a1[2]) - pa0[2])
+    bav = ((b1[0] - a1[0]) - ba0[0], (b1[1] - a1[1]) - ba0[1], (b1[2] - a1[2]) - ba0[2])
+    cav = ((c1[0] - a1[0]) - ca0[0], (c1[1] - a1[1]) - ca0[1], (c1[2] - a1[2]) - ca0[2])
     return _cubic_coeffs(pa0, pav, ba0, bav, ca0, cav)
 
 
@@ -130,19 +126,12 @@ def cubic_edge_edge(a0, b0, c0, d0, a1, b1, c1, d1):
     k0, k1, k2, k3 : float
         Ascending coefficients, as :func:`cubic_vertex_triangle`.
     """
-    ca0 = np.empty(3)
-    cav = np.empty(3)
-    da0 = np.empty(3)
-    dav = np.empty(3)
-    ba0 = np.empty(3)
-    bav = np.empty(3)
-    for i in range(3):
-        ca0[i] = c0[i] - a0[i]
-        da0[i] = d0[i] - a0[i]
-        ba0[i] = b0[i] - a0[i]
-        cav[i] = (c1[i] - a1[i]) - ca0[i]
-        dav[i] = (d1[i] - a1[i]) - da0[i]
-        bav[i] = (b1[i] - a1[i]) - ba0[i]
+    ca0 = (c0[0] - a0[0], c0[1] - a0[1], c0[2] - a0[2])
+    da0 = (d0[0] - a0[0], d0[1] - a0[1], d0[2] - a0[2])
+    ba0 = (b0[0] - a0[0], b0[1] - a0[1], b0[2] - a0[2])
+    cav = ((c1[0] - a1[0]) - ca0[0], (c1[1] - a1[1]) - ca0[1], (c1[2] - a1[2]) - ca0[2])
+    dav = ((d1[0] - a1[0]) - da0[0], (d1[1] - a1[1]) - da0[1], (d1[2] - a1[2]) - da0[2])
+    bav = ((b1[0] - a1[0]) - ba0[0], (b1[1] - a1[1]) - ba0[1], (b1[2] - a1[2]) - ba0[2])
     return _cubic_coeffs(ca0, cav, da0, dav, ba0, bav)
 
 
@@ -815,3 +804,49 @@ def edge_edge_ccd(a0, b0, c0, d0, a1, b1, c1, d1, tol, out):
     if hits == 0 and big <= _ILL_REL * L3:
         return _ee_coplanar(a0, b0, c0, d0, a1, b1, c1, d1, tol, out)
     return hits
+
+
+# --------------------------------------------------------------------------------------------------
+# The cull alone, on a position array: most candidate pairs end here
+# --------------------------------------------------------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def _row(x, i):
+    return (x[i, 0], x[i, 1], x[i, 2])
+
+
+@njit(cache=True, inline="always")
+def _culled(k0, k1, k2, k3, L):
+    """The early exit of :func:`vertex_triangle_ccd` / :func:`edge_edge_ccd`: True exactly where
+    they return 0 at their cubic's cull (not near-coplanar, not ill-conditioned)."""
+    if L == 0.0:
+        return False
+    big = abs(k0) + abs(k1) + abs(k2) + abs(k3)
+    L3 = L * L * L
+    if big <= _COPLANAR_REL * L3:
+        return False
+    if cull_cubic(k0, k1, k2, k3):
+        return not big <= _ILL_REL * L3
+    return False
+
+
+@njit(cache=True)
+def vertex_triangle_culled(x0, x1, p, a, b, c):
+    """True where ``vertex_triangle_ccd(x0[p], x0[a], x0[b], x0[c], x1[p], ...)`` certainly returns
+    0 by its cubic's cull: the same arithmetic on the rows of ``x0`` / ``x1`` as tuples. The
+    narrow phase calls it first: slicing eight rows into array views for the full test costs a
+    reference count each, about ten times the cull itself, and most pairs are culled."""
+    p0, a0, b0, c0 = _row(x0, p), _row(x0, a), _row(x0, b), _row(x0, c)
+    p1, a1, b1, c1 = _row(x1, p), _row(x1, a), _row(x1, b), _row(x1, c)
+    k0, k1, k2, k3 = cubic_vertex_triangle(p0, a0, b0, c0, p1, a1, b1, c1)
+    return _culled(k0, k1, k2, k3, _max_extent(p0, a0, b0, c0, p1, a1, b1, c1))
+
+
+@njit(cache=True)
+def edge_edge_culled(x0, x1, a, b, c, d):
+    """:func:`vertex_triangle_culled` for :func:`edge_edge_ccd` of edges ab and cd."""
+    a0, b0, c0, d0 = _row(x0, a), _row(x0, b), _row(x0, c), _row(x0, d)
+    a1, b1, c1, d1 = _row(x1, a), _row(x1, b), _row(x1, c), _row(x1, d)
+    k0, k1, k2, k3 = cubic_edge_edge(a0, b0, c0, d0, a1, b1, c1, d1)
+    return _culled(k0, k1, k2, k3, _max_extent(a0, b0, c0, d0, a1, b1, c1, d1))

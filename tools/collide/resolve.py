@@ -27,7 +27,8 @@ from numba import njit, prange
 
 from .broad import (PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, box_pairs, edge_boxes, triangle_boxes,
                     vertex_boxes)
-from .ccd import edge_edge_ccd, vertex_triangle_ccd
+from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
+from .probe import can_probe, probe_contacts
 from .response import project_collision_constraints
 
 __all__ = ["Contacts", "CollisionResult", "detect_collisions", "resolve_collisions", "default_tolerance",
@@ -147,13 +148,10 @@ def _narrow_vt_one(k, x0, x1, tri, pairs, tol, hits, info):
     a = tri[t, 0]
     b = tri[t, 1]
     c = tri[t, 2]
-    out = np.zeros(4)
-    if v == a or v == b or v == c:
+    if v == a or v == b or v == c or vertex_triangle_culled(x0, x1, v, a, b, c):
         hits[k] = 0
-    else:
-        hits[k] = vertex_triangle_ccd(x0[v], x0[a], x0[b], x0[c], x1[v], x1[a], x1[b], x1[c], tol, out)
-    for j in range(4):
-        info[k, j] = out[j]
+    else:  # info[k] (zeros) is written only on a hit
+        hits[k] = vertex_triangle_ccd(x0[v], x0[a], x0[b], x0[c], x1[v], x1[a], x1[b], x1[c], tol, info[k])
 
 
 @njit(cache=True, inline="always")
@@ -164,13 +162,10 @@ def _narrow_ee_one(k, x0, x1, edges, pairs, tol, hits, info):
     b = edges[e, 1]
     c = edges[f, 0]
     d = edges[f, 1]
-    out = np.zeros(4)
-    if a == c or a == d or b == c or b == d:
+    if a == c or a == d or b == c or b == d or edge_edge_culled(x0, x1, a, b, c, d):
         hits[k] = 0
     else:
-        hits[k] = edge_edge_ccd(x0[a], x0[b], x0[c], x0[d], x1[a], x1[b], x1[c], x1[d], tol, out)
-    for j in range(4):
-        info[k, j] = out[j]
+        hits[k] = edge_edge_ccd(x0[a], x0[b], x0[c], x0[d], x1[a], x1[b], x1[c], x1[d], tol, info[k])
 
 
 @njit(cache=True, parallel=True)
@@ -409,7 +404,9 @@ class _StepBroadPhase:
         ke = (self.epart[pairs_ee[:, 0]] == self.epart[pairs_ee[:, 1]]) == same
         return np.ascontiguousarray(pairs_vt[kv]), np.ascontiguousarray(pairs_ee[ke])
 
-    def first(self, x1):
+    def first(self, x1, pairs=True):
+        """Round 0: the grids and the grown boxes' pairs for the later rounds; the pairs of the
+        true boxes (None with ``pairs=False``: round 0 was detected otherwise)."""
         x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
         vb = vertex_boxes(x0, x1, pad)
         tb = triangle_boxes(x0, x1, tri, pad)
@@ -436,6 +433,8 @@ class _StepBroadPhase:
         # the grown boxes' pairs, for the later rounds; this round tests those of the true boxes
         self.vt0 = self.grid_t.query(self.vb, vertices=self.vid, parts=self.vpart, parts_mode=m)
         self.ee0 = self.grid_e.query(self.eb, same=True, vertices=edges, parts=self.epart, parts_mode=m)
+        if not pairs:
+            return None
         none = np.zeros(len(x0), np.bool_)
         no_t = np.zeros(len(tri), np.bool_)
         no_e = np.zeros(len(edges), np.bool_)
@@ -523,11 +522,40 @@ class _SplitBroadPhase:
         self.world = _StepBroadPhase(x0, tri, edges, pad, cell_size, vertex_part, PARTS_CROSS)
         self.local = _StepBroadPhase(x0, tri, edges, pad, cell_size, vertex_part, PARTS_SAME)
 
-    def first(self, x1):
-        return _joined(self.world.first(x1), self.local.first(x1 - self.shift))
+    def first(self, x1, pairs=True):
+        w = self.world.first(x1, pairs)
+        loc = self.local.first(x1 - self.shift, pairs)
+        return _joined(w, loc) if pairs else None
 
     def again(self, x1, active):
         return _joined(self.world.again(x1, active), self.local.again(x1 - self.shift, active))
+
+
+class _ProbedBroadPhase:
+    """Round 0 by :func:`.probe.probe_contacts` (the contacts, without the pair lists); the
+    step's own broad phase (``broad``) is started, from round 0's positions, only when a later
+    round asks for pairs. The contacts and the later rounds' pairs are those of ``broad`` alone."""
+
+    def __init__(self, broad, x0, tri, edges, pad, tol, vertex_part):
+        self.broad = broad
+        self.x0, self.tri, self.edges, self.pad, self.tol = x0, tri, edges, pad, tol
+        self.vertex_part = vertex_part
+        self.x1_round0 = None
+        self.started = False
+
+    def round0(self, x1):
+        self.x1_round0 = x1.copy()
+        shift = self.broad.shift if isinstance(self.broad, _SplitBroadPhase) else None
+        vt, ee, stats = probe_contacts(self.x0, x1, self.tri, self.edges, self.pad, self.tol, self.vertex_part,
+                                       shift)
+        found, _ = _narrow(self.x0, x1, self.tri, self.edges, vt, ee, self.tol)
+        return found, stats
+
+    def again(self, x1, active):
+        if not self.started:
+            self.broad.first(self.x1_round0, pairs=False)
+            self.started = True
+        return self.broad.again(x1, active)
 
 
 def _joined(a, b):
@@ -786,7 +814,8 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
                        stiffness: float = 1.0, iterations: int = 10, max_retries: int = 20,
                        tolerance: float | None = None, cell_size: float | None = None,
                        relax=None, relax_rounds: int | None = None,
-                       fallback: str = "vertices", parts=None, vertex_part=None) -> CollisionResult:
+                       fallback: str = "vertices", parts=None, vertex_part=None,
+                       probe: bool = True) -> CollisionResult:
     """Move ``x1`` (in place) until the step from ``x0`` is collision-free (Alg. 1 lines 10-20).
 
     Parameters
@@ -835,7 +864,12 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
     vertex_part : (n,) int or None
         The part of every vertex (default: ``parts["vertex_part"]``): where parts are carried far
         over the step, pairs within a part are found in its moving frame (:func:`step_broad_phase`;
-        the same contacts, found faster).
+        the same contacts, found faster); where the parts are grouped (:func:`.probe.can_probe`),
+        round 0 is detected part by part without a pair list (:func:`.probe.probe_contacts`:
+        the same contacts) and the retry rounds' broad phase is built only if a retry comes.
+    probe : bool
+        Allow that round-0 probe (a caller whose last step found contacts in round 0 expects
+        retries, which need the pair lists anyway, and passes False).
 
     Returns
     -------
@@ -853,11 +887,17 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
     edges = np.ascontiguousarray(edge_indices, dtype=np.int32)
     x0 = np.ascontiguousarray(x0, dtype=np.float64)
     vp = parts.get("vertex_part") if parts else None
+    if vertex_part is None:
+        vertex_part = vp
     broad = step_broad_phase(x0, np.ascontiguousarray(x1, dtype=np.float64), tri, edges, 0.5 * tol, cell_size,
-                             vp if vertex_part is None else vertex_part)
+                             vertex_part)
+    if probe and can_probe(tri, edges, vertex_part):
+        broad = _ProbedBroadPhase(broad, x0, tri, edges, 0.5 * tol, tol, vertex_part)
     state = {"constraints": Contacts.empty()}
 
     def detect(active):
+        if active is None and isinstance(broad, _ProbedBroadPhase):
+            return broad.round0(x1)
         pairs = broad.first(x1) if active is None else broad.again(x1, active)
         return _narrow(x0, x1, tri, edges, pairs[0], pairs[1], tol)
 

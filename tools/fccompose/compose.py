@@ -242,6 +242,8 @@ class Simulation:
         # measured on the first positions detected from (the module doc of inflo.tools.collide)
         self.cell_size = None
         self.converged_below = None
+        self.round0_clear = True
+        """the last step's round 0 found no contact (the next one is probed: resolve_collisions)"""
         self.restore(State.at_start(model) if state is None else state)
 
     def restore(self, state: State) -> None:
@@ -520,8 +522,11 @@ class Simulation:
 
         parts = dict(vertex_part=vp, n_parts=nf, misshapen=misshapen, carried=carried,
                      crossing=retreat_crossing)
+        # round 0 probed without pair lists while the last step's round 0 found nothing (a head
+        # before its florets meet); once contacts come, retries follow and need the lists anyway
         res = resolve_collisions(x0s, x1s, w if v is None else w[v], tri, edges, relax=relax,
-                                 relax_rounds=RELAX_ROUNDS, parts=parts, **kw)
+                                 relax_rounds=RELAX_ROUNDS, parts=parts, probe=self.round0_clear, **kw)
+        self.round0_clear = not (res.found and res.found[0] > 0)
         if v is not None:
             xp[v] = x1s
         if res.whole_step:

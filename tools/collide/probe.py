@@ -1,0 +1,308 @@
+"""Round 0 of a step without a pair list: does anything touch at all?
+
+Most steps of a growing head before its florets meet (and many of a crowded canopy's emergence)
+find no contact in their first detection round. The step's broad phase
+(:func:`.resolve.step_broad_phase`) nonetheless builds its grids, pairs every element's box grown
+by the retry rounds' slack and keeps the pairs for the rounds that never come; in the dense
+growing head, where a folded bud's triangles overlap a dozen of their own neighbours each, that was
+two thirds of the step.
+
+:func:`probe_contacts` answers round 0's question directly. The mesh is taken floret by floret
+(the parts, grouped: :func:`.broad.parts_grouped`): the pairs of one floret are found by sweep and
+prune in the floret's own box, the pairs of two florets only where their boxes overlap
+(:func:`.broad.box_pairs_by_part`'s walk), and each overlapping pair is tested at once by the
+same continuous tests as the narrow phase (:func:`.ccd.vertex_triangle_ccd`,
+:func:`.ccd.edge_edge_ccd`), without writing the pair. The candidate pairs are exactly round 0's
+(the same boxes, the same filters: a shared vertex, within / across parts, the floret's moving
+frame of :class:`.resolve._SplitBroadPhase`), so where the probe finds no contact round 0 finds
+none, and its counts are round 0's log figures. Where it finds one, the step runs its rounds as
+before (nothing of the probe is reused: the answer is the same either way).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from .broad import (PART_SWEEP_MAX_ELEMENTS, PARTS_CROSS, _axis_orders, _overlap, _overlapping_parts, _part_boxes,
+                    _part_starts, _share_vertex, edge_boxes, parts_grouped, triangle_boxes, vertex_boxes)
+from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
+
+__all__ = ["probe_contacts", "can_probe"]
+
+#: per-part counters of :func:`_probe_kernel` (the last three: where the part writes its crossing
+#: pairs, and how many it may write there)
+_VT_CAND, _EE_CAND, _VT_HIT, _EE_HIT, _VT_EVEN, _EE_EVEN, _VT_ODD, _EE_ODD, _VT_AT, _EE_AT, _CAP = range(11)
+_N_COUNTERS = 11
+#: crossing pairs of each kind a part may write in the first pass (a part with more is run again)
+_PART_CAP = 16
+
+
+def can_probe(tri: np.ndarray, edges: np.ndarray, vertex_part) -> bool:
+    """Whether :func:`probe_contacts` applies: every element within one part, the vertices,
+    triangles and edges grouped by part, no part over :data:`.broad.PART_SWEEP_MAX_ELEMENTS`."""
+    if vertex_part is None or len(tri) == 0:
+        return False
+    vp = np.asarray(vertex_part)
+    if not parts_grouped(vp):
+        return False
+    tp = vp[tri]
+    if (tp != tp[:, :1]).any() or not parts_grouped(tp[:, 0]):
+        return False
+    if len(edges):
+        ep = vp[edges]
+        if (ep != ep[:, :1]).any() or not parts_grouped(ep[:, 0]):
+            return False
+    return int(np.bincount(tp[:, 0]).max()) <= PART_SWEEP_MAX_ELEMENTS
+
+
+def probe_contacts(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray, edges: np.ndarray, pad: float,
+                   tolerance: float, vertex_part: np.ndarray,
+                   shift: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Round 0's contacts of a step: its crossing pairs and its candidate and hit counts.
+
+    Parameters
+    ----------
+    x0, x1 : (n, 3) float64
+        Positions at the start and the end of the step.
+    tri, edges : (m, 3), (e, 2) int32
+    pad : float
+        Box pad (the step broad phase's: half the tolerance).
+    tolerance : float
+        The continuous tests' tolerance.
+    vertex_part : (n,) int
+        Part (floret) of every vertex; :func:`can_probe` must hold.
+    shift : (n, 3) float64 or None
+        Each vertex's part's mean motion where pairs within a part are found in its moving frame
+        (:class:`.resolve._SplitBroadPhase`), else None.
+
+    Returns
+    -------
+    (vt, ee, stats)
+        ``vt``, ``ee``: (k, 2) int32 vertex-triangle and edge-edge pairs crossing an odd number of
+        times (round 0's contacts), sorted; ``stats``: the counts of :func:`.resolve._narrow`
+        (candidates, hits, even hits).
+    """
+    x0 = np.ascontiguousarray(x0, dtype=np.float64)
+    x1 = np.ascontiguousarray(x1, dtype=np.float64)
+    tri = np.ascontiguousarray(tri, dtype=np.int32)
+    edges = np.ascontiguousarray(edges, dtype=np.int32).reshape(-1, 2)
+    vp = np.ascontiguousarray(vertex_part, dtype=np.int64)
+    n_parts = int(vp.max()) + 1
+    tp = np.ascontiguousarray(vp[tri[:, 0]])
+    ep = np.ascontiguousarray(vp[edges[:, 0]]) if len(edges) else np.zeros(0, np.int64)
+    vb = vertex_boxes(x0, x1, pad)
+    tb = triangle_boxes(x0, x1, tri, pad)
+    eb = edge_boxes(x0, x1, edges, pad)
+    if shift is None:
+        vb_l, tb_l, eb_l = vb, tb, eb
+    else:
+        xl = np.ascontiguousarray(x1 - shift)
+        vb_l = vertex_boxes(x0, xl, pad)
+        tb_l = triangle_boxes(x0, xl, tri, pad)
+        eb_l = edge_boxes(x0, xl, edges, pad)
+    sv = _part_starts(vp, n_parts)
+    st = _part_starts(tp, n_parts)
+    se = _part_starts(ep, n_parts)
+    # within a part (its moving frame's boxes) and across parts (the scene's)
+    pv_l, pt_l, pe_l = _part_boxes(vb_l, sv), _part_boxes(tb_l, st), _part_boxes(eb_l, se)
+    pv, pt, pe = _part_boxes(vb, sv), _part_boxes(tb, st), _part_boxes(eb, se)
+    ov_l, ot_l, oe_l = _axis_orders(vb_l, sv), _axis_orders(tb_l, st), _axis_orders(eb_l, se)
+    if shift is None:
+        ov, ot, oe = ov_l, ot_l, oe_l
+    else:
+        ov, ot, oe = _axis_orders(vb, sv), _axis_orders(tb, st), _axis_orders(eb, se)
+    vt_start, vt_nbr = _overlapping_parts(pv, pt, False, PARTS_CROSS)
+    ee_start, ee_nbr = _overlapping_parts(pe, pe, True, PARTS_CROSS)
+    args = (x0, x1, tri, edges, float(tolerance), sv, st, se, vb_l, tb_l, eb_l, pv_l, pt_l, pe_l, ov_l, ot_l,
+            oe_l, vb, tb, eb, pv, pt, pe, ov, ot, oe, vt_start, vt_nbr, ee_start, ee_nbr)
+    # each part writes up to _PART_CAP crossing pairs of a kind into its own slots
+    start = np.zeros((n_parts, _N_COUNTERS), np.int64)
+    start[:, _VT_AT] = start[:, _EE_AT] = np.arange(n_parts) * _PART_CAP
+    start[:, _CAP] = _PART_CAP
+    slots_vt = np.zeros((n_parts * _PART_CAP, 2), np.int32)
+    slots_ee = np.zeros((n_parts * _PART_CAP, 2), np.int32)
+    counts = _probe_kernel(*args, np.ones(n_parts, np.bool_), slots_vt, slots_ee, start)
+    total = counts.sum(axis=0)
+    n_vt = np.minimum(counts[:, _VT_ODD], _PART_CAP)
+    n_ee = np.minimum(counts[:, _EE_ODD], _PART_CAP)
+    keep = np.arange(_PART_CAP)[None, :]
+    vt = slots_vt.reshape(n_parts, _PART_CAP, 2)[keep < n_vt[:, None]]
+    ee = slots_ee.reshape(n_parts, _PART_CAP, 2)[keep < n_ee[:, None]]
+    over = (counts[:, _VT_ODD] > _PART_CAP) | (counts[:, _EE_ODD] > _PART_CAP)
+    if over.any():  # those parts again, with room for all theirs
+        n_over = int(over.sum())
+        big = int(max(counts[over, _VT_ODD].max(), counts[over, _EE_ODD].max()))
+        again = np.zeros((n_parts, _N_COUNTERS), np.int64)
+        again[over, _VT_AT] = again[over, _EE_AT] = np.arange(n_over) * big
+        again[:, _CAP] = big
+        more_vt = np.zeros((n_over * big, 2), np.int32)
+        more_ee = np.zeros((n_over * big, 2), np.int32)
+        redo = _probe_kernel(*args, over, more_vt, more_ee, again)[over]
+        keep = np.arange(big)[None, :]
+        vt = np.concatenate([vt[~np.repeat(over, n_vt)], more_vt.reshape(n_over, big, 2)[keep < redo[:, _VT_ODD][:, None]]])
+        ee = np.concatenate([ee[~np.repeat(over, n_ee)], more_ee.reshape(n_over, big, 2)[keep < redo[:, _EE_ODD][:, None]]])
+    vt = _sorted(vt)
+    ee = _sorted(ee)
+    stats = {
+        "vt_candidates": int(total[_VT_CAND]),
+        "ee_candidates": int(total[_EE_CAND]),
+        "vt_hits": int(total[_VT_HIT]),
+        "ee_hits": int(total[_EE_HIT]),
+        "vt_even": int(total[_VT_EVEN]),
+        "ee_even": int(total[_EE_EVEN]),
+    }
+    return vt, ee, stats
+
+
+def _sorted(pairs):
+    if len(pairs) < 2:
+        return pairs
+    key = pairs[:, 0].astype(np.int64) << np.int64(32) | pairs[:, 1].astype(np.int64)
+    return np.ascontiguousarray(pairs[np.argsort(key, kind="stable")])
+
+
+@njit(cache=True, inline="always")
+def _test(kind, a, b, x0, x1, tri, edges, tol, out, c, out_vt, out_ee):
+    """The continuous test of pair (a, b): kind 0 vertex a / triangle b, 1 edges a and b; counts
+    into ``c``; a pair crossing an odd number of times is written to ``out_vt`` / ``out_ee`` at
+    the part's cursor while the part has written fewer than its cap."""
+    if kind == 0:
+        p = tri[b, 0]
+        q = tri[b, 1]
+        r = tri[b, 2]
+        c[_VT_CAND] += 1
+        if vertex_triangle_culled(x0, x1, a, p, q, r):
+            return
+        h = vertex_triangle_ccd(x0[a], x0[p], x0[q], x0[r], x1[a], x1[p], x1[q], x1[r], tol, out)
+        if h > 0:
+            c[_VT_HIT] += 1
+            if h % 2 == 0:
+                c[_VT_EVEN] += 1
+            else:
+                c[_VT_ODD] += 1
+                if c[_VT_ODD] <= c[_CAP]:
+                    out_vt[c[_VT_AT], 0] = a
+                    out_vt[c[_VT_AT], 1] = b
+                    c[_VT_AT] += 1
+    else:
+        c[_EE_CAND] += 1
+        if edge_edge_culled(x0, x1, edges[a, 0], edges[a, 1], edges[b, 0], edges[b, 1]):
+            return
+        h = edge_edge_ccd(x0[edges[a, 0]], x0[edges[a, 1]], x0[edges[b, 0]], x0[edges[b, 1]],
+                          x1[edges[a, 0]], x1[edges[a, 1]], x1[edges[b, 0]], x1[edges[b, 1]], tol, out)
+        if h > 0:
+            c[_EE_HIT] += 1
+            if h % 2 == 0:
+                c[_EE_EVEN] += 1
+            else:
+                c[_EE_ODD] += 1
+                if c[_EE_ODD] <= c[_CAP]:
+                    out_ee[c[_EE_AT], 0] = a
+                    out_ee[c[_EE_AT], 1] = b
+                    c[_EE_AT] += 1
+
+
+@njit(cache=True, inline="always")
+def _ok(kind, a, b, boxes_a, boxes_b, same, tri, edges):
+    if same and b <= a:
+        return False
+    if not _overlap(boxes_a, a, boxes_b, b):
+        return False
+    if kind == 0:
+        return not (tri[b, 0] == a or tri[b, 1] == a or tri[b, 2] == a)
+    return not _share_vertex(edges, a, edges, b)
+
+
+@njit(cache=True)
+def _sweep_test(kind, boxes_a, boxes_b, la, lb, na, nb, d, same, x0, x1, tri, edges, tol, out, c, out_vt,
+                out_ee):
+    """:func:`.broad._sweep`, testing each overlapping pair instead of writing it."""
+    ia = 0
+    ib = 0
+    while ia < na and ib < nb:
+        a = la[ia]
+        b = lb[ib]
+        if boxes_a[a, d] <= boxes_b[b, d]:
+            top = boxes_a[a, d + 3]
+            k = ib
+            while k < nb and boxes_b[lb[k], d] <= top:
+                if _ok(kind, a, lb[k], boxes_a, boxes_b, same, tri, edges):
+                    _test(kind, a, lb[k], x0, x1, tri, edges, tol, out, c, out_vt, out_ee)
+                k += 1
+            ia += 1
+        else:
+            top = boxes_b[b, d + 3]
+            k = ia
+            while k < na and boxes_a[la[k], d] <= top:
+                if _ok(kind, la[k], b, boxes_a, boxes_b, same, tri, edges):
+                    _test(kind, la[k], b, x0, x1, tri, edges, tol, out, c, out_vt, out_ee)
+                k += 1
+            ib += 1
+
+
+@njit(cache=True)
+def _region_list(boxes, order, lo, hi, d, r, lst):
+    """The elements ``order[d, lo:hi]`` (sorted on axis d) whose boxes overlap box ``r``, into ``lst``."""
+    n = 0
+    for k in range(lo, hi):
+        e = order[d, k]
+        if (boxes[e, 0] <= r[3] and boxes[e, 3] >= r[0] and boxes[e, 1] <= r[4] and boxes[e, 4] >= r[1]
+                and boxes[e, 2] <= r[5] and boxes[e, 5] >= r[2]):
+            lst[n] = e
+            n += 1
+    return n
+
+
+@njit(cache=True)
+def _pair_parts(kind, p, q, boxes_a, boxes_b, pa, pb, oa, ob, sa, sb, same, x0, x1, tri, edges, tol,
+                la, lb, r, out, c, out_vt, out_ee):
+    """Test the elements of part p (``a`` set) against those of part q (``b`` set) that reach into
+    the intersection of the two parts' boxes."""
+    for d in range(3):
+        r[d] = max(pa[p, d], pb[q, d])
+        r[d + 3] = min(pa[p, d + 3], pb[q, d + 3])
+    if r[0] > r[3] or r[1] > r[4] or r[2] > r[5]:
+        return
+    d = 0
+    if r[4] - r[1] > r[3] - r[0]:
+        d = 1
+    if r[5] - r[2] > max(r[3] - r[0], r[4] - r[1]):
+        d = 2
+    na = _region_list(boxes_a, oa, sa[p], sa[p + 1], d, r, la)
+    nb = _region_list(boxes_b, ob, sb[q], sb[q + 1], d, r, lb)
+    _sweep_test(kind, boxes_a, boxes_b, la, lb, na, nb, d, same, x0, x1, tri, edges, tol, out, c, out_vt, out_ee)
+
+
+@njit(cache=True, parallel=True)
+def _probe_kernel(x0, x1, tri, edges, tol, sv, st, se, vb_l, tb_l, eb_l, pv_l, pt_l, pe_l, ov_l, ot_l, oe_l,
+                  vb, tb, eb, pv, pt, pe, ov, ot, oe, vt_start, vt_nbr, ee_start, ee_nbr, want, out_vt, out_ee,
+                  cursors):
+    """Per part (those ``want`` flags): its own pairs (moving-frame boxes ``*_l``) and its pairs
+    with the parts listed for it (scene boxes); (n_parts, :data:`_N_COUNTERS`) counters, started
+    from ``cursors`` (where each part writes its crossing pairs into ``out_vt`` / ``out_ee``, and
+    how many it may write)."""
+    n_parts = sv.shape[0] - 1
+    big = 1
+    for p in range(n_parts):
+        big = max(big, sv[p + 1] - sv[p], st[p + 1] - st[p], se[p + 1] - se[p])
+    counts = np.zeros((n_parts, _N_COUNTERS), np.int64)
+    counts[:] = cursors
+    for p in prange(n_parts):
+        if not want[p]:
+            continue
+        la = np.empty(big, np.int32)
+        lb = np.empty(big, np.int32)
+        r = np.empty(6)
+        out = np.zeros(4)
+        c = counts[p]
+        _pair_parts(0, p, p, vb_l, tb_l, pv_l, pt_l, ov_l, ot_l, sv, st, False, x0, x1, tri, edges, tol,
+                    la, lb, r, out, c, out_vt, out_ee)
+        _pair_parts(1, p, p, eb_l, eb_l, pe_l, pe_l, oe_l, oe_l, se, se, True, x0, x1, tri, edges, tol,
+                    la, lb, r, out, c, out_vt, out_ee)
+        for t in range(vt_start[p], vt_start[p + 1]):
+            _pair_parts(0, p, vt_nbr[t], vb, tb, pv, pt, ov, ot, sv, st, False, x0, x1, tri, edges, tol,
+                        la, lb, r, out, c, out_vt, out_ee)
+        for t in range(ee_start[p], ee_start[p + 1]):
+            _pair_parts(1, p, ee_nbr[t], eb, eb, pe, pe, oe, oe, se, se, True, x0, x1, tri, edges, tol,
+                        la, lb, r, out, c, out_vt, out_ee)
+    return counts
