@@ -518,40 +518,6 @@ def test_split_broad_phase_finds_the_same_contacts():
     assert (pa[:, 0] == pa[:, 3]).any() and (pa[:, 0] != pa[:, 3]).any()
 
 
-def test_box_pairs_by_part_match_the_grid_and_brute_force():
-    """The part-by-part sweep gives the grid's pairs, in the same (a, b) order, for pairs of two
-    box sets and within one set, with the vertex-sharing filter and every part mode; parts that
-    overlap, parts far apart, an empty part and a part of one box included."""
-    from inflo.tools.collide.broad import (PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, box_pairs_brute,
-                                           box_pairs_by_part, parts_grouped)
-
-    rng = np.random.default_rng(5)
-    sizes = [40, 0, 1, 60, 35, 50]  # part 1 empty, part 2 a single box
-    part = np.repeat(np.arange(len(sizes)), sizes).astype(np.int32)
-    centre = rng.random((len(sizes), 3)) * 0.6
-    centre[5] += 3.0  # far from every other part
-    lo = centre[part] + rng.random((len(part), 3)) * 0.3
-    b = np.concatenate([lo, lo + rng.random((len(part), 3)) * 0.08], axis=1)
-    verts = rng.integers(0, 120, (len(part), 2)).astype(np.int32)
-    assert parts_grouped(part) and not parts_grouped(part[::-1])
-    ref = box_pairs_brute(b, b, True)
-    same_part = part[ref[:, 0]] == part[ref[:, 1]]
-    for mode, keep in ((PARTS_ANY, np.ones(len(ref), bool)), (PARTS_SAME, same_part), (PARTS_CROSS, ~same_part)):
-        got = box_pairs_by_part(b, part, None, None, parts_mode=mode)
-        np.testing.assert_array_equal(got, ref[keep])
-        grid = BoxGrid(b, 0.1, b[:, :3].min(axis=0), verts, parts=part)
-        want = grid.query(b, same=True, vertices=verts, parts=part, parts_mode=mode)
-        np.testing.assert_array_equal(box_pairs_by_part(b, part, None, None, vertices_a=verts, parts_mode=mode),
-                                      want)
-    # two sets: 'vertices' (points' boxes) against these boxes
-    pts = rng.random((200, 3)) * 0.9
-    vpart = np.sort(rng.integers(0, len(sizes), 200)).astype(np.int32)
-    pb = np.concatenate([pts - 0.01, pts + 0.01], axis=1)
-    got = box_pairs_by_part(pb, vpart, b, part)
-    np.testing.assert_array_equal(got, box_pairs_brute(pb, b, False))
-    assert len(got) and len(ref) and same_part.any() and (~same_part).any()
-
-
 def _crowd(seed=2):
     """Six crumpled sheets (parts) in a stack, two of them passing through each other over the step,
     one carried far: contacts within and between parts."""

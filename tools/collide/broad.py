@@ -30,7 +30,6 @@ __all__ = [
     "PARTS_SAME",
     "PARTS_CROSS",
     "lattice_cell_size",
-    "box_pairs_by_part",
     "parts_grouped",
 ]
 
@@ -468,76 +467,21 @@ def box_pairs_brute(boxes_a, boxes_b, same):
 
 
 # --------------------------------------------------------------------------------------------------
-# All pairs of boxes grouped by part: sweep and prune within parts and between overlapping parts
+# Boxes grouped by part (florets): the tables of the part-by-part sweep of :mod:`.probe`
 # --------------------------------------------------------------------------------------------------
 
-#: :func:`box_pairs_by_part` is used where no part has more elements than this (one big part:
-#: one long sweep, slower than the grid)
+#: the part-by-part sweep (:mod:`.probe`) is used where no part has more elements than this (one
+#: big part: one long sweep, slower than the grid)
 PART_SWEEP_MAX_ELEMENTS = 8192
 
 
 def parts_grouped(part: np.ndarray | None) -> bool:
     """Whether the (k,) element parts are grouped in non-decreasing order (every part's elements
-    contiguous, parts in increasing order), as :func:`box_pairs_by_part` needs."""
+    contiguous, parts in increasing order), as the part-by-part sweep (:mod:`.probe`) needs."""
     if part is None:
         return False
     p = np.asarray(part)
     return len(p) == 0 or (p.min() >= 0 and bool(np.all(p[1:] >= p[:-1])))
-
-
-def box_pairs_by_part(boxes_a: np.ndarray, part_a: np.ndarray, boxes_b: np.ndarray | None, part_b: np.ndarray,
-                      *, vertices_a: np.ndarray | None = None, vertices_b: np.ndarray | None = None,
-                      parts_mode: int = PARTS_ANY) -> np.ndarray:
-    """All pairs of overlapping boxes (closed: touching counts), found part by part: the same pairs
-    in the same (a, b) order as :meth:`BoxGrid.query` over the same boxes, without a grid.
-
-    A floret is a few hundred elements in a box of its own. Each part's boxes are sorted once
-    along each axis; the pairs within a part are found by sweep and prune along the axis of the
-    part's largest extent, the pairs of two parts (only where the two parts' boxes overlap) by a
-    sweep of the elements of each that reach into the other's box, along the longest axis of the
-    two boxes' intersection. Work goes with the pairs and the florets' boundaries, not with the
-    cells a box visits (the grid's cost in the dense growing head: most pairs are of one floret,
-    in its tightly folded bud).
-
-    Parameters
-    ----------
-    boxes_a : (na, 6) float64
-    part_a : (na,) int
-        Part of each box, non-decreasing (:func:`parts_grouped`).
-    boxes_b : (nb, 6) float64 or None
-        None: pairs within ``boxes_a``, ``a < b`` only.
-    part_b : (nb,) int
-        As ``part_a`` (ignored when ``boxes_b`` is None).
-    vertices_a, vertices_b : (na, k), (nb, m) int32 or None
-        The elements' mesh vertices: pairs sharing one are left out (both or neither).
-    parts_mode : int
-        :data:`PARTS_ANY`, :data:`PARTS_SAME` (pairs within one part) or :data:`PARTS_CROSS`
-        (pairs of two parts).
-
-    Returns
-    -------
-    (k, 2) int32, sorted by (a, b).
-    """
-    a = np.ascontiguousarray(boxes_a, dtype=np.float64).reshape(-1, 6)
-    pa = np.ascontiguousarray(part_a, dtype=np.int64)
-    same = boxes_b is None
-    b = a if same else np.ascontiguousarray(boxes_b, dtype=np.float64).reshape(-1, 6)
-    pb = pa if same else np.ascontiguousarray(part_b, dtype=np.int64)
-    if len(a) == 0 or len(b) == 0:
-        return np.zeros((0, 2), np.int32)
-    va = _NO_VERTS if vertices_a is None else np.ascontiguousarray(vertices_a, dtype=np.int32)
-    vb = _NO_VERTS if vertices_b is None or vertices_a is None else np.ascontiguousarray(vertices_b, dtype=np.int32)
-    if same:
-        vb = va
-    n_parts = int(max(pa[-1], pb[-1])) + 1
-    sa = _part_starts(pa, n_parts)
-    sb = sa if same else _part_starts(pb, n_parts)
-    ba = _part_boxes(a, sa)
-    bb = ba if same else _part_boxes(b, sb)
-    oa = _axis_orders(a, sa)
-    ob = oa if same else _axis_orders(b, sb)
-    nbr_start, nbr = _overlapping_parts(ba, bb, same, int(parts_mode))
-    return _pairs_by_part(a, b, sa, sb, ba, bb, oa, ob, nbr_start, nbr, same, va, vb)
 
 
 @njit(cache=True)
@@ -610,129 +554,3 @@ def _overlapping_parts(ba, bb, same, mode):
                     out[fill[p]] = q
                     fill[p] += 1
     return counts, out
-
-
-@njit(cache=True, inline="always")
-def _pair_ok(a, b, boxes_a, boxes_b, same, verts_a, verts_b):
-    if same and b <= a:
-        return False
-    if not _overlap(boxes_a, a, boxes_b, b):
-        return False
-    if verts_a.shape[0] and _share_vertex(verts_a, a, verts_b, b):
-        return False
-    return True
-
-
-@njit(cache=True)
-def _sweep(boxes_a, boxes_b, la, lb, na, nb, d, same, verts_a, verts_b, out, base, limit):
-    """Sweep and prune of the elements ``la[:na]`` against ``lb[:nb]`` (each sorted by their
-    boxes' minimum on axis ``d``): every overlapping pair tested once. Pairs are written at
-    ``out[base:]`` while below row ``limit``; returns their number."""
-    n = 0
-    ia = 0
-    ib = 0
-    while ia < na and ib < nb:
-        a = la[ia]
-        b = lb[ib]
-        if boxes_a[a, d] <= boxes_b[b, d]:
-            top = boxes_a[a, d + 3]
-            k = ib
-            while k < nb and boxes_b[lb[k], d] <= top:
-                bk = lb[k]
-                if _pair_ok(a, bk, boxes_a, boxes_b, same, verts_a, verts_b):
-                    if base + n < limit:
-                        out[base + n, 0] = a
-                        out[base + n, 1] = bk
-                    n += 1
-                k += 1
-            ia += 1
-        else:
-            top = boxes_b[b, d + 3]
-            k = ia
-            while k < na and boxes_a[la[k], d] <= top:
-                ak = la[k]
-                if _pair_ok(ak, b, boxes_a, boxes_b, same, verts_a, verts_b):
-                    if base + n < limit:
-                        out[base + n, 0] = ak
-                        out[base + n, 1] = b
-                    n += 1
-                k += 1
-            ib += 1
-    return n
-
-
-@njit(cache=True)
-def _part_pairs(p, boxes_a, boxes_b, sa, sb, ba, bb, oa, ob, nbr_start, nbr, same, verts_a, verts_b,
-                la, lb, out, base, limit):
-    """The pairs of part p's ``a`` elements with the ``b`` elements of its overlapping parts."""
-    n = 0
-    for t in range(nbr_start[p], nbr_start[p + 1]):
-        q = nbr[t]
-        # the region the pairs can be in: the two parts' boxes' intersection
-        lo0 = max(ba[p, 0], bb[q, 0])
-        lo1 = max(ba[p, 1], bb[q, 1])
-        lo2 = max(ba[p, 2], bb[q, 2])
-        hi0 = min(ba[p, 3], bb[q, 3])
-        hi1 = min(ba[p, 4], bb[q, 4])
-        hi2 = min(ba[p, 5], bb[q, 5])
-        d = 0
-        if hi1 - lo1 > hi0 - lo0:
-            d = 1
-        if hi2 - lo2 > max(hi0 - lo0, hi1 - lo1):
-            d = 2
-        na = 0
-        for k in range(sa[p], sa[p + 1]):
-            e = oa[d, k]
-            if (boxes_a[e, 0] <= hi0 and boxes_a[e, 3] >= lo0 and boxes_a[e, 1] <= hi1 and boxes_a[e, 4] >= lo1
-                    and boxes_a[e, 2] <= hi2 and boxes_a[e, 5] >= lo2):
-                la[na] = e
-                na += 1
-        nb = 0
-        for k in range(sb[q], sb[q + 1]):
-            e = ob[d, k]
-            if (boxes_b[e, 0] <= hi0 and boxes_b[e, 3] >= lo0 and boxes_b[e, 1] <= hi1 and boxes_b[e, 4] >= lo1
-                    and boxes_b[e, 2] <= hi2 and boxes_b[e, 5] >= lo2):
-                lb[nb] = e
-                nb += 1
-        n += _sweep(boxes_a, boxes_b, la, lb, na, nb, d, same, verts_a, verts_b, out, base + n, limit)
-    return n
-
-
-@njit(cache=True, parallel=True)
-def _pairs_by_part(boxes_a, boxes_b, sa, sb, ba, bb, oa, ob, nbr_start, nbr, same, verts_a, verts_b):
-    """:func:`box_pairs_by_part`'s kernel: parts in parallel; each part's pairs counted, then
-    written into its own block and sorted there, so the output is in (a, b) order."""
-    n_parts = sa.shape[0] - 1
-    big_a = 0
-    big_b = 0
-    for p in range(n_parts):
-        big_a = max(big_a, sa[p + 1] - sa[p])
-        big_b = max(big_b, sb[p + 1] - sb[p])
-    counts = np.zeros(n_parts + 1, np.int64)
-    dummy = np.empty((0, 2), np.int32)
-    for p in prange(n_parts):
-        la = np.empty(big_a, np.int32)
-        lb = np.empty(big_b, np.int32)
-        counts[p + 1] = _part_pairs(p, boxes_a, boxes_b, sa, sb, ba, bb, oa, ob, nbr_start, nbr, same,
-                                    verts_a, verts_b, la, lb, dummy, 0, 0)
-    for p in range(n_parts):
-        counts[p + 1] += counts[p]
-    out = np.empty((counts[n_parts], 2), np.int32)
-    nb_all = boxes_b.shape[0]
-    for p in prange(n_parts):
-        la = np.empty(big_a, np.int32)
-        lb = np.empty(big_b, np.int32)
-        lo = counts[p]
-        hi = counts[p + 1]
-        _part_pairs(p, boxes_a, boxes_b, sa, sb, ba, bb, oa, ob, nbr_start, nbr, same, verts_a, verts_b,
-                    la, lb, out, lo, hi)
-        if hi - lo > 1:
-            key = np.empty(hi - lo, np.int64)
-            for k in range(hi - lo):
-                key[k] = np.int64(out[lo + k, 0]) * nb_all + out[lo + k, 1]
-            order = np.argsort(key)
-            block = out[lo:hi].copy()
-            for k in range(hi - lo):
-                out[lo + k, 0] = block[order[k], 0]
-                out[lo + k, 1] = block[order[k], 1]
-    return out

@@ -9,22 +9,24 @@ two thirds of the step.
 
 :func:`probe_contacts` answers round 0's question directly. The mesh is taken floret by floret
 (the parts, grouped: :func:`.broad.parts_grouped`): the pairs of one floret are found by sweep and
-prune in the floret's own box, the pairs of two florets only where their boxes overlap
-(:func:`.broad.box_pairs_by_part`'s walk), and each overlapping pair is tested at once by the
+prune in the floret's own box, the pairs of two florets only where their boxes overlap (the
+elements of each that reach into the other's box), and each overlapping pair is tested at once by the
 same continuous tests as the narrow phase (:func:`.ccd.vertex_triangle_ccd`,
 :func:`.ccd.edge_edge_ccd`), without writing the pair. The candidate pairs are exactly round 0's
 (the same boxes, the same filters: a shared vertex, within / across parts, the floret's moving
 frame of :class:`.resolve._SplitBroadPhase`), so where the probe finds no contact round 0 finds
-none, and its counts are round 0's log figures. Where it finds one, the step runs its rounds as
-before (nothing of the probe is reused: the answer is the same either way).
+none, and its counts are round 0's log figures; the pairs it finds crossing are round 0's contacts
+(in their order). The retry rounds' broad phase is then started from round 0's positions only if a
+retry comes (:class:`.resolve._ProbedBroadPhase`).
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
 
-from .broad import (PART_SWEEP_MAX_ELEMENTS, PARTS_CROSS, _axis_orders, _overlap, _overlapping_parts, _part_boxes,
+from .broad import (PART_SWEEP_MAX_ELEMENTS, PARTS_ANY, PARTS_CROSS, _axis_orders, _overlap, _overlapping_parts, _part_boxes,
                     _part_starts, _share_vertex, edge_boxes, parts_grouped, triangle_boxes, vertex_boxes)
+from .tritri import _pair_flag, _share_vertex as _tri_share_vertex
 from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
 
 __all__ = ["probe_contacts", "can_probe"]
@@ -216,7 +218,9 @@ def _ok(kind, a, b, boxes_a, boxes_b, same, tri, edges):
 @njit(cache=True)
 def _sweep_test(kind, boxes_a, boxes_b, la, lb, na, nb, d, same, x0, x1, tri, edges, tol, out, c, out_vt,
                 out_ee):
-    """:func:`.broad._sweep`, testing each overlapping pair instead of writing it."""
+    """Sweep and prune of the elements ``la[:na]`` against ``lb[:nb]`` (each sorted by their
+    boxes' minimum on axis ``d``), testing every pair whose boxes overlap once (with ``same``, the
+    two lists are one set: each pair comes in both orders, kept as ``a < b``)."""
     ia = 0
     ib = 0
     while ia < na and ib < nb:
@@ -305,4 +309,136 @@ def _probe_kernel(x0, x1, tri, edges, tol, sv, st, se, vb_l, tb_l, eb_l, pv_l, p
         for t in range(ee_start[p], ee_start[p + 1]):
             _pair_parts(1, p, ee_nbr[t], eb, eb, pe, pe, oe, oe, se, se, True, x0, x1, tri, edges, tol,
                         la, lb, r, out, c, out_vt, out_ee)
+    return counts
+
+
+# --------------------------------------------------------------------------------------------------
+# The exact static test, part by part (the written frames' check, the sanity checks)
+# --------------------------------------------------------------------------------------------------
+
+
+def intersecting_pairs_by_part(vertex_x: np.ndarray, tri_indices: np.ndarray, tri_part: np.ndarray) -> np.ndarray:
+    """:func:`.tritri.intersecting_pairs` (every pair of intersecting triangles sharing no vertex,
+    exact) for triangles grouped by part: the pairs within a part by sweep and prune in the part's
+    box, those of two parts where their boxes overlap, each tested as it is found (no pair list:
+    in a canopy most candidate pairs are neighbours in one floret, cheaper to test than to write).
+
+    Parameters
+    ----------
+    vertex_x : (n, 3) float64
+    tri_indices : (m, 3) int32
+    tri_part : (m,) int
+        Non-decreasing (:func:`.broad.parts_grouped`).
+
+    Returns
+    -------
+    (k, 2) int32
+        Pairs ``(i, j)``, ``i < j``, sorted (as :func:`.tritri.intersecting_pairs`).
+    """
+    from .tritri import _decide
+
+    x = np.ascontiguousarray(vertex_x, dtype=np.float64)
+    tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
+    if len(tri) < 2:
+        return np.zeros((0, 2), np.int32)
+    tp = np.ascontiguousarray(tri_part, dtype=np.int64)
+    n_parts = int(tp[-1]) + 1
+    tb = triangle_boxes(x, x, tri, 0.0)
+    st = _part_starts(tp, n_parts)
+    pt = _part_boxes(tb, st)
+    ot = _axis_orders(tb, st)
+    start, nbr = _overlapping_parts(pt, pt, True, PARTS_ANY)
+    counts = _static_kernel(x, tri, tb, pt, ot, st, start, nbr, np.zeros((0, 2), np.int32),
+                            np.zeros(0, np.int64))
+    if counts.sum() == 0:
+        return np.zeros((0, 2), np.int32)
+    at = np.zeros(n_parts + 1, np.int64)
+    at[1:] = np.cumsum(counts)
+    flagged = np.zeros((int(at[-1]), 2), np.int32)
+    want = counts > 0
+    _static_kernel(x, tri, tb, pt, ot, st, start, nbr, flagged, np.append(np.where(want, at[:-1], -1), 0))
+    flagged = _sorted(flagged)
+    flags = _pair_flags(x, tri, flagged)
+    return _decide(x, tri, flagged, flags)
+
+
+@njit(cache=True)
+def _pair_flags(x, tri, pairs):
+    out = np.zeros(pairs.shape[0], np.int8)
+    for k in range(pairs.shape[0]):
+        out[k] = _pair_flag(x, tri, pairs[k, 0], pairs[k, 1])
+    return out
+
+
+@njit(cache=True)
+def _static_pair_parts(p, q, x, tri, tb, pt, ot, st, la, lb, r, out, base, n):
+    """Test the triangles of part p against those of part q (p <= q) that reach into the
+    intersection of their boxes, pairs ``a < b``; a pair the float test does not call disjoint
+    (intersecting or undecided) is counted, and written at ``out[base + n]`` where ``base >= 0``.
+    Returns the new count."""
+    for d in range(3):
+        r[d] = max(pt[p, d], pt[q, d])
+        r[d + 3] = min(pt[p, d + 3], pt[q, d + 3])
+    if r[0] > r[3] or r[1] > r[4] or r[2] > r[5]:
+        return n
+    d = 0
+    if r[4] - r[1] > r[3] - r[0]:
+        d = 1
+    if r[5] - r[2] > max(r[3] - r[0], r[4] - r[1]):
+        d = 2
+    na = _region_list(tb, ot, st[p], st[p + 1], d, r, la)
+    nb = _region_list(tb, ot, st[q], st[q + 1], d, r, lb)
+    ia = 0
+    ib = 0
+    while ia < na and ib < nb:
+        a = la[ia]
+        b = lb[ib]
+        first_a = tb[a, d] <= tb[b, d]
+        top = tb[a, d + 3] if first_a else tb[b, d + 3]
+        k = ib if first_a else ia
+        while True:
+            if first_a:
+                if k >= nb or tb[lb[k], d] > top:
+                    break
+                i, j = a, lb[k]
+            else:
+                if k >= na or tb[la[k], d] > top:
+                    break
+                i, j = la[k], b
+            k += 1
+            if j <= i or not _overlap(tb, i, tb, j) or _tri_share_vertex(tri, i, j):
+                continue
+            if _pair_flag(x, tri, i, j) != 0:
+                if base >= 0:
+                    out[base + n, 0] = i
+                    out[base + n, 1] = j
+                n += 1
+        if first_a:
+            ia += 1
+        else:
+            ib += 1
+    return n
+
+
+@njit(cache=True, parallel=True)
+def _static_kernel(x, tri, tb, pt, ot, st, start, nbr, out, base):
+    """Per part p: its own pairs and those with the parts q > p listed for it; (n_parts,) counts
+    of pairs not certainly disjoint, written to ``out`` from ``base[p]`` where that is >= 0
+    (``base`` empty: count only)."""
+    n_parts = st.shape[0] - 1
+    big = 1
+    for p in range(n_parts):
+        big = max(big, st[p + 1] - st[p])
+    counts = np.zeros(n_parts, np.int64)
+    for p in prange(n_parts):
+        b0 = base[p] if base.shape[0] > n_parts else -1
+        if base.shape[0] > n_parts and b0 < 0:
+            continue
+        la = np.empty(big, np.int32)
+        lb = np.empty(big, np.int32)
+        r = np.empty(6)
+        n = 0
+        for t in range(start[p], start[p + 1]):
+            n = _static_pair_parts(p, nbr[t], x, tri, tb, pt, ot, st, la, lb, r, out, b0, n)
+        counts[p] = n
     return counts

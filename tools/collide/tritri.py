@@ -282,14 +282,29 @@ def _test_pair(x, tri, pairs, flags, k):
     if _share_vertex(tri, i, j):
         flags[k] = 0
         return
-    a0, a1, a2 = x[tri[i, 0]], x[tri[i, 1]], x[tri[i, 2]]
-    b0, b1, b2 = x[tri[j, 0]], x[tri[j, 1]], x[tri[j, 2]]
+    flags[k] = _pair_flag(x, tri, i, j)
+
+
+@njit(cache=True)
+def _pair_flag(x, tri, i, j):
+    """0 disjoint, 1 intersecting, 2 undecided in float64, for triangles i and j. The corners are
+    tuples, not row views of ``x`` (a reference count each, more than the test of most pairs),
+    and a plane that certainly separates the two is tried first: most candidate pairs are
+    neighbours in one floret, one on one side of the other (the same flag either way: a certain
+    side is what :func:`certified` + :func:`triangles_intersect` or :func:`separated` find)."""
+    a0 = (x[tri[i, 0], 0], x[tri[i, 0], 1], x[tri[i, 0], 2])
+    a1 = (x[tri[i, 1], 0], x[tri[i, 1], 1], x[tri[i, 1], 2])
+    a2 = (x[tri[i, 2], 0], x[tri[i, 2], 1], x[tri[i, 2], 2])
+    b0 = (x[tri[j, 0], 0], x[tri[j, 0], 1], x[tri[j, 0], 2])
+    b1 = (x[tri[j, 1], 0], x[tri[j, 1], 1], x[tri[j, 1], 2])
+    b2 = (x[tri[j, 2], 0], x[tri[j, 2], 1], x[tri[j, 2], 2])
+    if _certainly_one_side(a0, a1, a2, b0, b1, b2) or _certainly_one_side(b0, b1, b2, a0, a1, a2):
+        return 0
     if certified(a0, a1, a2, b0, b1, b2):
-        flags[k] = 1 if triangles_intersect(a0, a1, a2, b0, b1, b2) else 0
-    elif separated(a0, a1, a2, b0, b1, b2):
-        flags[k] = 0
-    else:
-        flags[k] = 2
+        return 1 if triangles_intersect(a0, a1, a2, b0, b1, b2) else 0
+    if separated(a0, a1, a2, b0, b1, b2):
+        return 0
+    return 2
 
 
 @njit(cache=True, parallel=True)
@@ -327,27 +342,36 @@ def _decide(x, tri, pairs, flags) -> np.ndarray:
     return pairs[flags == 1]
 
 
-def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_size: float | None = None) -> np.ndarray:
+def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_size: float | None = None,
+                       tri_part: np.ndarray | None = None) -> np.ndarray:
     """All pairs of intersecting triangles that share no vertex (exact static test).
 
-    Broad phase: :func:`inflo.tools.collide.broad.box_pairs` over the triangles' boxes.
+    Broad phase: :func:`inflo.tools.collide.broad.box_pairs` over the triangles' boxes; with
+    ``tri_part`` (the part, a canopy's floret, of every triangle) grouped by part, the part-by-part
+    sweep of :func:`inflo.tools.collide.probe.intersecting_pairs_by_part` (the same pairs).
 
     Parameters
     ----------
     vertex_x : (n, 3) float64
     tri_indices : (m, 3) int32
+    tri_part : (m,) int or None
 
     Returns
     -------
     (k, 2) int32
         Pairs ``(i, j)``, ``i < j``, sorted.
     """
-    from .broad import box_pairs, triangle_boxes
+    from .broad import PART_SWEEP_MAX_ELEMENTS, box_pairs, parts_grouped, triangle_boxes
 
     x = np.ascontiguousarray(vertex_x, dtype=np.float64)
     tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
     if len(tri) < 2:
         return np.zeros((0, 2), np.int32)
+    if (tri_part is not None and len(tri_part) == len(tri) and parts_grouped(tri_part)
+            and int(np.bincount(np.asarray(tri_part)).max()) <= PART_SWEEP_MAX_ELEMENTS):
+        from .probe import intersecting_pairs_by_part
+
+        return intersecting_pairs_by_part(x, tri, tri_part)
     boxes = triangle_boxes(x, x, tri, 0.0)
     pairs = box_pairs(boxes, None, cell_size=cell_size)
     return _exact_pairs(x, tri, pairs)

@@ -265,7 +265,9 @@ class Simulation:
 
     def intersecting(self, x: np.ndarray) -> np.ndarray:
         """Exact static test of the present canopy: intersecting triangle pairs (model indices)."""
-        return self.global_tris(intersecting_pairs(x, self.present.tri))
+        ids = self.present.tri_ids
+        part = self.model.tri_floret if ids is None else self.model.tri_floret[ids]
+        return self.global_tris(intersecting_pairs(x, self.present.tri, tri_part=part))
 
     def emerge(self, x: np.ndarray, frame: float) -> tuple[list, list]:
         """Let the florets due by ``frame`` emerge where they intersect nothing (module doc).
@@ -666,23 +668,23 @@ def _fingerprint(params: CanopyParams, model: Model, inputs: dict | None = None)
 WRITE_FORMATS = ("%.6f", "%.9f", "%.12f", "%.17g")
 
 
-def written_format(x: np.ndarray, faces: np.ndarray, formats=WRITE_FORMATS) -> str:
+def written_format(x: np.ndarray, faces: np.ndarray, formats=WRITE_FORMATS, tri_part: np.ndarray | None = None) -> str:
     """The first of ``formats`` whose written coordinates keep the canopy as collision-free as
     ``x`` is: rounding to 6 decimals can make two petals that lie flat on each other, closer than
     the rounding, cross (a written-frame guarantee, issue 14). The written numbers are parsed back
     and tested exactly (:func:`intersecting_pairs`, touching counts); where ``x`` itself has
     intersecting pairs (the sanity check reports them), more digits cannot help and the first
-    format is kept."""
+    format is kept. ``tri_part``: the floret of each face (the exact test goes floret by floret)."""
     n = None
     for fmt in formats:
         if fmt == formats[-1]:
             return fmt
         xr = as_written(x, fmt)
-        found = len(intersecting_pairs(xr, faces))
+        found = len(intersecting_pairs(xr, faces, tri_part=tri_part))
         if found == 0:
             return fmt
         if n is None:
-            n = len(intersecting_pairs(x, faces))
+            n = len(intersecting_pairs(x, faces, tri_part=tri_part))
             if n >= found:
                 return formats[0]
     return formats[-1]
@@ -699,7 +701,7 @@ def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndar
         faces, face_group = faces[tri_on], face_group[tri_on]
         if face_material is not None:
             face_material = face_material[tri_on]
-    fmt = written_format(x, faces) if exact else WRITE_FORMATS[0]
+    fmt = written_format(x, faces, tri_part=face_group) if exact else WRITE_FORMATS[0]
     present = len(np.unique(face_group))
     mesh = ObjMesh(
         vertices=x,
