@@ -28,6 +28,7 @@ __all__ = [
     "write_obj_sequence",
     "list_obj_sequence",
     "as_written",
+    "written_vertices",
     "write_mtl",
     "FLOAT_FMT",
     "MTL_NAME",
@@ -340,20 +341,31 @@ def _fmt_rows(arr: np.ndarray, prefix: str, fmt: str, block: int = 4096) -> str:
 
 def as_written(arr: np.ndarray, fmt: str = FLOAT_FMT) -> np.ndarray:
     """``arr`` (n, c) as :func:`write_obj` writes it with ``fmt`` and a reader reads it back."""
+    return written_vertices(arr, fmt)[0]
+
+
+def written_vertices(arr: np.ndarray, fmt: str = FLOAT_FMT) -> tuple[np.ndarray, str]:
+    """(``arr`` as written with ``fmt`` and read back, the ``v`` lines :func:`write_obj` writes
+    for it): a caller that checks the written numbers hands the text on (``vertex_text``) rather
+    than formatting twice."""
     arr = np.asarray(arr, dtype=np.float64)
     if arr.size == 0:
-        return arr.copy()
-    return np.array(_fmt_rows(arr, "", fmt).split(), dtype=np.float64).reshape(arr.shape)
+        return arr.copy(), ""
+    text = _fmt_rows(arr, "v ", fmt)
+    values = np.array(text.replace("v ", "").split(), dtype=np.float64)
+    return values.reshape(arr.shape), text
 
 
 def write_obj(path, mesh: ObjMesh, *, header: str | None = None, fmt: str = FLOAT_FMT,
-              mtllib: str | None = MTL_NAME) -> None:
+              mtllib: str | None = MTL_NAME, vertex_text: str | None = None) -> None:
     """Write ``mesh`` to ``path`` atomically, vertices in order, faces 1-based.
 
     Faces are written grouped as stored; a ``g``/``usemtl`` line is emitted where a face's group
     or material changes. Per-vertex normals are written as ``vn`` with ``f a//a b//b c//c``.
     A mesh with materials names the library ``mtllib`` (None: no ``mtllib`` line) after the
     header; ``s 1`` (one smoothing group: smooth shading) comes before the first face.
+    ``vertex_text``: the ``v`` lines already formatted (:func:`written_vertices` of the vertices
+    with ``fmt``; not with vertex colours).
     """
     _check_mesh(mesh, path)
     parts = []
@@ -363,6 +375,8 @@ def write_obj(path, mesh: ObjMesh, *, header: str | None = None, fmt: str = FLOA
         parts.append(f"mtllib {mtllib}\n")
     if mesh.vertex_colors is not None:
         parts.append(_fmt_rows(np.hstack([mesh.vertices, mesh.vertex_colors]), "v ", fmt))
+    elif vertex_text is not None:
+        parts.append(vertex_text)
     else:
         parts.append(_fmt_rows(mesh.vertices, "v ", fmt))
     if mesh.normals is not None:

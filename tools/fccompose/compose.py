@@ -70,7 +70,7 @@ import numpy as np
 from inflo.formats.atomic import frame_name, remove_stale_frames, write_bytes_atomic, write_text_atomic
 from inflo.formats.errors import InputError
 from inflo.formats.fcc import CanopyParams, check_references
-from inflo.formats.obj import ObjMesh, as_written, write_obj
+from inflo.formats.obj import ObjMesh, write_obj, written_vertices
 from inflo.tools.collide.broad import lattice_cell_size, triangle_boxes
 from inflo.tools.collide.resolve import CollisionResult, default_tolerance, resolve_collisions
 from inflo.tools.collide.tritri import intersecting_pairs, intersecting_pairs_with
@@ -675,19 +675,29 @@ def written_format(x: np.ndarray, faces: np.ndarray, formats=WRITE_FORMATS, tri_
     and tested exactly (:func:`intersecting_pairs`, touching counts); where ``x`` itself has
     intersecting pairs (the sanity check reports them), more digits cannot help and the first
     format is kept. ``tri_part``: the floret of each face (the exact test goes floret by floret)."""
+    return written_text(x, faces, formats, tri_part)[0]
+
+
+def written_text(x: np.ndarray, faces: np.ndarray, formats=WRITE_FORMATS,
+                 tri_part: np.ndarray | None = None) -> tuple[str, str]:
+    """(:func:`written_format`, the ``v`` lines of ``x`` in it): the frame's vertices formatted
+    once, for the check and the file."""
     n = None
+    first = None
     for fmt in formats:
+        xr, text = written_vertices(x, fmt)
+        if first is None:
+            first = (fmt, text)
         if fmt == formats[-1]:
-            return fmt
-        xr = as_written(x, fmt)
+            return fmt, text
         found = len(intersecting_pairs(xr, faces, tri_part=tri_part))
         if found == 0:
-            return fmt
+            return fmt, text
         if n is None:
             n = len(intersecting_pairs(x, faces, tri_part=tri_part))
             if n >= found:
-                return formats[0]
-    return formats[-1]
+                return first
+    return first
 
 
 def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndarray | None = None,
@@ -701,7 +711,7 @@ def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndar
         faces, face_group = faces[tri_on], face_group[tri_on]
         if face_material is not None:
             face_material = face_material[tri_on]
-    fmt = written_format(x, faces, tri_part=face_group) if exact else WRITE_FORMATS[0]
+    fmt, text = written_text(x, faces, tri_part=face_group) if exact else (WRITE_FORMATS[0], None)
     present = len(np.unique(face_group))
     mesh = ObjMesh(
         vertices=x,
@@ -714,7 +724,8 @@ def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndar
     path = out / frame_name(k, "frame_", ".obj", 4)
     florets = (f"{len(model.florets)} florets" if tri_on is None
                else f"{present} of {len(model.florets)} florets emerged")
-    write_obj(path, mesh, header=f"fccompose canopy, frame {k}: {florets}, {len(faces)} triangles", fmt=fmt)
+    write_obj(path, mesh, header=f"fccompose canopy, frame {k}: {florets}, {len(faces)} triangles", fmt=fmt,
+              vertex_text=text)
     return path
 
 
