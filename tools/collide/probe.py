@@ -50,11 +50,12 @@ def can_probe(tri: np.ndarray, edges: np.ndarray, vertex_part) -> bool:
     tp = vp[tri]
     if (tp != tp[:, :1]).any() or not parts_grouped(tp[:, 0]):
         return False
-    if len(edges):
-        ep = vp[edges]
-        if (ep != ep[:, :1]).any() or not parts_grouped(ep[:, 0]):
-            return False
-    return int(np.bincount(tp[:, 0]).max()) <= PART_SWEEP_MAX_ELEMENTS
+    ep = vp[edges] if len(edges) else None
+    if ep is not None and ((ep != ep[:, :1]).any() or not parts_grouped(ep[:, 0])):
+        return False
+    most = max(int(np.bincount(tp[:, 0]).max()), int(np.bincount(vp).max()),
+               int(np.bincount(ep[:, 0]).max()) if len(edges) else 0)
+    return most <= PART_SWEEP_MAX_ELEMENTS
 
 
 def probe_contacts(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray, edges: np.ndarray, pad: float,
