@@ -404,7 +404,9 @@ def intersecting_pairs_with(vertex_x: np.ndarray, tri_indices: np.ndarray, which
     g = g[g[:, 0] != g[:, 1]]
     if len(g) == 0:
         return np.zeros((0, 2), np.int32)
-    g = np.unique(np.sort(g, axis=1), axis=0).astype(np.int32)
+    g = np.sort(g, axis=1)
+    key = np.unique(g[:, 0] * np.int64(len(tri)) + g[:, 1])  # the sorted distinct rows, as one int64 each
+    g = np.stack([key // len(tri), key % len(tri)], axis=1).astype(np.int32)
     return _exact_pairs(x, tri, g)
 
 
