@@ -24,12 +24,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .broad import (PART_SWEEP_MAX_ELEMENTS, PARTS_ANY, PARTS_CROSS, _axis_orders, _overlap, _overlapping_parts, _part_boxes,
-                    _part_starts, _share_vertex, edge_boxes, parts_grouped, triangle_boxes, vertex_boxes)
-from .tritri import _pair_flag, _share_vertex as _tri_share_vertex
+from .broad import (PART_SWEEP_MAX_ELEMENTS, PARTS_ANY, PARTS_CROSS, _axis_orders, _overlap, _overlapping_parts,
+                    _part_boxes, _part_starts, _share_vertex, edge_boxes, parts_grouped, triangle_boxes,
+                    vertex_boxes)
 from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
+from .tritri import _pair_flag
+from .tritri import _share_vertex as _tri_share_vertex
 
-__all__ = ["probe_contacts", "can_probe"]
+__all__ = ["probe_contacts", "can_probe", "intersecting_pairs_by_part"]
 
 #: per-part counters of :func:`_probe_kernel` (the last three: where the part writes its crossing
 #: pairs, and how many it may write there)
@@ -142,8 +144,10 @@ def probe_contacts(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray, edges: np.nd
         more_ee = np.zeros((n_over * big, 2), np.int32)
         redo = _probe_kernel(*args, over, more_vt, more_ee, again)[over]
         keep = np.arange(big)[None, :]
-        vt = np.concatenate([vt[~np.repeat(over, n_vt)], more_vt.reshape(n_over, big, 2)[keep < redo[:, _VT_ODD][:, None]]])
-        ee = np.concatenate([ee[~np.repeat(over, n_ee)], more_ee.reshape(n_over, big, 2)[keep < redo[:, _EE_ODD][:, None]]])
+        vt = np.concatenate([vt[~np.repeat(over, n_vt)],
+                             more_vt.reshape(n_over, big, 2)[keep < redo[:, _VT_ODD][:, None]]])
+        ee = np.concatenate([ee[~np.repeat(over, n_ee)],
+                             more_ee.reshape(n_over, big, 2)[keep < redo[:, _EE_ODD][:, None]]])
     vt = _sorted(vt)
     ee = _sorted(ee)
     stats = {
