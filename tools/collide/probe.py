@@ -169,10 +169,26 @@ def _sorted(pairs):
 
 
 @njit(cache=True, inline="always")
+def _tally(h, a, b, c, out, hit, even, odd, at):
+    """Count the test's result ``h`` (crossings) of pair (a, b) into the counters ``c`` (columns
+    ``hit``, ``even``, ``odd``); a pair crossing an odd number of times is written to ``out`` at
+    the part's cursor (column ``at``) while the part has written fewer than its cap."""
+    if h > 0:
+        c[hit] += 1
+        if h % 2 == 0:
+            c[even] += 1
+        else:
+            c[odd] += 1
+            if c[odd] <= c[_CAP]:
+                out[c[at], 0] = a
+                out[c[at], 1] = b
+                c[at] += 1
+
+
+@njit(cache=True, inline="always")
 def _test(kind, a, b, x0, x1, tri, edges, tol, out, c, out_vt, out_ee):
-    """The continuous test of pair (a, b): kind 0 vertex a / triangle b, 1 edges a and b; counts
-    into ``c``; a pair crossing an odd number of times is written to ``out_vt`` / ``out_ee`` at
-    the part's cursor while the part has written fewer than its cap."""
+    """The continuous test of pair (a, b): kind 0 vertex a / triangle b, 1 edges a and b
+    (:func:`_tally`)."""
     if kind == 0:
         p = tri[b, 0]
         q = tri[b, 1]
@@ -181,32 +197,14 @@ def _test(kind, a, b, x0, x1, tri, edges, tol, out, c, out_vt, out_ee):
         if vertex_triangle_culled(x0, x1, a, p, q, r):
             return
         h = vertex_triangle_ccd(x0[a], x0[p], x0[q], x0[r], x1[a], x1[p], x1[q], x1[r], tol, out)
-        if h > 0:
-            c[_VT_HIT] += 1
-            if h % 2 == 0:
-                c[_VT_EVEN] += 1
-            else:
-                c[_VT_ODD] += 1
-                if c[_VT_ODD] <= c[_CAP]:
-                    out_vt[c[_VT_AT], 0] = a
-                    out_vt[c[_VT_AT], 1] = b
-                    c[_VT_AT] += 1
+        _tally(h, a, b, c, out_vt, _VT_HIT, _VT_EVEN, _VT_ODD, _VT_AT)
     else:
         c[_EE_CAND] += 1
         if edge_edge_culled(x0, x1, edges[a, 0], edges[a, 1], edges[b, 0], edges[b, 1]):
             return
         h = edge_edge_ccd(x0[edges[a, 0]], x0[edges[a, 1]], x0[edges[b, 0]], x0[edges[b, 1]],
                           x1[edges[a, 0]], x1[edges[a, 1]], x1[edges[b, 0]], x1[edges[b, 1]], tol, out)
-        if h > 0:
-            c[_EE_HIT] += 1
-            if h % 2 == 0:
-                c[_EE_EVEN] += 1
-            else:
-                c[_EE_ODD] += 1
-                if c[_EE_ODD] <= c[_CAP]:
-                    out_ee[c[_EE_AT], 0] = a
-                    out_ee[c[_EE_AT], 1] = b
-                    c[_EE_AT] += 1
+        _tally(h, a, b, c, out_ee, _EE_HIT, _EE_EVEN, _EE_ODD, _EE_AT)
 
 
 @njit(cache=True, inline="always")
@@ -262,21 +260,31 @@ def _region_list(boxes, order, lo, hi, d, r, lst):
     return n
 
 
-@njit(cache=True)
-def _pair_parts(kind, p, q, boxes_a, boxes_b, pa, pb, oa, ob, sa, sb, same, x0, x1, tri, edges, tol,
-                la, lb, r, out, c, out_vt, out_ee):
-    """Test the elements of part p (``a`` set) against those of part q (``b`` set) that reach into
-    the intersection of the two parts' boxes."""
+@njit(cache=True, inline="always")
+def _region(pa, p, pb, q, r):
+    """The intersection of part p's box (``pa``) and part q's (``pb``) into ``r``; returns the axis of
+    its longest side (the sweep's), or -1 where the boxes do not overlap."""
     for d in range(3):
         r[d] = max(pa[p, d], pb[q, d])
         r[d + 3] = min(pa[p, d + 3], pb[q, d + 3])
     if r[0] > r[3] or r[1] > r[4] or r[2] > r[5]:
-        return
+        return -1
     d = 0
     if r[4] - r[1] > r[3] - r[0]:
         d = 1
     if r[5] - r[2] > max(r[3] - r[0], r[4] - r[1]):
         d = 2
+    return d
+
+
+@njit(cache=True)
+def _pair_parts(kind, p, q, boxes_a, boxes_b, pa, pb, oa, ob, sa, sb, same, x0, x1, tri, edges, tol,
+                la, lb, r, out, c, out_vt, out_ee):
+    """Test the elements of part p (``a`` set) against those of part q (``b`` set) that reach into
+    the intersection of the two parts' boxes."""
+    d = _region(pa, p, pb, q, r)
+    if d < 0:
+        return
     na = _region_list(boxes_a, oa, sa[p], sa[p + 1], d, r, la)
     nb = _region_list(boxes_b, ob, sb[q], sb[q + 1], d, r, lb)
     _sweep_test(kind, boxes_a, boxes_b, la, lb, na, nb, d, same, x0, x1, tri, edges, tol, out, c, out_vt, out_ee)
@@ -381,16 +389,9 @@ def _static_pair_parts(p, q, x, tri, tb, pt, ot, st, la, lb, r, out, base, n):
     intersection of their boxes, pairs ``a < b``; a pair the float test does not call disjoint
     (intersecting or undecided) is counted, and written at ``out[base + n]`` where ``base >= 0``.
     Returns the new count."""
-    for d in range(3):
-        r[d] = max(pt[p, d], pt[q, d])
-        r[d + 3] = min(pt[p, d + 3], pt[q, d + 3])
-    if r[0] > r[3] or r[1] > r[4] or r[2] > r[5]:
+    d = _region(pt, p, pt, q, r)
+    if d < 0:
         return n
-    d = 0
-    if r[4] - r[1] > r[3] - r[0]:
-        d = 1
-    if r[5] - r[2] > max(r[3] - r[0], r[4] - r[1]):
-        d = 2
     na = _region_list(tb, ot, st[p], st[p + 1], d, r, la)
     nb = _region_list(tb, ot, st[q], st[q + 1], d, r, lb)
     ia = 0
