@@ -523,8 +523,9 @@ class Renderer:
     def release(self) -> None:
         """Free the GL context and everything in it."""
         if self.ctx is not None:
-            for f in self._fbos:
-                f.release()
+            with self.ctx:
+                for f in self._fbos:
+                    f.release()
             self.ctx.release()
             self.ctx = None
 
@@ -572,6 +573,12 @@ class Renderer:
         """
         if self.ctx is None:
             raise RuntimeError("this Renderer has been released")
+        # this renderer's context current while it draws: a process may hold several (the CLI's
+        # shared one and one of its own), and GL calls go to whichever was made current last
+        with self.ctx:
+            return self._render(meshes, camera, options)
+
+    def _render(self, meshes, camera, options) -> np.ndarray:
         options = options or RenderOptions()
         meshes = [meshes] if hasattr(meshes, "vertices") else list(meshes)
         if camera is None:
