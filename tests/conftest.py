@@ -8,6 +8,11 @@ from pathlib import Path
 
 import pytest
 
+# Mesa's on-disk shader cache off for the tests: make test runs two pytest processes side by side,
+# both drawing with llvmpipe (canopy-render), and each test's pictures should not depend on what
+# the other process compiled into a shared cache
+os.environ.setdefault("MESA_SHADER_CACHE_DISABLE", "true")
+
 REPO = Path(__file__).resolve().parent.parent
 SEEDS = REPO.parent / "shared" / "seeds"
 
