@@ -556,3 +556,13 @@ def _overlapping_parts(ba, bb, same, mode):
                     out[fill[p]] = q
                     fill[p] += 1
     return counts, out
+
+
+def _sorted_pairs(pairs: np.ndarray) -> np.ndarray:
+    """(k, 2) int32 pairs in (a, b) order: the order of the contacts (and so of the Gauss-Seidel
+    projection) does not depend on which of the broad phase's lists found a pair."""
+    p = np.ascontiguousarray(pairs, dtype=np.int32)
+    if len(p) < 2:
+        return p
+    key = p[:, 0].astype(np.int64) << np.int64(32) | p[:, 1].astype(np.int64)
+    return np.ascontiguousarray(p[np.argsort(key, kind="stable")])

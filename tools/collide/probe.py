@@ -25,8 +25,8 @@ import numpy as np
 from numba import njit, prange
 
 from .broad import (PART_SWEEP_MAX_ELEMENTS, PARTS_ANY, PARTS_CROSS, _axis_orders, _overlap, _overlapping_parts,
-                    _part_boxes, _part_starts, _share_vertex, edge_boxes, parts_grouped, triangle_boxes,
-                    vertex_boxes)
+                    _part_boxes, _part_starts, _share_vertex, _sorted_pairs, edge_boxes, parts_grouped,
+                    triangle_boxes, vertex_boxes)
 from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
 from .tritri import _pair_flag
 from .tritri import _share_vertex as _tri_share_vertex
@@ -148,8 +148,8 @@ def probe_contacts(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray, edges: np.nd
                              more_vt.reshape(n_over, big, 2)[keep < redo[:, _VT_ODD][:, None]]])
         ee = np.concatenate([ee[~np.repeat(over, n_ee)],
                              more_ee.reshape(n_over, big, 2)[keep < redo[:, _EE_ODD][:, None]]])
-    vt = _sorted(vt)
-    ee = _sorted(ee)
+    vt = _sorted_pairs(vt)
+    ee = _sorted_pairs(ee)
     stats = {
         "vt_candidates": int(total[_VT_CAND]),
         "ee_candidates": int(total[_EE_CAND]),
@@ -159,13 +159,6 @@ def probe_contacts(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray, edges: np.nd
         "ee_even": int(total[_EE_EVEN]),
     }
     return vt, ee, stats
-
-
-def _sorted(pairs):
-    if len(pairs) < 2:
-        return pairs
-    key = pairs[:, 0].astype(np.int64) << np.int64(32) | pairs[:, 1].astype(np.int64)
-    return np.ascontiguousarray(pairs[np.argsort(key, kind="stable")])
 
 
 @njit(cache=True, inline="always")
@@ -370,7 +363,7 @@ def intersecting_pairs_by_part(vertex_x: np.ndarray, tri_indices: np.ndarray, tr
     flagged = np.zeros((int(at[-1]), 2), np.int32)
     want = counts > 0
     _static_kernel(x, tri, tb, pt, ot, st, start, nbr, flagged, np.append(np.where(want, at[:-1], -1), 0))
-    flagged = _sorted(flagged)
+    flagged = _sorted_pairs(flagged)
     flags = _pair_flags(x, tri, flagged)
     return _decide(x, tri, flagged, flags)
 

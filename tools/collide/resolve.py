@@ -25,8 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
-from .broad import (PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, box_pairs, edge_boxes, triangle_boxes,
-                    vertex_boxes)
+from .broad import (PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, _sorted_pairs, box_pairs, edge_boxes,
+                    triangle_boxes, vertex_boxes)
 from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
 from .probe import can_probe, probe_contacts
 from .response import project_collision_constraints
@@ -586,16 +586,6 @@ def step_broad_phase(x0, x1, tri, edges, pad, cell_size, vertex_part=None):
     if not motion > SPLIT_MOTION * extent:
         return plain()
     return _SplitBroadPhase(x0, tri, edges, pad, cell_size, vp, np.ascontiguousarray(shift))
-
-
-def _sorted_pairs(pairs: np.ndarray) -> np.ndarray:
-    """(k, 2) int32 pairs in (a, b) order: the order of the contacts (and so of the Gauss-Seidel
-    projection) does not depend on which of the broad phase's lists found a pair."""
-    p = np.ascontiguousarray(pairs, dtype=np.int32)
-    if len(p) < 2:
-        return p
-    key = p[:, 0].astype(np.int64) << np.int64(32) | p[:, 1].astype(np.int64)
-    return np.ascontiguousarray(p[np.argsort(key, kind="stable")])
 
 
 @njit(cache=True)
