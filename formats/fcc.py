@@ -260,6 +260,12 @@ class CanopyParams:
     emergence_growth_frames : float
         ``emergence growth frames``: frames over which a floret that emerged smaller grows back
         to its own size (> 0). 10.
+    crowded_scales : tuple of float
+        ``crowded scales``: sizes (fractions of its present size, in (0, 1], decreasing) a floret
+        is tried at when a crowded step leaves it outside the ``edge stretch bounds`` and its
+        carried shape has no room: it is put at the first that fits (its carried shape, else its
+        rest shape, scaled about its base) and grows back like an emerging floret; ``1`` alone:
+        never. (0.85, 0.7, 0.55, 0.4, 0.25).
     output_frames_number : int or None
         ``output animation frames number``: write an OBJ every N frames (>= 1). None: not given.
     output_obj_skip : int or None
@@ -312,6 +318,7 @@ class CanopyParams:
     collisions: bool = True
     emergence_scales: tuple = (1.0, 0.75, 0.5, 0.35, 0.25)
     emergence_growth_frames: float = 10.0
+    crowded_scales: tuple = (0.85, 0.7, 0.55, 0.4, 0.25)
     output_frames_number: int | None = None
     output_obj_skip: int | None = None
     lattice: LatticeParams = field(default_factory=LatticeParams)
@@ -338,6 +345,7 @@ class CanopyParams:
         object.__setattr__(self, "scene_scale", tuple(float(v) for v in self.scene_scale))
         object.__setattr__(self, "stretch_bounds", tuple(float(v) for v in self.stretch_bounds))
         object.__setattr__(self, "emergence_scales", tuple(float(v) for v in self.emergence_scales))
+        object.__setattr__(self, "crowded_scales", tuple(float(v) for v in self.crowded_scales))
 
     @property
     def output_every(self) -> int:
@@ -464,6 +472,7 @@ KEYS: Mapping[str, KeySpec] = MappingProxyType({
     "collisions": KeySpec("bool", field="collisions"),
     "emergence scales": KeySpec("scales", field="emergence_scales"),
     "emergence growth frames": KeySpec("float", low=0, strict=True, field="emergence_growth_frames"),
+    "crowded scales": KeySpec("scales", field="crowded_scales"),
     "output animation frames number": replace(_COUNT1, high=_FRAMES, field="output_frames_number"),
     "output animation obj per frames": replace(_COUNT0, high=_FRAMES, field="output_obj_skip"),
     "lattice size multiply": KeySpec("float", 3, low=0, strict=True, field="lattice.size_multiply"),
@@ -963,6 +972,7 @@ def format_fcc(params: CanopyParams) -> str:
     add(f"collisions: {_bool(p.collisions)}")
     add("emergence scales: " + " ".join(_num(x) for x in p.emergence_scales))
     add(f"emergence growth frames: {_num(p.emergence_growth_frames)}")
+    add("crowded scales: " + " ".join(_num(x) for x in p.crowded_scales))
     opt("output animation frames number",
         None if p.output_frames_number is None else str(int(p.output_frames_number)), "not set")
     opt("output animation obj per frames",

@@ -696,3 +696,109 @@ def test_retreat_parts_keeps_up_with_the_carried_motion():
     assert len(detect_collisions(x0, x1, tri, edges, tolerance=1e-9)[0]) == 0
     assert res.fraction[1] >= 0.0  # not at x0
     assert np.all(x1[4:, 0] > 1.0)  # moved aside with its placement
+
+
+def test_a_misshapen_part_without_room_for_its_carried_shape_is_put_at_a_smaller_one():
+    """The ``"parts"`` fallback's last resort (``parts["shrink"]``): a part the solve left out of
+    shape whose carried shape crosses something is put on the first smaller shape offered for it
+    that the step reaches collision-free; ``shrunk`` says at which scale. Where none fits (or the
+    free one is not offered for that part) it keeps the solve's shape and counts as misshapen."""
+    from inflo.tools.collide.resolve import CollisionResult, _retreat_fallback, detect_collisions
+
+    x0, tri, edges, vp = _two_squares(0.5)
+    tol = 1e-9
+    x1 = x0.copy()
+    x1[6, 2] = 1.5  # the solve left square 1 bent: out of shape, but free
+    carried = x0.copy()
+    carried[4:, 2] = -0.5  # its carried shape passes through square 0
+
+    def misshapen(xs):
+        rest = np.linalg.norm(x0[edges[:, 0]] - x0[edges[:, 1]], axis=1)
+        now = np.linalg.norm(xs[edges[:, 0]] - xs[edges[:, 1]], axis=1)
+        bad = np.abs(now / rest - 1.0) > 0.2
+        return np.bincount(vp[edges[bad, 0]], minlength=2) > 0
+
+    def detect(xs, act):
+        return detect_collisions(x0, xs, tri, edges, tolerance=tol, active=act)[0]
+
+    base = x0[4]
+    crossing = base + 0.85 * (carried - base)  # smaller, still through square 0
+    free = base + 0.85 * (x0 - base)  # smaller, where it was
+    asked = []
+
+    def shrink(s, which):
+        asked.append((s, which.tolist()))
+        every = np.ones(2, bool)
+        return [(crossing, every), (free, every)] if s == 0.85 else [(crossing, every)]
+
+    res = CollisionResult()
+    parts = dict(vertex_part=vp, n_parts=2, misshapen=misshapen, carried=lambda: carried, shrink=shrink,
+                 shrink_scales=[0.85, 0.7])
+    _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect)
+    assert asked == [(0.85, [False, True])]
+    assert res.shrunk.tolist() == [1.0, 0.85] and res.misshapen == 0
+    assert res.retreated.tolist() == [1]
+    np.testing.assert_array_equal(x1[4:], free[4:])
+    np.testing.assert_array_equal(x1[:4], x0[:4])  # square 0 untouched
+    assert len(detect(x1, np.ones(len(x1), bool))) == 0
+
+    # nothing offered fits: the solve's shape stays, reported misshapen
+    x1 = x0.copy()
+    x1[6, 2] = 1.5
+    res = CollisionResult()
+    parts["shrink"] = lambda s, which: [(crossing, np.ones(2, bool)), (free, np.zeros(2, bool))]
+    _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect)
+    assert res.shrunk.tolist() == [1.0, 1.0] and res.misshapen == 1
+    assert x1[6, 2] == 1.5 and len(res.retreated) == 0
+
+
+def test_a_part_that_fits_at_no_scale_is_given_room_by_its_neighbours_made_smaller():
+    """:func:`_shrink_with_blockers`: a part out of shape whose smallest rest shape still
+    intersects a neighbour in shape is put there together with that neighbour scaled about its
+    base, at the largest scale at which the two intersect nothing (here 0.4: the neighbour square
+    then stops short of the part's plane x = 0.5)."""
+    from inflo.tools.collide.resolve import CollisionResult, _shrink_with_blockers
+
+    sq = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)  # part 0 (base at the origin)
+    wall = np.array([[0.5, 0.2, 0.1], [0.5, 0.8, 0.1], [0.5, 0.8, 0.7], [0.5, 0.2, 0.7]])  # part 1
+    x1 = np.concatenate([sq, wall])
+    tri = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]], np.int32)
+    vp = np.array([0, 0, 0, 0, 1, 1, 1, 1])
+    small = x1.copy()
+    small[4:, 2] -= 0.3  # part 1's smallest shape reaches through part 0's square
+
+    def shrink(s, which):
+        return [(x1, np.zeros(2, bool)), (small, np.ones(2, bool))]
+
+    def scaled(xs, which, s):
+        out = xs.copy()
+        out[which[vp]] *= s
+        return out
+
+    def crossing(xs):
+        pairs = intersecting_pairs(xs, tri)
+        return vp[tri[pairs[:, 0], 0]], vp[tri[pairs[:, 1], 0]]
+
+    def blockers(xs, which):
+        out = np.zeros(2, bool)
+        for a, b in zip(*crossing(xs)):
+            out[[a, b]] |= which[[b, a]]
+        return out & ~which
+
+    def intersecting(xs, which):
+        out = np.zeros(2, bool)
+        for a, b in zip(*crossing(xs)):
+            out[max(a, b) if which[a] and which[b] else (a if which[a] else b)] = True
+        return out & which
+
+    res = CollisionResult()
+    res.shrunk = np.ones(2)
+    still = np.array([False, True])
+    retreated = np.zeros(2, bool)
+    _shrink_with_blockers(res, x1, vp, still, retreated, shrink, scaled, blockers, intersecting,
+                          [0.85, 0.7, 0.55, 0.4, 0.25], lambda xs: np.array([False, True]))
+    assert not still.any() and retreated.all()
+    assert res.shrunk.tolist() == [0.4, 0.25]
+    np.testing.assert_allclose(x1[:4], 0.4 * sq)
+    np.testing.assert_array_equal(x1[4:], small[4:])
+    assert len(intersecting_pairs(x1, tri)) == 0

@@ -492,9 +492,38 @@ def test_a_dynamic_phyllotaxis_head_grows_with_florets_emerging(inputs, tmp_path
 
 
 
+def test_florets_with_no_room_are_made_smaller_not_torn(inputs, tmp_path):
+    """The small dynamic head with florets 1.1 x their primordia and h = 0.005: from frame 6 on,
+    florets are crowded beyond what the collision response can hold in shape. A floret left out
+    of the stretch bounds whose carried shape has no room is put at a smaller size (``crowded
+    scales``) and grows back: every frame keeps every edge within [0.5, 1.5] x rest, with no
+    intersecting pair and every floret present. With ``crowded scales: 1`` (never) the same
+    frames leave florets out of the bounds."""
+    fcc = _small_dynamic_head(inputs, tmp_path, 1.1, spacing=0.005)
+    text = fcc.read_text() + "run for number of frames: 9\n"
+
+    def run(extra):
+        fcc.write_text(text + extra)
+        out = tmp_path / ("out" + str(len(extra)))
+        res = run_cli("fccompose", fcc, "-o", out, "-q")
+        assert res.returncode == 0, res.stderr
+        return read_log(out)
+
+    log = run("")
+    assert len(log) == 10
+    assert all(int(r["intersecting_pairs"]) == 0 for r in log)
+    assert all(0.5 <= float(r["min_edge_stretch"]) and float(r["max_edge_stretch"]) <= 1.5 for r in log)
+    assert int(log[-1]["florets_present"]) == 33 and int(log[-1]["florets_waiting"]) == 0
+    smaller = [int(r["florets_smaller"]) for r in log]
+    assert smaller[-1] > smaller[5]  # made smaller after they emerged, not only when emerging
+    never = run("crowded scales: 1\n")
+    assert any(float(r["min_edge_stretch"]) < 0.5 or float(r["max_edge_stretch"]) > 1.5 for r in never)
+
+
 @pytest.mark.skip(reason="issue 13 follow-up: with florets 1.2 x their primordia and h a tenth of a floret, "
-                         "the whole-floret fallback takes minutes per frame (it no longer tears, but is "
-                         "too slow for CI); the stop on a torn floret is tested below")
+                         "the run takes about 3.5 minutes (frames 8 and 9: the retry rounds' far-moved "
+                         "fallback pairs every element afresh); every frame now stays within the stretch "
+                         "bounds, but it is too slow for CI; the stop on a torn floret is tested below")
 def test_florets_squeezed_hard_stay_whole(inputs, tmp_path):
     """The same head with florets 1.2 x their primordia and a thickness h of a tenth of a floret
     (before issue 13 the per-vertex revert tore such florets and the solve diverged, to 1e11 units,
@@ -508,7 +537,9 @@ def test_florets_squeezed_hard_stay_whole(inputs, tmp_path):
     log = read_log(out)
     assert len(log) == 10
     assert all(int(r["intersecting_pairs"]) == 0 for r in log)
-    assert max(float(r["max_edge_stretch"]) for r in log) < 5.0  # whole (a torn floret: > 50)
+    # whole and in shape: florets with no room were made smaller (a torn floret: > 50)
+    assert all(0.5 <= float(r["min_edge_stretch"]) and float(r["max_edge_stretch"]) <= 1.5 for r in log)
+    assert int(log[-1]["florets_present"]) == 33
     assert sum(int(r["collisions_found"]) for r in log) > 100
     last = read_obj(sorted(out.glob("frame_*.obj"))[-1])
     assert np.ptp(last.vertices, axis=0).max() < 10.0

@@ -101,6 +101,7 @@ edge stretch bounds: 0.6 1.4
 relax iterations: 3
 emergence scales: 1 0.5 0.2
 emergence growth frames: 4.5
+crowded scales: 0.9 0.6
 output animation frames number: 5
 output animation obj per frames: 4
 lattice size multiply: 1.1, 1.2, 1.3
@@ -184,6 +185,7 @@ def test_every_key_of_the_list(write, tmp_path):
         collisions=False,
         emergence_scales=(1, 0.5, 0.2),
         emergence_growth_frames=4.5,
+        crowded_scales=(0.9, 0.6),
         output_frames_number=5,
         output_obj_skip=4,
         lattice=LatticeParams((1.1, 1.2, 1.3), True, (-1, -2, -3), (10, 20, 30), (2, 4, 6), False),
@@ -222,7 +224,7 @@ def test_every_key_of_the_list(write, tmp_path):
     assert p.stiffness(1) == (0.5, 0.3)
     assert p.entry(2).rba_folder.resolved == tmp_path / "rba"
     assert p.entry(99) is None
-    assert p.weights[0].line == 32
+    assert p.weights[0].line == 33
 
 
 def test_defaults_of_an_empty_file(write):
@@ -347,6 +349,8 @@ MALFORMED = [
     ("emergence scales: 1 0.5 0.7\n", 1, "decreasing numbers"),
     ("emergence scales: 1.5\n", 1, "numbers in (0, 1]"),
     ("emergence growth frames: 0\n", 1, "a number > 0"),
+    ("crowded scales: 0.5 0.8\n", 1, "decreasing numbers"),
+    ("crowded scales: 0\n", 1, "numbers in (0, 1]"),
     ("run for number of frames: -3\n", 1, "an integer >= 0"),
     ("sanity check per frames: x\n", 1, "an integer"),
     ("output animation frames number: 0\n", 1, "an integer >= 1"),

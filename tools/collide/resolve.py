@@ -795,8 +795,12 @@ class CollisionResult:
     """passes that relaxed parts left out of shape and resolved what that moved"""
     misshapen: int = 0
     """parts (``fallback="parts"``) still out of shape at the end: their carried shape crosses
-    something, so they keep the collision-free shape the solve gave them (reported; fccompose
-    does not redo such a step: halving it made squeezed canopies 9 x slower, issue 13)"""
+    something, and so does each smaller shape ``parts["shrink"]`` offers, so they keep the
+    collision-free shape the solve gave them (reported; fccompose does not redo such a step:
+    halving it made squeezed canopies 9 x slower, issue 13)"""
+    shrunk: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """(n_parts,) the scale each part was put at by the ``"parts"`` fallback's last resort for parts
+    out of shape (``parts["shrink"]``): 1 where none; empty when the fallback did not run"""
 
 
 def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarray,
@@ -849,8 +853,21 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
     parts : dict or None
         For ``fallback="parts"``: ``vertex_part``, ``n_parts``, ``carried`` (a callable giving the
         carried positions, called only when needed), ``misshapen`` (callable or None: parts out of
-        shape are moved back too, also when no pair is left) and ``crossing`` (bool: also move back
-        the parts of pairs still crossing; False leaves those to the caller, e.g. to substep).
+        shape are moved back too, also when no pair is left), ``crossing`` (bool: also move back
+        the parts of pairs still crossing; False leaves those to the caller, e.g. to substep) and,
+        optional, ``shrink`` and ``shrink_scales``: ``shrink(s, which)`` gives smaller shapes of
+        the parts of the (n_parts,) bool ``which`` at scale ``s``, a list of ``(target, fits)``:
+        (n, 3) positions and the (n_parts,) bool parts for which they are a shape within bounds
+        (fccompose: the carried shape scaled about each floret's base, for the florets whose
+        carried shape is in shape; the rest shape scaled, for all). They are tried in turn, at
+        each ``s`` of ``shrink_scales``, for the parts still out of shape whose carried shape
+        crosses something or is out of shape too (:func:`reshape_parts`; ``CollisionResult.shrunk``);
+        with ``intersecting`` (the exact static test, as :func:`place_parts` takes it) a smaller
+        shape that the step's way to it crosses is taken where the shape itself intersects nothing;
+        with also ``blockers(x, which)`` (the parts not in ``which`` whose triangles intersect
+        those of ``which``) and ``scaled(x, which, s)`` (the shapes of ``which`` in ``x`` scaled by
+        ``s`` about their bases), a part that fits at no scale is tried with the neighbours in
+        its way made smaller too (:func:`_shrink_with_blockers`).
     vertex_part : (n,) int or None
         The part of every vertex (default: ``parts["vertex_part"]``): where parts are carried far
         over the step, pairs within a part are found in its moving frame (:func:`step_broad_phase`;
@@ -1001,9 +1018,12 @@ class RetreatResult:
 def _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect) -> None:
     """``fallback="parts"``: the florets of pairs still crossing are moved back along their own
     motion (:func:`retreat_parts`, down to ``x0`` if need be: the step must end collision-free);
-    then the florets out of shape are put on their carried start-of-step shape where that
-    crosses nothing (:func:`reshape_parts`; elsewhere they keep the collision-free shape the solve
-    gave them: a floret frozen at ``x0`` while its rest values grow would tear later)."""
+    then the florets out of shape (those moved back included) are put on their carried
+    start-of-step shape where that crosses nothing and is in shape (:func:`reshape_parts`); else,
+    with ``parts["shrink"]``, on a smaller shape that fits (module doc of fccompose: ``crowded
+    scales``; the neighbours in the way made smaller too where nothing else fits,
+    :func:`_shrink_with_blockers`); elsewhere they keep the collision-free shape the solve gave
+    them (a floret frozen at ``x0`` while its rest values grow would tear later)."""
     vp = np.asarray(parts["vertex_part"])
     n_parts = int(parts["n_parts"])
     misshapen = parts.get("misshapen")
@@ -1023,16 +1043,112 @@ def _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect) -> None:
         if ret.whole_step:
             res.retreated = np.arange(n_parts)
             return
+    res.shrunk = np.ones(n_parts)
     if misshapen is not None:
-        bad = np.asarray(misshapen(x1), dtype=bool) & ~retreated
+        bad = np.asarray(misshapen(x1), dtype=bool)
         if bad.any():
             if carried is None:
                 carried = parts["carried"]()
             moved, _ = reshape_parts(x0, x1, carried, vp, bad, detect)
             retreated |= moved
             res.reverted += int(np.count_nonzero(moved[vp]))
-            res.misshapen = int(np.count_nonzero(bad & ~moved))
+            still = bad & ~moved
+            shrink = parts.get("shrink")
+            intersecting = parts.get("intersecting")
+            if shrink is not None:
+                # a carried shape out of shape itself (the floret started the step so) is no cure
+                still |= moved & np.asarray(misshapen(x1), dtype=bool)
+                # no room for a shape of its own size: a smaller one (the caller grows it back)
+                for s in parts.get("shrink_scales", ()):
+                    if not still.any():
+                        break
+                    for target, fits in shrink(float(s), still.copy()):
+                        tried = still & np.asarray(fits, dtype=bool)
+                        if not tried.any():
+                            continue
+                        put, _ = reshape_parts(x0, x1, target, vp, tried, detect)
+                        if intersecting is not None and (tried & ~put).any():
+                            # the way there crosses something, the smaller shape itself nothing:
+                            # a floret with no room changes size in the step, as one emerging
+                            put |= place_parts(x1, target, vp, tried & ~put, intersecting)
+                        res.shrunk[put] = float(s)
+                        retreated |= put
+                        res.reverted += int(np.count_nonzero(put[vp]))
+                        still &= ~put
+                        if not still.any():
+                            break
+                blockers = parts.get("blockers")
+                scales = list(parts.get("shrink_scales", ()))
+                if still.any() and blockers is not None and intersecting is not None and scales:
+                    _shrink_with_blockers(res, x1, vp, still, retreated, shrink, parts["scaled"], blockers,
+                                          intersecting, scales, misshapen)
+            res.misshapen = int(np.count_nonzero(still))
     res.retreated = np.nonzero(retreated)[0]
+
+
+def _shrink_with_blockers(res, x1, vp, still, retreated, shrink, scaled, blockers, intersecting, scales,
+                          misshapen):
+    """The last resort for parts out of shape that fit at none of the ``scales`` because
+    neighbours in shape take their room: each such part, at its rest shape at the smallest scale,
+    is tried together with those neighbours (``blockers``) made smaller too (their present shape
+    scaled about their base by each of ``scales`` in turn, ``scaled``), as crowded florets make
+    room for each other; the first scale at which the whole group fits (exact static test) is
+    taken. ``still``, ``retreated`` and ``res`` are updated in place."""
+    smin = float(scales[-1])
+    in_shape = ~np.asarray(misshapen(x1), dtype=bool)
+    for f in np.nonzero(still)[0].tolist():
+        one = np.zeros_like(still)
+        one[f] = True
+        small = shrink(smin, one)[-1][0]  # the rest shape, smallest
+        trial = x1.copy()
+        sel = one[vp]
+        trial[sel] = small[sel]
+        b = np.asarray(blockers(trial, one), dtype=bool) & ~one & ~still & in_shape & (res.shrunk >= 1.0)
+        if not b.any():
+            continue
+        group = one | b
+        keep = x1.copy()
+        for s in scales:
+            target = trial.copy()
+            bs = b[vp]
+            target[bs] = scaled(x1, b, float(s))[bs]
+            put = place_parts(x1, target, vp, group, intersecting)
+            if (put == group).all():
+                res.shrunk[f] = smin
+                res.shrunk[b] = float(s)
+                retreated |= group
+                res.reverted += int(np.count_nonzero(group[vp]))
+                still[f] = False
+                break
+            g = group[vp]
+            x1[g] = keep[g]
+
+
+def place_parts(x1, target, vertex_part, parts, intersecting, max_rounds: int = 8):
+    """Put the (n_parts,) bool ``parts`` on ``target`` where the result intersects nothing (the
+    exact static test ``intersecting(x1, which) -> (n_parts,) bool``: the parts of ``which`` with
+    a triangle intersecting any triangle); those that would intersect stay where they were (``x1``
+    on entry intersects nothing, so this ends). Unlike :func:`reshape_parts` the way from ``x0``
+    is not tested: the part changes shape within the step as an emerging floret appears. Returns
+    the (n_parts,) bool parts now on ``target``."""
+    vp = np.asarray(vertex_part)
+    keep = x1.copy()
+    on = np.asarray(parts, dtype=bool).copy()
+    sel = on[vp]
+    x1[sel] = target[sel]
+    for _ in range(max_rounds):
+        if not on.any():
+            return on
+        bad = np.asarray(intersecting(x1, on.copy()), dtype=bool) & on
+        if not bad.any():
+            return on
+        on &= ~bad
+        back = bad[vp]
+        x1[back] = keep[back]
+    sel = on[vp]
+    x1[sel] = keep[sel]
+    on[:] = False
+    return on
 
 
 def reshape_parts(x0, x1, carried, vertex_part, parts, detect, max_rounds: int = 8):

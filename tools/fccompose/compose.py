@@ -24,7 +24,8 @@
    frame and those florets moved back whole along their own motion
    (:func:`inflo.tools.collide.retreat_parts`; so the canopy stays collision-free), or the run
    stops with ``strict``; florets still out of shape are put on their carried start-of-step shape
-   where that crosses nothing (formats/fcc.md, "Crowding");
+   where that crosses nothing, else on a smaller shape (``crowded scales``) from which they grow
+   back as emerging florets do (formats/fcc.md, "Crowding");
 5. the positions are accepted.
 
 **Emergence.** A floret of an ``rba:`` placement emerges at the first RBA frame that lists it
@@ -522,8 +523,60 @@ class Simulation:
             carry(x0s, vp, delta, out)
             return out
 
+        def scaled(xs, which, scale):
+            """``xs`` with the florets of ``which`` scaled by ``scale`` about their bases (their
+            placements' origins at ``frame_to``); the other rows as they are."""
+            out = xs.copy()
+            sel = which[vp]
+            base = np.ascontiguousarray(new.matrix[:, :, 3])[vp[sel]]
+            out[sel] = base + scale * (xs[sel] - base)
+            return out
+
+        def shrink(scale, which):
+            """Smaller shapes of the florets ``which`` (out of shape, no room for their carried
+            shape): their carried shape (where that is in shape), then their rest shape, scaled by
+            ``scale`` about each floret's base (its placement's origin at ``frame_to``); as
+            ``(positions, fits)`` pairs (rows of other florets unused)."""
+            c = carried()
+            a = scaled(c, which, scale)
+            mats = new.matrix.copy()
+            mats[:, :, :3] *= scale
+            off = m.floret_vertex_offset
+            verts = np.concatenate([np.arange(off[f], off[f + 1]) for f in np.nonzero(which)[0]])
+            xg = np.zeros((m.n_vertices, 3))
+            m.template_positions(new._replace(matrix=mats), vertices=verts.astype(np.int32), out=xg)
+            return [(a, ~misshapen(c)), (xg if v is None else xg[v], np.ones(nf, bool))]
+
+        tri_part = vp[tri[:, 0]] if len(tri) else np.zeros(0, np.int64)
+
+        def blockers(xs, which):
+            """The florets not in ``which`` with a triangle intersecting one of ``which``'s."""
+            ids = np.nonzero(which[tri_part])[0]
+            out = np.zeros(nf, bool)
+            pairs = intersecting_pairs_with(xs, tri, ids, cell_size=self._cell(x))
+            if len(pairs):
+                out[tri_part[pairs.ravel()]] = True
+            return out & ~which
+
+        def intersecting(xs, which):
+            """The florets of ``which`` with a triangle intersecting another (exact static test);
+            of two such florets intersecting each other, only the later is named (the earlier may
+            then fit once the later has gone back)."""
+            ids = np.nonzero(which[tri_part])[0]
+            out = np.zeros(nf, bool)
+            pairs = intersecting_pairs_with(xs, tri, ids, cell_size=self._cell(x))
+            if len(pairs):
+                a, b = tri_part[pairs[:, 0]], tri_part[pairs[:, 1]]
+                both = which[a] & which[b]
+                out[np.maximum(a, b)[both]] = True
+                out[a[~both]] = True
+                out[b[~both]] = True
+            return out & which
+
         parts = dict(vertex_part=vp, n_parts=nf, misshapen=misshapen, carried=carried,
-                     crossing=retreat_crossing)
+                     crossing=retreat_crossing, shrink=shrink, intersecting=intersecting,
+                     scaled=scaled, blockers=blockers,
+                     shrink_scales=[s for s in p.crowded_scales if s < 1.0])
         # round 0 probed without pair lists while the last step's round 0 found nothing (a head
         # before its florets meet); once contacts come, retries follow and need the lists anyway
         res = resolve_collisions(x0s, x1s, w if v is None else w[v], tri, edges, relax=relax,
@@ -531,6 +584,16 @@ class Simulation:
         self.round0_clear = not (res.found and res.found[0] > 0)
         if v is not None:
             xp[v] = x1s
+        if len(res.shrunk) and (res.shrunk < 1.0).any():
+            # florets put at a smaller size (no room for their own shape): they grow back from it
+            # over ``emergence growth frames``, as florets that emerged smaller (size_factor)
+            st = self.state
+            small = np.nonzero(res.shrunk < 1.0)[0]
+            st.emerge_scale[small] = self.size_factor(frame_to)[small] * res.shrunk[small]
+            st.emerge_frame[small] = frame_to
+            self._sched = None
+            self.update_rest(frame_to)
+            timing["shrunk"] = timing.get("shrunk", 0) + len(small)
         if res.whole_step:
             timing["whole_steps"] = timing.get("whole_steps", 0) + 1
         t3 = time.perf_counter()
