@@ -77,3 +77,28 @@ def test_cli_bracts_and_bad_values(tmp_path):
     assert r.returncode == 2 and "--bracts must be >= 0" in r.stderr and not (tmp_path / "u.scn").exists()
     r = run_cli("dimorph", str(tmp_path / "h.scn"), "--alpha", "120", "--bract-scale", "0", "-o", str(tmp_path / "u.scn"))
     assert r.returncode == 2 and "--bract-scale must be > 0" in r.stderr
+
+
+def test_marginal_keeps_the_rays_to_the_outermost_florets_of_each_head():
+    """--marginal N: a floret may be a ray only among the N outermost of its head (after the
+    bracts); inside that rim the fates are the cones' own, elsewhere every floret is a disk floret
+    (a corymb's rim head, open on one whole side, keeps its inner florets disk florets)."""
+    scene = _head(n=300, groups=2)
+    plain, c0 = dimorph_scene(scene, DimorphOptions(120.0))
+    capped, c1 = dimorph_scene(scene, DimorphOptions(120.0, marginal=10))
+    arr = scene.arrays()
+    rim = outermost(arr["pos"], np.array([scene.groups[g].centre for g in arr["group"]]), arr["group"], 10)
+    ray0 = np.array([p.type == "ray" for p in plain.placements])
+    ray1 = np.array([p.type == "ray" for p in capped.placements])
+    assert c0["ray"] > 20  # more rays than the cap allows
+    assert ray1.tolist() == (ray0 & rim).tolist() and 0 < c1["ray"] <= 20
+    assert c1["disk"] == len(scene) - c1["ray"]
+    # with bracts the rim is the N florets just inside them
+    both, c2 = dimorph_scene(scene, DimorphOptions(120.0, bracts=34, marginal=10))
+    types = [p.type for p in both.placements]
+    ref, _ = dimorph_scene(scene, DimorphOptions(120.0, bracts=34))
+    rim2 = outermost(arr["pos"], np.array([scene.groups[g].centre for g in arr["group"]]), arr["group"], 44)
+    expect = [t if (t != "ray" or r) else "disk" for t, r in zip((p.type for p in ref.placements), rim2)]
+    assert types == expect and c2["bract"] == 68 and c2["ray"] > 0
+    r = run_cli("dimorph", "x.scn", "--alpha", "120", "--marginal", "-1", "-o", "y.scn")
+    assert r.returncode == 2 and "--marginal must be >= 0" in r.stderr

@@ -48,6 +48,10 @@ from .sweep import write_sweep
                    "--bract-id), left out of the other florets' cone tests.")
 @click.option("--bract-id", type=int, default=2, show_default=True, help="Type id of involucral bracts.")
 @click.option("--bract-scale", type=float, default=1.0, show_default=True, help="Scale factor of bracts.")
+@click.option("--marginal", type=int, default=0, show_default=True, metavar="N",
+              help="Only the N outermost florets of each head (after its bracts) may be ray florets, as "
+                   "in Asteraceae, whose ray florets are marginal; the others are disk florets whatever "
+                   "their cones. 0: any floret.")
 @click.option("--petal-size", is_flag=True,
               help="Ray and small ray size factors grow the petals only ('#@ petal: f'; fccompose scales the "
                    "template's 'petal weight' vertices), not the whole floret (fig. 6.4c).")
@@ -56,13 +60,13 @@ from .sweep import write_sweep
                    "petal) points away from its group's or top-level group's centre.")
 def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, small_ray_scale, disk_scale, centre,
         half_angle, ray_lead, ray_development_frames, disk_development_frames, bracts, bract_id, bract_scale,
-        petal_size, orient_rays, quiet, debug):
+        petal_size, orient_rays, marginal, quiet, debug):
     from inflo.formats.errors import InputError
 
     if len(thresholds) > 2:
         raise InputError(f"--threshold given {len(thresholds)} times; expected at most 2")
     for name, v in (("--ray-id", ray_id), ("--disk-id", disk_id), ("--small-ray-id", small_ray_id),
-                    ("--bracts", bracts), ("--bract-id", bract_id)):
+                    ("--bracts", bracts), ("--bract-id", bract_id), ("--marginal", marginal)):
         if v is not None and v < 0:
             raise InputError(f"{name} must be >= 0, found {v}")
     for name, v in (("--ray-scale", ray_scale), ("--disk-scale", disk_scale), ("--bract-scale", bract_scale),
@@ -73,7 +77,7 @@ def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_sca
             raise InputError(f"{name} must be in [1e-06, 1e+06], found {v:g}")
     opts = DimorphOptions(alpha, tuple(thresholds), ray_id, disk_id, small_ray_id, ray_scale, disk_scale,
                           centre, half_angle, ray_lead, ray_development_frames, disk_development_frames,
-                          bracts, bract_id, bract_scale, petal_size, orient_rays, small_ray_scale)
+                          bracts, bract_id, bract_scale, petal_size, orient_rays, small_ray_scale, marginal)
     check_window_options(opts)
     sc = read_scn(scene)
     out, counts = dimorph_scene(sc, opts)

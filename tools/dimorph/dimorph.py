@@ -53,6 +53,11 @@ class DimorphOptions:
         its free space is) points towards the top-level centre, e.g. one facing a gap inside the
         inflorescence, is turned along its cone axis instead. Placements whose orientation comes
         from RBA files (``rba``) are refused
+    marginal : 0, or N > 0: only the N outermost placements of each head after its bracts (by
+        distance from its centre O, as ``bracts``) may be ray or small ray florets; the others are
+        disk florets whatever their cones (the ray florets of a capitulum are its marginal ones:
+        a head at the rim of a corymb, whose cones point into open space on one whole side, still
+        keeps its inner florets disk florets)
     Windows are changed only on placements that have one (``ca``, ``ta``, ``ra``, ``rba``).
     """
 
@@ -74,6 +79,7 @@ class DimorphOptions:
     petal_size: bool = False
     orient_rays: str = "none"
     small_ray_scale: float | None = None
+    marginal: int = 0
 
 
 def orient_outward(p, centre) -> bool:
@@ -199,6 +205,10 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
         dmin[~bract] = d_min(arr["pos"][~bract], centre[~bract], opts.alpha, radius=radius,
                              half_angle=opts.half_angle)
     fate = fates(dmin, th)
+    if int(opts.marginal) > 0:
+        head = centre if opts.centre == "group" else group_centres(scene, "group")
+        rim = outermost(arr["pos"], head, arr["group"], int(opts.bracts) + int(opts.marginal)) & ~bract
+        fate[~rim & (fate != FATE_DISK)] = FATE_DISK
     fate[bract] = FATE_BRACT
     small_id = opts.ray_id if opts.small_ray_id is None else opts.small_ray_id
     orient_centre = None if opts.orient_rays == "none" else group_centres(scene, opts.orient_rays)
