@@ -13,6 +13,7 @@ from typing import Iterable, Mapping
 __all__ = [
     "FormatError",
     "InputError",
+    "decode_lines",
     "did_you_mean",
     "parse_float",
     "parse_int",
@@ -133,7 +134,11 @@ def read_lines(path) -> list[str]:
     when it is not UTF-8 text.
     """
     path = os.fspath(path)
-    data = read_bytes(path)
+    return decode_lines(path, read_bytes(path))
+
+
+def decode_lines(path, data: bytes) -> list[str]:
+    """The lines of ``data`` (the bytes of the text file ``path``), as :func:`read_lines`."""
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -12,13 +12,15 @@ before the faces, for viewers such as Blender; :func:`write_mtl` writes that mat
 """
 from __future__ import annotations
 
+import os
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .atomic import atomic_write, frame_name, list_sequence
-from .errors import FormatError, read_lines, shorten
+from .errors import FormatError, decode_lines, read_bytes, shorten
 
 __all__ = [
     "ObjMesh",
@@ -153,10 +155,100 @@ def _floats(rows, want, path, linenos, what):
     raise AssertionError("unreachable")  # pragma: no cover
 
 
+FAST_BYTES = 1 << 18
+"""Files of about this many bytes or more are read and written by the numba kernels of
+:mod:`._objtext` (the same result; on smaller ones the kernels save less than they cost to load):
+see :func:`_fast`."""
+
+
+def _fast(size: int) -> bool:
+    """Whether a file / array of ``size`` bytes / numbers goes to the kernels: from
+    :data:`FAST_BYTES` where numba is imported already (every numerical tool), from 16 times that
+    where importing it is part of the cost."""
+    return size >= FAST_BYTES and ("numba" in sys.modules or size >= 16 * FAST_BYTES)
+
+
+class _Statements:
+    """The statements other than ``v``/``vn``/``f`` of one file, in file order: groups, materials,
+    polylines (kept as tokens until the vertex lines are known); unknown keywords raise."""
+
+    def __init__(self, path):
+        self.path = path
+        self.groups, self.group_index, self.materials, self.mat_index = [], {}, [], {}
+        self.group_changes, self.mat_changes = [(-1, -1)], [(-1, -1)]  # (line index, value)
+        self.polylines = []  # (line index, tokens)
+
+    def take(self, i: int, line: str) -> str | None:
+        """Handle line ``i``; returns ``"v"``, ``"vn"`` or ``"f"`` for those (the caller's), else None."""
+        toks = line.split()
+        if not toks or toks[0][0] == "#":
+            return None
+        tag, lineno = toks[0], i + 1
+        if tag in ("v", "vn", "f"):
+            return tag
+        if tag in ("o", "g"):
+            name = " ".join(toks[1:]) or "default"
+            if name not in self.group_index:
+                self.group_index[name] = len(self.groups)
+                self.groups.append(name)
+            self.group_changes.append((i, self.group_index[name]))
+        elif tag == "usemtl":
+            name = " ".join(toks[1:])
+            if not name:
+                raise FormatError(self.path, lineno, "a material name after 'usemtl'", shorten(line))
+            if name not in self.mat_index:
+                self.mat_index[name] = len(self.materials)
+                self.materials.append(name)
+            self.mat_changes.append((i, self.mat_index[name]))
+        elif tag == "l":
+            if len(toks) < 3:
+                raise FormatError(self.path, lineno, "at least 2 vertex references after 'l'", shorten(line))
+            self.polylines.append((i, toks[1:]))
+        elif tag not in _IGNORED:
+            raise FormatError(self.path, lineno,
+                              "an OBJ statement (v, vn, vt, f, l, o, g, usemtl, s, mtllib, #)", shorten(tag))
+        return None
+
+    def polyline_refs(self, v_line, vn_line) -> list:
+        """The polylines' 0-based vertex indices (``v_line``, ``vn_line``: the lines of the
+        ``v`` and ``vn`` statements, for negative references)."""
+        polylines = []
+        for i, toks in self.polylines:
+            n_v, n_vn = int(np.searchsorted(v_line, i)), int(np.searchsorted(vn_line, i))
+            polylines.append([_parse_ref(t, n_v, n_vn, self.path, i + 1)[0] for t in toks])
+        return polylines
+
+    def mesh(self, vertices, colors, vn, polylines, faces, face_nrm, face_line) -> ObjMesh:
+        normals = None
+        if vn is not None and len(vn) == len(vertices) and (
+            face_nrm.size == 0 or np.array_equal(face_nrm, faces)
+        ):
+            normals = vn
+
+        def per_face(changes):
+            at = np.array([c[0] for c in changes], dtype=np.int64)
+            val = np.array([c[1] for c in changes], dtype=np.int32)
+            return val[np.searchsorted(at, face_line, side="right") - 1]
+
+        return ObjMesh(
+            vertices=vertices,
+            faces=faces,
+            normals=normals,
+            vertex_colors=colors,
+            lines=polylines,
+            groups=self.groups,
+            face_group=per_face(self.group_changes) if self.groups else None,
+            materials=self.materials,
+            face_material=per_face(self.mat_changes) if self.materials else None,
+        )
+
+
 def read_obj(path) -> ObjMesh:
     """Read one OBJ file without merging, dropping or reordering vertices.
 
     Faces keep file order; a polygon with k > 3 vertices becomes k - 2 fan triangles in place.
+    Files of :data:`FAST_BYTES` or more in the common form (``v``, ``vn``, ``f a b c`` or
+    ``f a//n b//n c//n``, ``\\n`` line ends) are parsed by a numba kernel with the same result.
 
     Raises
     ------
@@ -164,7 +256,13 @@ def read_obj(path) -> ObjMesh:
         Unknown statement, wrong number of coordinates, NaN/inf, a face or polyline index out of
         range (or referring to a vertex not yet defined), a face with fewer than 3 vertices.
     """
-    lines = read_lines(path)
+    path = os.fspath(path)
+    data = read_bytes(path)
+    if _fast(len(data)):
+        mesh = _read_fast(path, data)
+        if mesh is not None:
+            return mesh
+    lines = decode_lines(path, data)
     heads = [l[:2] for l in lines]
     h = np.array(heads) if heads else np.zeros(0, "U2")
     v_idx = np.nonzero((h == "v ") | (h == "v\t"))[0].tolist()
@@ -172,17 +270,12 @@ def read_obj(path) -> ObjMesh:
     vn_idx = []
 
     # the other statements, in file order: groups, materials, polylines, unknown keywords
-    groups, group_index, materials, mat_index = [], {}, [], {}
-    group_changes, mat_changes = [(-1, -1)], [(-1, -1)]  # (line index, value)
-    polyline_at = []
+    st = _Statements(path)
     late_v = late_f = False
     for i, h in enumerate(heads):
         if h in ("v ", "f ", "v\t", "f\t") or h[:1] == "#":
             continue
-        toks = lines[i].split()
-        if not toks or toks[0][0] == "#":
-            continue
-        tag, lineno = toks[0], i + 1
+        tag = st.take(i, lines[i])
         if tag == "vn":
             vn_idx.append(i)
         elif tag == "v":  # indented or otherwise unusual v/f lines
@@ -191,29 +284,6 @@ def read_obj(path) -> ObjMesh:
         elif tag == "f":
             f_idx.append(i)
             late_f = True
-        elif tag in ("o", "g"):
-            name = " ".join(toks[1:]) or "default"
-            if name not in group_index:
-                group_index[name] = len(groups)
-                groups.append(name)
-            group_changes.append((i, group_index[name]))
-        elif tag == "usemtl":
-            name = " ".join(toks[1:])
-            if not name:
-                raise FormatError(path, lineno, "a material name after 'usemtl'", shorten(lines[i]))
-            if name not in mat_index:
-                mat_index[name] = len(materials)
-                materials.append(name)
-            mat_changes.append((i, mat_index[name]))
-        elif tag == "l":
-            if len(toks) < 3:
-                raise FormatError(path, lineno, "at least 2 vertex references after 'l'", shorten(lines[i]))
-            polyline_at.append(i)
-        elif tag in _IGNORED:
-            continue
-        else:
-            raise FormatError(path, lineno, "an OBJ statement (v, vn, vt, f, l, o, g, usemtl, s, mtllib, #)",
-                              shorten(tag))
     if late_v:
         v_idx.sort()
     if late_f:
@@ -228,35 +298,45 @@ def read_obj(path) -> ObjMesh:
         if v.shape[1] == 6:
             colors = v[:, 3:6].copy()
     vn = _bulk_floats(lines, vn_idx, {3}, path, "vn") if vn_idx else None
-
-    polylines = []
-    for i in polyline_at:
-        n_v, n_vn = int(np.searchsorted(v_line, i)), int(np.searchsorted(vn_line, i))
-        polylines.append([_parse_ref(t, n_v, n_vn, path, i + 1)[0] for t in lines[i].split()[1:]])
-
+    polylines = st.polyline_refs(v_line, vn_line)
     faces, face_nrm, face_line = _read_faces(lines, f_idx, v_line, vn_line, path)
-    normals = None
-    if vn is not None and len(vn) == len(vertices) and (
-        face_nrm.size == 0 or np.array_equal(face_nrm, faces)
-    ):
-        normals = vn
+    return st.mesh(vertices, colors, vn, polylines, faces, face_nrm, face_line)
 
-    def per_face(changes):
-        at = np.array([c[0] for c in changes], dtype=np.int64)
-        val = np.array([c[1] for c in changes], dtype=np.int32)
-        return val[np.searchsorted(at, face_line, side="right") - 1]
 
-    return ObjMesh(
-        vertices=vertices,
-        faces=faces,
-        normals=normals,
-        vertex_colors=colors,
-        lines=polylines,
-        groups=groups,
-        face_group=per_face(group_changes) if groups else None,
-        materials=materials,
-        face_material=per_face(mat_changes) if materials else None,
-    )
+def _read_fast(path, data: bytes) -> ObjMesh | None:
+    """:func:`read_obj` by the kernel of :mod:`._objtext`; None where the file is outside its
+    form or holds an error (the Python reader then reads it and names the error)."""
+    from ._objtext import parse_obj
+
+    raw = np.frombuffer(data, dtype=np.uint8)
+    ok, v, v_line, vn, vn_line, faces, face_n, face_line, face_nv, face_nvn, other = parse_obj(raw)
+    if not ok:
+        return None
+    if len(raw) and int(raw.max()) >= 0x80:
+        try:
+            data.decode("utf-8")
+        except UnicodeDecodeError:
+            return None
+    st = _Statements(path)
+    for i, s0, s1 in other.tolist():
+        if st.take(i, data[s0:s1].decode("utf-8")) is not None:
+            return None  # an indented or bare v / vn / f line: the Python reader's
+    try:
+        polylines = st.polyline_refs(v_line, vn_line)
+    except FormatError:
+        return None
+    n_v = face_nv[:, None]
+    tri = np.where(faces < 0, faces + n_v + 1, faces)
+    if ((tri < 1) | (tri > n_v)).any():
+        return None
+    n_vn = face_nvn[:, None]
+    nrm = np.where(face_n < 0, face_n + n_vn + 1, face_n)
+    if ((nrm != 0) & ((nrm < 1) | (nrm > n_vn))).any():
+        return None
+    colors = v[:, 3:6].copy() if v.shape[1] == 6 else None
+    vertices = v[:, :3] if len(v) else np.zeros((0, 3))
+    return st.mesh(vertices, colors, vn if len(vn_line) else None, polylines,
+                   (tri - 1).astype(np.int32), nrm - 1, face_line)
 
 
 def _bulk_tokens(lines, idx, width, forbid: str | None = None):
@@ -339,6 +419,35 @@ def _fmt_rows(arr: np.ndarray, prefix: str, fmt: str, block: int = 4096) -> str:
     return "".join(out)
 
 
+def _fixed_digits(fmt: str) -> int | None:
+    """N for a ``%.Nf`` format with 1 <= N <= 9 (the kernel's), else None."""
+    if len(fmt) == 4 and fmt.startswith("%.") and fmt.endswith("f") and fmt[2] in "123456789":
+        return int(fmt[2])
+    return None
+
+
+def _rows_text(arr: np.ndarray, prefix: str, fmt: str) -> tuple[str, np.ndarray | None]:
+    """(the rows of ``arr`` as ``prefix`` + numbers lines, the numbers as they read back or None):
+    by :func:`._objtext.format_fixed` for large arrays in a ``%.Nf`` format (the same text,
+    flagged rows formatted again here), else by :func:`_fmt_rows`."""
+    digits = _fixed_digits(fmt)
+    arr = np.ascontiguousarray(arr, dtype=np.float64)
+    if digits is None or arr.ndim != 2 or not _fast(16 * arr.size):
+        return _fmt_rows(arr, prefix, fmt), None
+    from ._objtext import format_fixed
+
+    buf, flagged, back = format_fixed(np.frombuffer(prefix.encode("ascii"), np.uint8), arr, digits)
+    text = buf.tobytes().decode("ascii")
+    if flagged.any():
+        lines = text.split("\n")
+        row = prefix + " ".join([fmt] * arr.shape[1])
+        for k in np.nonzero(flagged)[0].tolist():
+            lines[k] = row % tuple(arr[k].tolist())
+            back[k] = [float(t) for t in lines[k][len(prefix):].split()]
+        text = "\n".join(lines)
+    return text, back
+
+
 def as_written(arr: np.ndarray, fmt: str = FLOAT_FMT) -> np.ndarray:
     """``arr`` (n, c) as :func:`write_obj` writes it with ``fmt`` and a reader reads it back."""
     return written_vertices(arr, fmt)[0]
@@ -351,8 +460,9 @@ def written_vertices(arr: np.ndarray, fmt: str = FLOAT_FMT) -> tuple[np.ndarray,
     arr = np.asarray(arr, dtype=np.float64)
     if arr.size == 0:
         return arr.copy(), ""
-    text = _fmt_rows(arr, "v ", fmt)
-    values = np.array(text.replace("v ", "").split(), dtype=np.float64)
+    text, values = _rows_text(arr, "v ", fmt)
+    if values is None:
+        values = np.array(text.replace("v ", "").split(), dtype=np.float64)
     return values.reshape(arr.shape), text
 
 
@@ -374,13 +484,13 @@ def write_obj(path, mesh: ObjMesh, *, header: str | None = None, fmt: str = FLOA
     if mtllib and mesh.face_material is not None and mesh.n_faces and bool(np.any(mesh.face_material >= 0)):
         parts.append(f"mtllib {mtllib}\n")
     if mesh.vertex_colors is not None:
-        parts.append(_fmt_rows(np.hstack([mesh.vertices, mesh.vertex_colors]), "v ", fmt))
+        parts.append(_rows_text(np.hstack([mesh.vertices, mesh.vertex_colors]), "v ", fmt)[0])
     elif vertex_text is not None:
         parts.append(vertex_text)
     else:
-        parts.append(_fmt_rows(mesh.vertices, "v ", fmt))
+        parts.append(_rows_text(mesh.vertices, "v ", fmt)[0])
     if mesh.normals is not None:
-        parts.append(_fmt_rows(mesh.normals, "vn ", fmt))
+        parts.append(_rows_text(mesh.normals, "vn ", fmt)[0])
     parts.append(_face_lines(mesh))
     for pl in mesh.lines:
         parts.append("l " + " ".join(str(int(i) + 1) for i in pl) + "\n")
@@ -404,6 +514,12 @@ def _face_lines(mesh: ObjMesh) -> str:
     change[1:] = (grp[1:] != grp[:-1]) | (mat[1:] != mat[:-1])
     starts = np.nonzero(change)[0].tolist() + [m]
     out = ["s 1\n"]
+    fast = None
+    if _fast(16 * m):
+        from ._objtext import format_faces
+
+        buf, offs = format_faces(np.ascontiguousarray(mesh.faces, dtype=np.int64), mesh.normals is not None)
+        fast = buf.tobytes().decode("ascii")
     cur_g = cur_m = -1
     for s0, s1 in zip(starts[:-1], starts[1:]):
         g, mt = int(grp[s0]), int(mat[s0])
@@ -413,6 +529,9 @@ def _face_lines(mesh: ObjMesh) -> str:
         if mt != cur_m and mt >= 0:
             out.append(f"usemtl {mesh.materials[mt]}\n")
             cur_m = mt
+        if fast is not None:
+            out.append(fast[offs[s0]:offs[s1]])
+            continue
         for k in range(s0, s1, 8192):
             chunk = f1[k:min(s1, k + 8192)]
             out.append((row * len(chunk)) % tuple(chunk.ravel().tolist()))

@@ -90,7 +90,7 @@ def check_head(build: Path, *, rays: int | None, failures: list, per_frame=None,
     mesh = None
     for i, path in enumerate(canopy):
         mesh = read_obj(path)
-        n = len(intersecting_pairs(mesh.vertices, mesh.faces))
+        n = len(intersecting_pairs(mesh.vertices, mesh.faces, tri_part=mesh.face_group))
         rec = read_obj(receptacle[min(i, len(receptacle) - 1)])
         nr = len(intersecting_pairs_between(mesh.vertices, mesh.faces, rec.vertices, rec.faces))
         total_pairs += n

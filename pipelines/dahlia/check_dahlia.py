@@ -92,7 +92,7 @@ def main(build: Path) -> int:
 
     ball, packed = collisions(build / "canopy"), collisions(build / "packed")
     off = read_obj(list_obj_sequence(build / "packed_off")[-1])
-    n_off = len(intersecting_pairs(off.vertices, off.faces))
+    n_off = len(intersecting_pairs(off.vertices, off.faces, tri_part=off.face_group))
     print(f"collisions found: ball {ball}, packed {packed} ({packed / max(ball, 1):.1f} x); packed without "
           f"collision handling, last frame: {n_off} intersecting pairs")
     if ball == 0:

@@ -35,7 +35,7 @@ def main(build: Path, size: str, out: Path) -> int:
         for name, title in (("packed_off", "collisions off"), ("packed", "collisions on")):
             last = list_obj_sequence(build / name)[-1]
             mesh = read_obj(last)
-            n = len(intersecting_pairs(mesh.vertices, mesh.faces))
+            n = len(intersecting_pairs(mesh.vertices, mesh.faces, tri_part=mesh.face_group))
             tiles = []
             for zoom in ZOOMS:
                 png = Path(tmp) / f"{name}_{zoom}.png"

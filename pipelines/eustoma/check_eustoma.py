@@ -69,7 +69,7 @@ def main(build: Path) -> int:
             if not m.same_topology(first):
                 print(f"  {name} {p.name}: topology differs from the bud")
                 bad += 1
-            n = len(intersecting_pairs(m.vertices, m.faces))
+            n = len(intersecting_pairs(m.vertices, m.faces, tri_part=m.face_group))
             pairs.append(n)
             bad += n
             if i + 1 in (1, 50, len(paths)):

@@ -52,7 +52,7 @@ def worst_pair(mesh, pos, up) -> tuple:
     florets face most directly out of the panicle (the smaller of their ``up`` . outward, outward
     the horizontal direction from the main axis to their midpoint, tilted 30 degrees up), times
     its count. ``pos``, ``up``: the placements'. Returns (the pair or None, all pairs' count)."""
-    pairs = np.asarray(intersecting_pairs(mesh.vertices, mesh.faces)).reshape(-1, 2)
+    pairs = np.asarray(intersecting_pairs(mesh.vertices, mesh.faces, tri_part=mesh.face_group)).reshape(-1, 2)
     of = floret_of_face(mesh)
     a, b = of[pairs[:, 0]], of[pairs[:, 1]]
     keep = a != b
@@ -88,7 +88,7 @@ def cut_out(mesh, keep: set, mark: tuple) -> ObjMesh:
 
 def pair_count(mesh, mark: tuple) -> int:
     sub = cut_out(mesh, set(mark), mark)
-    return len(intersecting_pairs(sub.vertices, sub.faces))
+    return len(intersecting_pairs(sub.vertices, sub.faces, tri_part=sub.face_group))
 
 
 def main(build: Path, size: str, out: Path) -> int:
@@ -122,7 +122,7 @@ def main(build: Path, size: str, out: Path) -> int:
     panels = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, mesh, title in (("off", off, "collisions off"), ("on", on, "collisions on")):
-            n = len(intersecting_pairs(mesh.vertices, mesh.faces))
+            n = len(intersecting_pairs(mesh.vertices, mesh.faces, tri_part=mesh.face_group))
             obj = Path(tmp) / f"{name}.obj"
             write_obj(obj, cut_out(mesh, keep, mark))
             png = Path(tmp) / f"{name}.png"

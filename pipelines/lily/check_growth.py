@@ -68,7 +68,7 @@ def main(frames: Path) -> int:
     bad = 0
     for i, p in enumerate(paths):
         m = read_obj(p)
-        n = len(intersecting_pairs(m.vertices, m.faces))
+        n = len(intersecting_pairs(m.vertices, m.faces, tri_part=m.face_group))
         same = m.same_topology(first)
         bad += n + (not same)
         if i + 1 in LISTED or n or not same:

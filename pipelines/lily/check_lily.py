@@ -50,7 +50,7 @@ def main(build: Path) -> int:
     tested = 0
     for i, path in enumerate(canopy):  # every written frame is tested; every tenth (and 60) listed
         mesh = read_obj(path)
-        n = len(intersecting_pairs(mesh.vertices, mesh.faces))
+        n = len(intersecting_pairs(mesh.vertices, mesh.faces, tri_part=mesh.face_group))
         c = cross_pairs(mesh, read_obj(column[i]))
         bad += n + c
         tested += 1
@@ -64,7 +64,7 @@ def main(build: Path) -> int:
     print(f"smooth: {len(smooth)} frames")
     for path in smooth:
         mesh = read_obj(path)
-        n = len(intersecting_pairs(mesh.vertices, mesh.faces))
+        n = len(intersecting_pairs(mesh.vertices, mesh.faces, tri_part=mesh.face_group))
         bad += n
         print(f"  {path.name}: {len(mesh.faces)} triangles, {n} intersecting pairs")
     print("OK: no intersecting triangle pairs" if bad == 0 else f"FAILED: {bad} intersecting pairs")

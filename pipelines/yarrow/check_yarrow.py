@@ -40,7 +40,7 @@ from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between  
 
 
 def count(mesh) -> int:
-    return len(intersecting_pairs(mesh.vertices, mesh.faces))
+    return len(intersecting_pairs(mesh.vertices, mesh.faces, tri_part=mesh.face_group))
 
 
 def cross_pairs(a, b) -> int:
