@@ -695,6 +695,17 @@ def test_frames_option_overrides_the_run_length(inputs, tmp_path):
     assert res.returncode == 2 and not (tmp_path / "bad").exists()
 
 
+def test_updates_option_overrides_the_steps_per_frame(inputs, tmp_path):
+    out = tmp_path / "u"
+    res = run_cli("fccompose", inputs["dir"] / "single.fcc", "-o", out, "-q", "--frames", "2", "--updates", "3")
+    assert res.returncode == 0, res.stderr
+    with open(out / "log.csv", newline="") as fh:
+        log = list(csv.DictReader(fh))
+    assert [int(r["steps"]) for r in log[1:]] == [3, 3]
+    res = run_cli("fccompose", inputs["dir"] / "single.fcc", "-o", tmp_path / "bad", "-q", "--updates", "0")
+    assert res.returncode == 2 and not (tmp_path / "bad").exists()
+
+
 def test_rba_matrices_of_all_florets_at_once_equal_the_one_by_one_placement(inputs, tmp_path):
     """Model.schedule places every rba: floret with one vectorized evaluation; it must give each
     floret's placement (:func:`_rba_matrix`: rows interpolated between RBA frames, the nearest

@@ -25,10 +25,14 @@ from .compose import compose_canopy
 @click.option("--frames", "frames", type=click.IntRange(min=0), default=None, metavar="N",
               help="Frames to simulate; overrides the file's 'run for number of frames' (a pipeline's "
                    "draft and final builds share one .fcc).")
-def main(params, output, resume, strict, allow_initial_intersections, frames, quiet, debug):
+@click.option("--updates", "updates", type=click.IntRange(min=1, max=1000), default=None, metavar="N",
+              help="Simulation steps per frame; overrides the file's 'updates per frame'.")
+def main(params, output, resume, strict, allow_initial_intersections, frames, updates, quiet, debug):
     p = read_fcc(params)
     if frames is not None:
         p = dataclasses.replace(p, run_frames=int(frames))
+    if updates is not None:
+        p = dataclasses.replace(p, updates_per_frame=int(updates))
     _refuse_output_holding_inputs(params, p, output)
     warn = (lambda msg: None) if quiet else (lambda msg: click.echo(f"fccompose: warning: {msg}", err=True))
     res = compose_canopy(
