@@ -19,7 +19,7 @@ from conftest import no_partial_files  # noqa: E402
 from inflo.formats.obj import read_obj  # noqa: E402
 from inflo.formats.pc2 import encode_pc2, read_pc2  # noqa: E402
 from inflo.tools.canopy_export import cli as export_cli  # noqa: E402
-from inflo.tools.canopy_export.usd import srgb_to_linear, vertex_normals  # noqa: E402
+from inflo.tools.canopy_export.usd import points_extent, srgb_to_linear, vertex_normals  # noqa: E402
 
 # frame k: the quad's far corner rises; frame 2 adds vertex 5 and face (2, 5, 3), material mtl4
 _BASE = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0)]
@@ -212,6 +212,26 @@ def test_helpers():
     v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [5, 5, 5]], float)
     n = vertex_normals(v, np.array([[0, 1, 2]]))
     assert n.dtype == np.float32 and np.all(n == 0)
+
+
+def test_fast_helpers_match_their_plain_versions():
+    """points_extent (a transposed copy reduced by rows) and vertex_normals (bincount) give the
+    very bits of the plain numpy they replace: min/max along axis 0, np.add.at per corner."""
+    rng = np.random.default_rng(7)
+    v = rng.normal(size=(500, 3)) * 10
+    f = rng.integers(0, 480, size=(900, 3))  # vertices 480.. in no face: zero normals
+    pts = v.astype(np.float32)
+    ext = points_extent(pts)
+    assert ext.dtype == np.float32 and ext.shape == (2, 3)
+    assert ext.tobytes() == np.stack([pts.min(axis=0), pts.max(axis=0)]).tobytes()
+    assert points_extent(np.zeros((0, 3), np.float32)).tobytes() == np.zeros((2, 3), np.float32).tobytes()
+    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    acc = np.zeros_like(v)
+    for j in range(3):
+        np.add.at(acc, f[:, j], fn)
+    length = np.linalg.norm(acc, axis=1, keepdims=True)
+    ref = np.divide(acc, length, out=np.zeros_like(acc), where=length > 0).astype(np.float32)
+    assert vertex_normals(v, f).tobytes() == ref.tobytes()
 
 
 def test_changing_faces_carry_material_index_and_mtl(build):

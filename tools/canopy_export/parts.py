@@ -158,6 +158,7 @@ def iter_frames(parts: Sequence[Part], n_frames: int, *, constant_topology: bool
     """
     prev: list[ObjMesh | None] = [None] * len(parts)
     first: list[ObjMesh | None] = [None] * len(parts)
+    prev_key: list[tuple] = [()] * len(parts)  # _face_materials(prev[i])
     for k in range(n_frames):
         meshes, changed = [], []
         for i, part in enumerate(parts):
@@ -166,15 +167,16 @@ def iter_frames(parts: Sequence[Part], n_frames: int, *, constant_topology: bool
                 changed.append(False)
                 continue
             mesh = read_obj(part.path(k))
+            key = _face_materials(mesh)
             if prev[i] is None:
                 first[i] = mesh
                 change = True
             else:
                 change = _check_topology(part, k, mesh, prev[i], first[i], constant_topology)
-                change = change or _face_materials(mesh) != _face_materials(prev[i])
+                change = change or key != prev_key[i]
             meshes.append(mesh)
             changed.append(change)
-            prev[i] = mesh
+            prev[i], prev_key[i] = mesh, key
         yield k, meshes, changed
 
 

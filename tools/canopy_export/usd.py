@@ -22,7 +22,7 @@ import numpy as np
 from inflo.formats.atomic import atomic_path
 from inflo.formats.obj import ObjMesh
 
-__all__ = ["USD_SUFFIXES", "SUBSET_MODES", "srgb_to_linear", "vertex_normals", "UsdBuilder"]
+__all__ = ["USD_SUFFIXES", "SUBSET_MODES", "srgb_to_linear", "vertex_normals", "points_extent", "UsdBuilder"]
 
 USD_SUFFIXES = (".usdc", ".usda", ".usd")
 """Output suffixes: binary crate, text, binary (usd-core's default for ``.usd``)."""
@@ -50,11 +50,25 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     acc = np.zeros_like(v)
     if len(f):
         fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-        for j in range(3):
-            np.add.at(acc, f[:, j], fn)
+        # each face's normal added to its corners', corner 0 of every face first, then 1, then 2:
+        # bincount sums in that order, as ``np.add.at`` per corner would, so the same bits, faster
+        corners = f.T.reshape(-1)
+        for c in range(3):
+            acc[:, c] = np.bincount(corners, weights=np.tile(fn[:, c], 3), minlength=len(v))
     length = np.linalg.norm(acc, axis=1, keepdims=True)
     out = np.divide(acc, length, out=np.zeros_like(acc), where=length > 0)
     return out.astype(np.float32)
+
+
+def points_extent(points: np.ndarray) -> np.ndarray:
+    """The bounding box of ``points`` ``(n, 3) float32``: ``(2, 3) float32``, its min and max
+    corners (zeros for no points), the Mesh's ``extent``."""
+    if not len(points):
+        return np.zeros((2, 3), np.float32)
+    # per coordinate over a contiguous row: some 40 times faster than reducing (n, 3) along
+    # axis 0, the transposed copy included (min and max are exact, so the same values)
+    rows = np.ascontiguousarray(np.asarray(points, dtype=np.float32).T)
+    return np.stack([rows.min(axis=1), rows.max(axis=1)])
 
 
 @dataclass
@@ -154,7 +168,7 @@ class UsdBuilder:
     def add_frame(self, frame: int, meshes: Sequence[ObjMesh | None], changed: Sequence[bool]) -> None:
         """Add 0-based ``frame``: one mesh per part (None: a static part after frame 0), and per
         part whether its faces or materials changed since the previous frame."""
-        from pxr import Gf, Usd, Vt
+        from pxr import Usd, Vt
 
         for st, usd_mesh, mesh, change in zip(self._parts, self._meshes, meshes, changed):
             if mesh is None:
@@ -162,11 +176,7 @@ class UsdBuilder:
             t = Usd.TimeCode.Default() if st.static else Usd.TimeCode(self.time(frame))
             pts = np.ascontiguousarray(mesh.vertices, dtype=np.float32)
             usd_mesh.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(pts), t)
-            if len(pts):
-                lo, hi = pts.min(axis=0), pts.max(axis=0)
-            else:
-                lo = hi = np.zeros(3, np.float32)
-            usd_mesh.GetExtentAttr().Set(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]), t)
+            usd_mesh.GetExtentAttr().Set(Vt.Vec3fArray.FromNumpy(points_extent(pts)), t)
             if self.normals:
                 if mesh.normals is not None:
                     nrm = np.ascontiguousarray(mesh.normals, dtype=np.float32)
