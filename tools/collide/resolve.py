@@ -363,14 +363,18 @@ class _StepBroadPhase:
     """The broad phase of one step's detection rounds (Alg. 1 lines 10-20).
 
     Round 0 builds grids over every element's box (from ``x0`` to the predicted ``x1``), grown by
-    a slack of ``BROAD_SLACK`` mean triangle extents, pairs them all and keeps the pairs. Later rounds test
-    only pairs with an active element (one with a vertex the last round's constraints moved, or in
-    a pair still crossing). A vertex that has moved by no more than the slack in any coordinate
-    since round 0 is still inside its grown round-0 box, and so are its elements' boxes: the pairs
-    of two such elements are among round 0's (kept where an element is active and the current
-    boxes overlap). Elements with a vertex that has left its box (few: the collision response
-    moves vertices by about the thickness) are paired afresh: the active ones against round 0's
-    grids, and every active one against a small grid over the current boxes of those that left.
+    a slack of ``BROAD_SLACK`` mean triangle extents, and pairs the elements' true boxes against
+    them (kept where the true boxes overlap). Later rounds test only pairs with an active element
+    (one with a vertex the last round's constraints moved, or in a pair still crossing). A vertex
+    that has moved by no more than the slack in any coordinate since round 0 is still inside its
+    grown round-0 box, and so are its elements' boxes: the pairs of two such elements are among
+    the grown boxes' pairs (kept where an element is active and the current boxes overlap). Those
+    pairs are found for an element the first round it is active and kept for the rest of the step
+    (:meth:`_extend`): a step's retries touch a small part of a large canopy (a tenth of the final
+    yarrow's vertices), and pairing every grown box was half of its collision time. Elements with
+    a vertex that has left its box (few: the collision response moves vertices by about the
+    thickness) are paired afresh: the active ones against round 0's grids, and every active one
+    against a small grid over the current boxes of those that left.
     """
 
     def __init__(self, x0, tri, edges, pad, cell_size, vertex_part=None, parts_mode=PARTS_ANY):
@@ -405,8 +409,8 @@ class _StepBroadPhase:
         return np.ascontiguousarray(pairs_vt[kv]), np.ascontiguousarray(pairs_ee[ke])
 
     def first(self, x1, pairs=True):
-        """Round 0: the grids and the grown boxes' pairs for the later rounds; the pairs of the
-        true boxes (None with ``pairs=False``: round 0 was detected otherwise)."""
+        """Round 0: the grown boxes' grids for the later rounds; the pairs of the true boxes
+        (None with ``pairs=False``: round 0 was detected otherwise)."""
         x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
         vb = vertex_boxes(x0, x1, pad)
         tb = triangle_boxes(x0, x1, tri, pad)
@@ -430,17 +434,62 @@ class _StepBroadPhase:
         self.grid_t = BoxGrid(self.tb, cell, self.origin, tri, parts=self.tpart)
         self.grid_e = BoxGrid(self.eb, cell, self.origin, edges, parts=self.epart)
         self.grid_v = None
-        # the grown boxes' pairs, for the later rounds; this round tests those of the true boxes
-        self.vt0 = self.grid_t.query(self.vb, vertices=self.vid, parts=self.vpart, parts_mode=m)
-        self.ee0 = self.grid_e.query(self.eb, same=True, vertices=edges, parts=self.epart, parts_mode=m)
+        # the grown boxes' pairs of the elements active so far (the later rounds'): _extend
+        self.vt0 = np.zeros((0, 2), np.int32)
+        self.ee0 = np.zeros((0, 2), np.int32)
+        self.have_v = np.zeros(len(x0), np.bool_)
+        self.have_t = np.zeros(len(tri), np.bool_)
+        self.have_e = np.zeros(len(edges), np.bool_)
         if not pairs:
             return None
+        # this round's pairs: the true boxes against the grown grids, kept where the true boxes
+        # overlap (a grown box holds its true box: none is missed)
         none = np.zeros(len(x0), np.bool_)
         no_t = np.zeros(len(tri), np.bool_)
         no_e = np.zeros(len(edges), np.bool_)
-        vt = _live_pairs(self.vt0, self.vid, tri, x0, x1, pad, none, none, no_t, False)
-        ee = _live_pairs(self.ee0, edges, edges, x0, x1, pad, none, no_e, no_e, False)
+        vt = self.grid_t.query(vb, vertices=self.vid, parts=self.vpart, parts_mode=m)
+        ee = self.grid_e.query(eb, same=True, vertices=edges, parts=self.epart, parts_mode=m)
+        vt = _live_pairs(vt, self.vid, tri, x0, x1, pad, none, none, no_t, False)
+        ee = _live_pairs(ee, edges, edges, x0, x1, pad, none, no_e, no_e, False)
         return vt, ee
+
+    def _extend(self, active, active_t, active_e):
+        """Add the grown boxes' pairs of the active elements not paired yet to ``vt0``/``ee0``:
+        each pair once, by the first of its two elements to be active (by the vertex where a
+        vertex and a triangle become active in one round, by the lower edge of two edges)."""
+        m, P = self.mode, self._parts
+        nv = np.nonzero(active & ~self.have_v)[0]
+        nt = np.nonzero(active_t & ~self.have_t)[0]
+        ne = np.nonzero(active_e & ~self.have_e)[0]
+        vt, ee = [self.vt0], [self.ee0]
+        if len(nv):
+            p = self.grid_t.query(self.vb[nv], vertices=self.vid[nv], parts=P(self.vpart, nv), parts_mode=m,
+                                  skip=self.have_t)
+            p[:, 0] = nv[p[:, 0]]
+            vt.append(p)
+            self.have_v[nv] = True
+        if len(nt):
+            if self.grid_v is None:
+                self.grid_v = BoxGrid(self.vb, self.cell, self.origin, self.vid, parts=self.vpart)
+            # vertices paired already (the ones before and this round's new ones) are skipped
+            p = self.grid_v.query(self.tb[nt], vertices=self.tri[nt], parts=P(self.tpart, nt), parts_mode=m,
+                                  skip=self.have_v)
+            vt.append(np.ascontiguousarray(np.stack([p[:, 1], nt[p[:, 0]].astype(np.int32)], axis=1)))
+            self.have_t[nt] = True
+        if len(ne):
+            new_e = np.zeros(len(self.edges), np.bool_)
+            new_e[ne] = True
+            p = self.grid_e.query(self.eb[ne], vertices=self.edges[ne], parts=P(self.epart, ne), parts_mode=m,
+                                  skip=self.have_e)
+            a = ne[p[:, 0]].astype(np.int32)
+            b = p[:, 1]
+            keep = ~new_e[b] | (a < b)
+            ee.append(np.ascontiguousarray(np.stack([np.minimum(a, b)[keep], np.maximum(a, b)[keep]], axis=1)))
+            self.have_e[ne] = True
+        if len(vt) > 1:
+            self.vt0 = np.concatenate(vt)
+        if len(ee) > 1:
+            self.ee0 = np.concatenate(ee)
 
     def again(self, x1, active):
         x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
@@ -452,6 +501,7 @@ class _StepBroadPhase:
         moved_e = _touching(moved, edges)
         active_t = _touching(active, tri)
         active_e = _touching(active, edges)
+        self._extend(active, active_t, active_e)
         vt = [_live_pairs(self.vt0, self.vid, tri, x0, x1, pad, active, moved, moved_t, True)]
         ee = [_live_pairs(self.ee0, edges, edges, x0, x1, pad, active, moved_e, moved_e, True)]
         mv = np.nonzero(moved)[0]
