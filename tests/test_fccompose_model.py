@@ -144,3 +144,35 @@ def test_state_files_keep_their_format(tmp_path):
     assert _load_state(tmp_path, "abc", m) is None  # frame_0004.obj is missing: nothing to resume
     with pytest.raises(InputError, match="different parameters"):
         _load_state(tmp_path, "other", m)
+
+
+def test_rest_values_in_parallel_blocks_equal_one_serial_pass():
+    """model.rest_values runs blocks of edges and hinges in parallel; every value must be the one
+    serial pass gives, bit for bit (florets whose time sits on a template frame, alpha 0, too)."""
+    from inflo.tools.fccompose import model as M
+
+    rng = np.random.default_rng(0)
+    nf, per = 50, 40
+    tx = rng.normal(size=(nf * per * 2, 3))
+    vf = np.repeat(np.arange(nf), per).astype(np.int64)
+    off = (np.arange(nf) * per).astype(np.int64)
+    ba = np.zeros(nf, np.int64)
+    bb = np.full(nf, nf * per, np.int64)
+    al = rng.random(nf)
+    al[::3] = 0.0
+    mat = rng.normal(size=(nf, 3, 4))
+    e = np.array([(f * per + k, f * per + k + 1) for f in range(nf) for k in range(per - 3)], np.int32)
+    h = np.array([(f * per + k, f * per + k + 1, f * per + k + 2, f * per + k + 3)
+                  for f in range(nf) for k in range(per - 3)], np.int32)
+    lengths, angles = np.empty(len(e)), np.empty(len(h))
+    M.rest_values(tx, vf, off, ba, bb, al, mat, e, h, lengths, angles)
+    ref_l, ref_a = np.empty(len(e)), np.empty(len(h))
+    M._rest_lengths(tx, vf, off, ba, bb, al, mat, e, ref_l, 0, len(e))
+    M._rest_angles(tx, vf, off, ba, bb, al, mat, h, ref_a, 0, len(h))
+    assert lengths.tobytes() == ref_l.tobytes() and angles.tobytes() == ref_a.tobytes()
+    # the lengths are those of the mapped, interpolated template
+    # (template rows: the frame's base row + the vertex's index within its floret)
+    f, k = 1, 5
+    a = (1 - al[f]) * np.linalg.norm(mat[f, :, :3] @ (tx[k] - tx[k + 1])) + al[f] * np.linalg.norm(
+        mat[f, :, :3] @ (tx[nf * per + k] - tx[nf * per + k + 1]))
+    assert abs(lengths[f * (per - 3) + k] - a) < 1e-12

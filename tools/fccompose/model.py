@@ -58,7 +58,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.fcc import CanopyParams
@@ -968,16 +968,11 @@ def _mapped(template_x, f, row, matrix, out):
 
 
 @njit(cache=True)
-def rest_values(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, matrix,
-                edge_indices, hinge_indices, edge_rest_length, hinge_rest_angle):
-    """Rest lengths (eq. 3.11) and signed rest angles (eq. 3.13) at the floret's developmental time.
-
-    Each is measured on both template frames around the time, mapped by the linear part of the
-    floret's placement, and interpolated with weight ``alpha`` (angles modulo 2 pi).
-    """
-    pa = np.empty((4, 3))
-    pb = np.empty((4, 3))
-    for e in range(edge_indices.shape[0]):
+def _rest_lengths(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, matrix,
+                  edge_indices, edge_rest_length, lo, hi):
+    pa = np.empty((2, 3))
+    pb = np.empty((2, 3))
+    for e in range(lo, hi):
         i = edge_indices[e, 0]
         j = edge_indices[e, 1]
         f = vertex_floret[i]
@@ -994,7 +989,14 @@ def rest_values(template_x, vertex_floret, floret_vertex_offset, base_a, base_b,
             edge_rest_length[e] = (1.0 - s) * la + s * lb
         else:
             edge_rest_length[e] = la
-    for h in range(hinge_indices.shape[0]):
+
+
+@njit(cache=True)
+def _rest_angles(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, matrix,
+                 hinge_indices, hinge_rest_angle, lo, hi):
+    pa = np.empty((4, 3))
+    pb = np.empty((4, 3))
+    for h in range(lo, hi):
         f = vertex_floret[hinge_indices[h, 0]]
         off = floret_vertex_offset[f]
         for k in range(4):
@@ -1008,6 +1010,39 @@ def rest_values(template_x, vertex_floret, floret_vertex_offset, base_a, base_b,
             hinge_rest_angle[h] = wrap_angle(th_a + s * wrap_angle(th_b - th_a))
         else:
             hinge_rest_angle[h] = th_a
+
+
+#: blocks of the parallel rest values (each edge or hinge is computed alone: the same values on
+#: any number of threads)
+_REST_BLOCKS = 64
+
+
+@njit(cache=True, parallel=True)
+def rest_values(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, matrix,
+                edge_indices, hinge_indices, edge_rest_length, hinge_rest_angle):
+    """Rest lengths (eq. 3.11) and signed rest angles (eq. 3.13) at the floret's developmental time.
+
+    Each is measured on both template frames around the time, mapped by the linear part of the
+    floret's placement, and interpolated with weight ``alpha`` (angles modulo 2 pi). Blocks of
+    edges and hinges run in parallel; each value is computed on its own (thread-independent).
+    """
+    ne = edge_indices.shape[0]
+    nh = hinge_indices.shape[0]
+    per_e = (ne + _REST_BLOCKS - 1) // _REST_BLOCKS
+    per_h = (nh + _REST_BLOCKS - 1) // _REST_BLOCKS
+    for b in prange(2 * _REST_BLOCKS):
+        if b < _REST_BLOCKS:
+            lo = b * per_e
+            hi = min(ne, lo + per_e)
+            if lo < hi:
+                _rest_lengths(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, matrix,
+                              edge_indices, edge_rest_length, lo, hi)
+        else:
+            lo = (b - _REST_BLOCKS) * per_h
+            hi = min(nh, lo + per_h)
+            if lo < hi:
+                _rest_angles(template_x, vertex_floret, floret_vertex_offset, base_a, base_b, alpha, matrix,
+                             hinge_indices, hinge_rest_angle, lo, hi)
 
 
 @njit(cache=True)
