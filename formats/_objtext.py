@@ -32,6 +32,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ._rbatext import _put_uint
+
 __all__ = ["parse_obj", "format_fixed", "format_faces"]
 
 #: exactly representable powers of ten (Clinger's fast path)
@@ -50,6 +52,22 @@ def _is_blank(c):
     return c == 32 or c == 9
 
 
+@njit(cache=True, inline="always")
+def _digit_run(data, p, end, mant, nd):
+    """Read the decimal digits at ``data[p:end]`` into ``mant`` (leading zeros of a zero ``mant``
+    skipped; ``nd`` counts the digits kept, stopping past 16). Returns (mant, nd, digits read, p)."""
+    n = 0
+    while p < end and 48 <= data[p] <= 57:
+        d = data[p] - 48
+        n += 1
+        if mant != 0 or d != 0:
+            if nd <= 15:
+                mant = mant * 10 + d
+            nd += 1
+        p += 1
+    return mant, nd, n, p
+
+
 @njit(cache=True)
 def _parse_float(data, p, end, pow10):
     """Parse one number token at ``data[p:end]`` (p at its first byte). Returns (value, next p, ok):
@@ -60,37 +78,15 @@ def _parse_float(data, p, end, pow10):
     if c == 45 or c == 43:  # - +
         neg = c == 45
         p += 1
-    mant = np.int64(0)
-    nd = 0  # significant digits kept
-    digits = 0  # digits seen
+    # the digits before and after the point: the significant ones (from the first non-zero) into
+    # ``mant``, those after the point counted down in ``exp10``
+    mant, nd, n_int, p = _digit_run(data, p, end, np.int64(0), 0)
     exp10 = 0
-    lead = True
-    while p < end and 48 <= data[p] <= 57:
-        d = data[p] - 48
-        digits += 1
-        if lead and d == 0:
-            pass
-        else:
-            lead = False
-            mant = mant * 10 + d
-            nd += 1
-        p += 1
+    n_frac = 0
     if p < end and data[p] == 46:  # .
-        p += 1
-        while p < end and 48 <= data[p] <= 57:
-            d = data[p] - 48
-            digits += 1
-            exp10 -= 1
-            if lead and d == 0:
-                pass
-            else:
-                lead = False
-                mant = mant * 10 + d
-                nd += 1
-            p += 1
-            if nd > 15:
-                return 0.0, p, False
-    if digits == 0 or nd > 15:
+        mant, nd, n_frac, p = _digit_run(data, p + 1, end, mant, nd)
+        exp10 = -n_frac
+    if n_int + n_frac == 0 or nd > 15:
         return 0.0, p, False
     if p < end and (data[p] == 101 or data[p] == 69):  # e E
         p += 1
@@ -314,20 +310,6 @@ def parse_obj(data):
             jf += 1
     w = width if width > 0 else 3
     return (True, v[:, :w].copy(), v_line, vn, vn_line, faces, face_n, face_line, face_nv, face_nvn, other)
-
-
-@njit(cache=True)
-def _put_uint(buf, p, v):
-    """Write the decimal digits of a non-negative int64 ``v`` at ``buf[p:]``; returns the new p."""
-    k = 1
-    t = v // 10
-    while t > 0:
-        k += 1
-        t //= 10
-    for j in range(k - 1, -1, -1):
-        buf[p + j] = 48 + v % 10
-        v //= 10
-    return p + k
 
 
 @njit(cache=True)
