@@ -24,7 +24,7 @@ from inflo.tools.collide import (
     triangles_intersect,
     vertex_triangle_ccd,
 )
-from inflo.tools.collide.broad import box_pairs_brute
+from inflo.tools.collide.broad import box_pairs_brute, lattice_cell_size
 from inflo.tools.pbd import mesh_edges
 
 A = np.array([0.0, 0.0, 0.0])
@@ -802,3 +802,45 @@ def test_a_part_that_fits_at_no_scale_is_given_room_by_its_neighbours_made_small
     np.testing.assert_allclose(x1[:4], 0.4 * sq)
     np.testing.assert_array_equal(x1[4:], small[4:])
     assert len(intersecting_pairs(x1, tri)) == 0
+
+
+def test_lattice_cell_size_is_kept_between_one_and_five_mean_extents():
+    from inflo.formats.fcc import LatticeParams
+    from inflo.tools.collide.broad import MAX_CELL_EXTENTS
+    boxes = np.zeros((4, 6))
+    boxes[:, 3:] = 0.1  # mean extent 0.1
+    lo, hi = np.zeros(3), np.array([100.0, 1.0, 1.0])
+    coarse = LatticeParams(divisions=(10, 10, 10))  # 100 / 10 = 10 x the mean extent
+    assert lattice_cell_size(coarse, lo, hi, boxes) == pytest.approx(MAX_CELL_EXTENTS * 0.1)
+    fine = LatticeParams(divisions=(10_000, 10, 10))  # 0.01: below the mean extent
+    assert lattice_cell_size(fine, lo, hi, boxes) == pytest.approx(0.1)
+    mid = LatticeParams(divisions=(500, 10, 10))  # 0.2: kept
+    assert lattice_cell_size(mid, lo, hi, boxes) == pytest.approx(0.2)
+    # the broad phase is exact whatever the cell: the pairs of random boxes at every cell size
+    rng = np.random.default_rng(3)
+    c = rng.random((300, 3)) * 4
+    b = np.hstack([c, c + rng.random((300, 3)) * 0.3])
+    ref = box_pairs_brute(b, b, True)
+    for cell in (0.1, 0.3, 1.5, 4.0):
+        np.testing.assert_array_equal(box_pairs(b, None, cell_size=cell), ref)
+
+
+@pytest.mark.parametrize("budget", [None, 0])
+def test_box_pairs_with_boxes_far_longer_than_the_cell(monkeypatch, budget):
+    """Boxes swept far (a response moved their elements) next to small ones, with the canopy's
+    small cell: the big ones are paired directly, the cell taken no smaller than the mean box
+    (or, past the budget, coarsened to the biggest); the pairs are exactly the brute-force ones."""
+    from inflo.tools.collide import broad
+    if budget is not None:
+        monkeypatch.setattr(broad, "BIG_BOX_BUDGET", budget)
+    rng = np.random.default_rng(11)
+    for trial in range(12):
+        n = 300
+        c = rng.random((n, 3)) * 5
+        b = np.hstack([c, c + rng.random((n, 3)) * 0.1])
+        k = rng.choice(n, rng.integers(1, 8), replace=False)
+        b[k, 3:] = b[k, :3] + rng.random((len(k), 3)) * 10  # a few hundred cells long
+        np.testing.assert_array_equal(box_pairs(b, None, cell_size=0.02), box_pairs_brute(b, b, True))
+        q = b[::4]
+        np.testing.assert_array_equal(box_pairs(q, b, cell_size=0.02), box_pairs_brute(q, b, False))
+        np.testing.assert_array_equal(box_pairs(b, q, cell_size=0.02), box_pairs_brute(b, q, False))

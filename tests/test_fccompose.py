@@ -521,9 +521,10 @@ def test_florets_with_no_room_are_made_smaller_not_torn(inputs, tmp_path):
 
 
 @pytest.mark.skip(reason="issue 13 follow-up: with florets 1.2 x their primordia and h a tenth of a floret, "
-                         "the run takes about 3.5 minutes (frames 8 and 9: the retry rounds' far-moved "
-                         "fallback pairs every element afresh); every frame now stays within the stretch "
-                         "bounds, but it is too slow for CI; the stop on a torn floret is tested below")
+                         "the run takes about 2.4 minutes (frames 8 and 9, 100 s and 32 s of collision "
+                         "handling: elements moved far by the responses, swept boxes giving 0.5-1 M "
+                         "candidate pairs a round); every frame stays within the stretch bounds, but it "
+                         "is too slow for CI; the stop on a torn floret is tested below")
 def test_florets_squeezed_hard_stay_whole(inputs, tmp_path):
     """The same head with florets 1.2 x their primordia and a thickness h of a tenth of a floret
     (before issue 13 the per-vertex revert tore such florets and the solve diverged, to 1e11 units,
