@@ -29,6 +29,7 @@ from .dynamics import dynamic_scene, simulate, write_frames
 from .hierarchy import grow_hierarchy, hierarchy_scene, hierarchy_state
 from .params import Params, Primordia
 from .ridley import area_function, pattern_scene, static_pattern
+from .room import apply_room, fill_room
 from .surface import load_curve
 
 __all__ = ["Summary", "generate"]
@@ -169,6 +170,7 @@ def _hierarchy(params: Params, out: Path, progress, header, notes) -> Summary:
                        meristem_threshold=h_p.meristem_threshold, divergence=h_p.divergence,
                        max_count=h_p.max_count)
     final = hierarchy_state(h, h_p.frames, size_factor=pr.size_factor)
+    room = _room(final, h_p, h.element_birth[h.florets[final["ids"]]]) if h_p.fill_room else None
     frames = 0
     if h_p.dynamic:
         frames = int(math.floor(h_p.frames)) + 1
@@ -178,9 +180,13 @@ def _hierarchy(params: Params, out: Path, progress, header, notes) -> Summary:
         with ctx as bar:
             for f in range(frames):
                 st = hierarchy_state(h, float(f), size_factor=pr.size_factor)
+                if room is not None:
+                    st = apply_room(st, final, *room)
                 write_rba(rba / frame_name(f, "", ".rba", 4),
                           RbaFrame(st["ids"], st["pos"], st["scale"], st["up"], st["right"]), fast=True)
                 bar.update(1)
+    if room is not None:
+        final = apply_room(final, final, *room)
     scene = hierarchy_scene(h, final, floret_id=pr.floret_id, dynamic=h_p.dynamic, kind=pr.placement,
                             frame_start=pr.frame_start, frame_end=pr.frame_end,
                             development_frames=h_p.development_frames)
@@ -192,6 +198,18 @@ def _hierarchy(params: Params, out: Path, progress, header, notes) -> Summary:
     preview = {"pos": final["pos"], "diameter": final["scale"][:, 0], "age": h_p.frames - birth}
     return Summary(f"hierarchy ({h_p.levels} levels)", len(final["ids"]), frames, out / "scene.scn",
                    notes + list(h.messages), preview)
+
+
+def _room(final: dict, h_p, birth: np.ndarray) -> tuple:
+    """Displacement (f, 3) and diameter factor (f,) of every floret grown into its room
+    (``[hierarchy] fill_room``, :mod:`.room`)."""
+    pos = final["pos"][:, [0, 2]]
+    d = final["scale"][:, 0]
+    q, w = fill_room(pos, d, margin=h_p.room_margin, iterations=h_p.room_iterations,
+                     scale_range=tuple(h_p.room_scale), birth=birth)
+    shift = np.zeros_like(final["pos"])
+    shift[:, [0, 2]] = q - pos
+    return shift, w / d
 
 
 class _NoBar:

@@ -129,6 +129,10 @@ class Hierarchy:
     dynamic: bool = _key("bool", False)
     development_frames: int | None = _key("int", None)
     max_count: int = _key("int", 200_000)
+    fill_room: bool = _key("bool", False)
+    room_margin: float = _key("float", 1.0)
+    room_iterations: int = _key("int", 1)
+    room_scale: list = _key("floats", [0.9, 1.5])
 
 
 @dataclass(frozen=True)
@@ -383,6 +387,13 @@ def _check_ranges(p: dict, text: str, path) -> None:
             if not h["dynamic"]:
                 fail("hierarchy", "development_frames",
                      "only with dynamic = true (static files: [primordia] development_order/_frames)")
+        if h["room_margin"] < 0:
+            fail("hierarchy", "room_margin", ">= 0 (element radii)")
+        if h["room_iterations"] < 1:
+            fail("hierarchy", "room_iterations", ">= 1")
+        rs = h["room_scale"]
+        if len(rs) != 2 or not 0 < rs[0] <= rs[1]:
+            fail("hierarchy", "room_scale", "[lo, hi] with 0 < lo <= hi")
 
 
 def _per_level(values: list, levels: int) -> list:
