@@ -189,7 +189,7 @@ def test_obj_frame_in_blender(bpy_python, lily_build, tmp_path):
 
 # the parts of every species' usd stage (pipelines/*/Makefile): name -> sequence folder or OBJ file
 SPECIES_PARTS = {
-    "yarrow": {"heads": "canopy", "branches": "branches/branches.obj"},
+    "yarrow": {"heads": "canopy", "branches": "branches/frames"},  # one branch mesh per canopy frame (issue 19)
     "orlaya": {"florets": "canopy", "branches": "branches/branches.obj"},
     "sunflower": {"florets": "canopy", "receptacle": "head/receptacle"},
     "gaillardia": {"florets": "canopy", "receptacle": "head/receptacle"},

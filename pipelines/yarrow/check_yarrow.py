@@ -13,6 +13,9 @@ Prints, and exits 1 when any fails:
   is a vertex of that frame's branch mesh (the distal cap's apex), to 1e-5;
 - the edge stretch over all frames (fccompose's log) within [0.5, 1.5] x rest;
 - every floret of every head present in the last frame;
+- one canopy, not islands: the heads' discs in the last head RBA frame (the pattern's sizes, each
+  grown into its room: corymb.toml ``fill_room``), linked where two touch within 5 %, form one
+  group;
 - the rays per head (dimorph over the whole corymb, fig. 6.4a): printed as a distribution; on
   average 3-7 (real heads have about 5), every head with fewer rays than disk florets (a head
   enclosed by its neighbours may have none);
@@ -59,6 +62,21 @@ def stretch_range(log_path: Path) -> tuple[float, float, list]:
     hi = max(float(r["max_edge_stretch"]) for r in log)
     out = [r["frame"] for r in log if float(r["min_edge_stretch"]) < BOUNDS[0] or float(r["max_edge_stretch"]) > BOUNDS[1]]
     return lo, hi, out
+
+
+def canopy_groups(pos, diameter, slack: float = 1.05) -> int:
+    """Groups of heads (centres ``pos`` (n, 2) in the canopy plane, disc diameters) linked where
+    two discs touch, within ``slack``."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    n = len(pos)
+    if n == 0:
+        return 0
+    pairs = cKDTree(pos).query_pairs(float(diameter.max()) * slack, output_type="ndarray")
+    d = np.linalg.norm(pos[pairs[:, 0]] - pos[pairs[:, 1]], axis=1)
+    ok = d <= 0.5 * slack * (diameter[pairs[:, 0]] + diameter[pairs[:, 1]])
+    link = coo_matrix((np.ones(int(ok.sum())), (pairs[ok, 0], pairs[ok, 1])), shape=(n, n))
+    return int(connected_components(link, directed=False)[0])
 
 
 def rays_per_head(scene) -> list:
@@ -115,6 +133,12 @@ def main(build: Path) -> int:
     print(f"florets in the last frame: {len(present)} of {len(typed)} ({len(typed.groups) - 1} heads)")
     if len(present) != len(typed):
         fail.append(f"{len(typed) - len(present)} florets missing in the last frame")
+
+    last = read_rba(head_rba[-1])
+    groups_n = canopy_groups(last.pos[:, [0, 2]], last.scale[:, 0])
+    print(f"one canopy: {len(last.ids)} heads in {groups_n} group(s) of heads whose discs touch (within 5 %)")
+    if groups_n != 1:
+        fail.append(f"the heads form {groups_n} separate groups, not one canopy")
 
     per = rays_per_head(typed)
     size = Counter(p.group for p in typed.placements)
