@@ -160,12 +160,24 @@ FAST_BYTES = 1 << 18
 :mod:`._objtext` (the same result; on smaller ones the kernels save less than they cost to load):
 see :func:`_fast`."""
 
+_text_seen = 0
+"""Bytes / numbers this process has asked :func:`_fast` about (every OBJ read and write)."""
+
 
 def _fast(size: int) -> bool:
     """Whether a file / array of ``size`` bytes / numbers goes to the kernels: from
     :data:`FAST_BYTES` where numba is imported already (every numerical tool), from 16 times that
-    where importing it is part of the cost."""
-    return size >= FAST_BYTES and ("numba" in sys.modules or size >= 16 * FAST_BYTES)
+    where importing it is part of the cost.
+
+    The kernels' load is paid once a process: a file of any size goes to them once the process
+    has read and written :data:`FAST_BYTES` in all (numba imported), so that a sequence of small
+    frames (the lily's 100 frames of 120 kB: 10 ms a frame in Python, 1 ms in the kernel) is read
+    by the kernel after its first frames."""
+    global _text_seen
+    _text_seen += size
+    if "numba" in sys.modules:
+        return size >= FAST_BYTES or _text_seen >= 2 * FAST_BYTES
+    return size >= 16 * FAST_BYTES
 
 
 class _Statements:

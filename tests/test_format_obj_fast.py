@@ -177,3 +177,22 @@ def test_fast_writer_and_reader_round_trip_a_canopy_like_mesh(tmp_path):
     back = _read(tmp_path / "0_True.obj", True)
     np.testing.assert_allclose(back.vertices, v, atol=5e-7)
     assert (back.faces == faces).all() and (back.face_group == grp).all()
+
+
+def test_small_files_go_to_the_kernels_once_the_process_has_read_enough(monkeypatch):
+    """A file below FAST_BYTES goes to the Python reader until the process has read and written
+    2 x FAST_BYTES in all (numba imported): a sequence of small frames is read by the kernel after
+    its first frames; without numba imported only files of 16 x FAST_BYTES do."""
+    import sys
+
+    import numba  # noqa: F401  (every numerical tool has it imported)
+
+    monkeypatch.setattr(O, "FAST_BYTES", 1000)
+    monkeypatch.setattr(O, "_text_seen", 0)
+    assert O._fast(1000)  # a large file at once
+    monkeypatch.setattr(O, "_text_seen", 0)
+    taken = [O._fast(300) for _ in range(10)]
+    assert taken == [False] * 6 + [True] * 4
+    monkeypatch.setattr(O, "_text_seen", 10**9)
+    monkeypatch.delitem(sys.modules, "numba")
+    assert not O._fast(15999) and O._fast(16000)

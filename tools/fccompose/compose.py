@@ -1058,3 +1058,5 @@ def _record(run: _Run, row: FrameLog, *, write: bool) -> None:
         _save_state(run.out, sim.state, run.fingerprint, run.inputs)
         row["t_write_s"] = time.perf_counter() - t0
         write_log(run.out / "log.csv", run.log_rows)
+        # the rows written are final: kept as their text (the log is rewritten every frame)
+        run.log_rows = [r.text() if isinstance(r, FrameLog) else r for r in run.log_rows]
