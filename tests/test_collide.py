@@ -844,3 +844,17 @@ def test_box_pairs_with_boxes_far_longer_than_the_cell(monkeypatch, budget):
         q = b[::4]
         np.testing.assert_array_equal(box_pairs(q, b, cell_size=0.02), box_pairs_brute(q, b, False))
         np.testing.assert_array_equal(box_pairs(b, q, cell_size=0.02), box_pairs_brute(b, q, False))
+
+
+def test_touching_both_flags_the_elements_with_a_flagged_vertex_of_each_set():
+    from inflo.tools.collide.resolve import _touching_both
+
+    tri = np.array([[0, 1, 2], [2, 3, 4], [4, 5, 0]], np.int32)
+    edges = mesh_edges(tri)
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        a = rng.random(6) < 0.3
+        b = rng.random(6) < 0.3
+        for idx in (tri, edges):
+            ta, tb = _touching_both(a, b, idx)
+            assert (ta == a[idx].any(axis=1)).all() and (tb == b[idx].any(axis=1)).all()

@@ -570,7 +570,8 @@ def box_pairs_brute(boxes_a, boxes_b, same):
 
 #: the part-by-part sweep (:mod:`.probe`) is used where no part has more elements than this: a
 #: sweep goes along one axis, so a big part's elements each pass many others (the lily, one part
-#: of 3,780 triangles: its collision time 1.3 s with the grid, 2.1 s with the sweep; the dense
+#: of 3,780 triangles: its collision time 1.3 s with the grid, 2.1 s with the sweep; since a
+#: part's own edges are swept once rather than in both orders, 2.0 s either way; the dense
 #: growing head's florets, 280 triangles: the sweep 2 x faster)
 PART_SWEEP_MAX_ELEMENTS = 1500
 
@@ -607,22 +608,6 @@ def _part_boxes(boxes, starts):
             for d in range(3):
                 out[p, d] = min(out[p, d], boxes[i, d])
                 out[p, d + 3] = max(out[p, d + 3], boxes[i, d + 3])
-    return out
-
-
-@njit(cache=True, parallel=True)
-def _axis_orders(boxes, starts):
-    """(3, n) int32: per axis, each part's elements sorted by their boxes' minimum on that axis
-    (stable, so ties keep element order)."""
-    n = boxes.shape[0]
-    out = np.empty((3, n), np.int32)
-    for p in prange(starts.shape[0] - 1):
-        lo = starts[p]
-        hi = starts[p + 1]
-        for d in range(3):
-            order = np.argsort(boxes[lo:hi, d], kind="mergesort")
-            for k in range(hi - lo):
-                out[d, lo + k] = lo + order[k]
     return out
 
 

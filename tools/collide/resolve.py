@@ -312,15 +312,21 @@ def _merge_ee(p_edge, ae, e_map, e_active):
 
 
 @njit(cache=True)
-def _touching(flags, idx):
-    """(k,) bool: element k (a row of ``idx``) has a flagged vertex."""
-    out = np.zeros(idx.shape[0], np.bool_)
+def _touching_both(flags_a, flags_b, idx):
+    """(k,) bool twice: element k (a row of ``idx``) has a vertex flagged in ``flags_a``, in
+    ``flags_b`` (one pass over the elements for both)."""
+    out_a = np.zeros(idx.shape[0], np.bool_)
+    out_b = np.zeros(idx.shape[0], np.bool_)
     for k in range(idx.shape[0]):
+        a = False
+        b = False
         for j in range(idx.shape[1]):
-            if flags[idx[k, j]]:
-                out[k] = True
-                break
-    return out
+            v = idx[k, j]
+            a |= flags_a[v]
+            b |= flags_b[v]
+        out_a[k] = a
+        out_b[k] = b
+    return out_a, out_b
 
 
 @njit(cache=True)
@@ -497,10 +503,8 @@ class _StepBroadPhase:
         # slack have left the round-0 grids (once out, counted out for the rest of the step)
         _escape(x1, self.x1_ref, active, self.slack, self.moved)
         moved = self.moved
-        moved_t = _touching(moved, tri)
-        moved_e = _touching(moved, edges)
-        active_t = _touching(active, tri)
-        active_e = _touching(active, edges)
+        moved_t, active_t = _touching_both(moved, active, tri)
+        moved_e, active_e = _touching_both(moved, active, edges)
         self._extend(active, active_t, active_e)
         vt = [_live_pairs(self.vt0, self.vid, tri, x0, x1, pad, active, moved, moved_t, True)]
         ee = [_live_pairs(self.ee0, edges, edges, x0, x1, pad, active, moved_e, moved_e, True)]
