@@ -412,12 +412,16 @@ def _sheet(n):
     return grid, tri
 
 
-def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
-    """The retry rounds' incremental broad phase (round 0's grids of boxes grown by the slack + a
-    small grid over what moved out of them) finds every pair a brute-force test of every box pair
-    finds for the active vertices (less those sharing a vertex), and none that the boxes grown by
-    twice the slack would not pair, over rounds that move different vertices by less and by more
-    than the slack."""
+@pytest.mark.parametrize("fraction", [0.0, 0.5, 1e9])
+def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase(fraction, monkeypatch):
+    """The retry rounds' incremental broad phase (round 0's grids of boxes grown by the slack; the
+    elements of vertices that left their slack paired again at their new anchors) finds every pair
+    a brute-force test of every box pair finds for the active vertices (less those sharing a
+    vertex), each once, and none that the boxes grown by twice the slack would not pair, over
+    rounds that move different vertices by less and by more than the slack, and the same vertices
+    out of their anchors again and again; with the grids over what left rebuilt every round, now
+    and then, and only once (their stale entries skipped, a grid over the re-anchored ones)."""
+    from inflo.tools.collide import resolve
     from inflo.tools.collide.broad import box_pairs_brute, edge_boxes, triangle_boxes, vertex_boxes
     from inflo.tools.collide.resolve import _StepBroadPhase
     from inflo.tools.pbd import mesh_edges
@@ -444,7 +448,9 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
     edges = mesh_edges(tri)
     x1 = x0 + rng.normal(0, 0.02, x0.shape)
     pad, cell = 1e-4, 0.1
+    monkeypatch.setattr(resolve, "REBUILD_FRACTION", fraction)
     bp = _StepBroadPhase(x0, tri, edges, pad, cell)
+    grids = []  # the grids over what left, round by round
     vt0, ee0 = bp.first(x1)
     wide = pad + 2.0 * bp.slack
     assert bp.slack > 0
@@ -459,8 +465,12 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
     loose_vt, loose_ee = _candidates(x0, x1, tri, edges, wide, cell, None)
     within(vt0, ref_vt, loose_vt)
     within(ee0, ref_ee, loose_ee)
-    for r, scale in enumerate([0.0003, 0.05, 0.0003, 0.05, 0.001]):
+    # the same vertices keep moving far (they leave their anchors again and again), with others
+    again_and_again = rng.random(len(x0)) < 0.05
+    for r, scale in enumerate([0.0003, 0.05, 0.0003, 0.05, 0.001, 0.03, 0.03, 0.0003, 0.03]):
         active = rng.random(len(x0)) < 0.1
+        if r >= 5:
+            active |= again_and_again
         x1[active] += rng.normal(0, scale, (int(active.sum()), 3))
         vt, ee = bp.again(x1, active)
         ref_vt, ref_ee = _candidates(x0, x1, tri, edges, pad, cell, active)
@@ -470,6 +480,10 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase():
         if r == 0:  # small moves: nothing has left the round-0 boxes yet
             assert not bp.moved.any()
         assert len(ref_vt) and len(ref_ee)
+        grids.append(bp.grids_all)
+    # rebuilt every round that something left, more than once, once
+    builds = sum(g is not None and (k == 0 or g is not grids[k - 1]) for k, g in enumerate(grids))
+    assert builds == {0.0: 5, 0.5: 3, 1e9: 1}[fraction]
 
 
 def test_box_grid_part_filter_matches_brute_force():
@@ -846,15 +860,15 @@ def test_box_pairs_with_boxes_far_longer_than_the_cell(monkeypatch, budget):
         np.testing.assert_array_equal(box_pairs(b, q, cell_size=0.02), box_pairs_brute(b, q, False))
 
 
-def test_touching_both_flags_the_elements_with_a_flagged_vertex_of_each_set():
-    from inflo.tools.collide.resolve import _touching_both
+def test_touching_flags_the_elements_with_a_flagged_vertex_of_each_set():
+    from inflo.tools.collide.resolve import _touching
 
     tri = np.array([[0, 1, 2], [2, 3, 4], [4, 5, 0]], np.int32)
     edges = mesh_edges(tri)
     rng = np.random.default_rng(3)
     for _ in range(20):
-        a = rng.random(6) < 0.3
-        b = rng.random(6) < 0.3
+        flags = rng.random((3, 6)) < 0.3
         for idx in (tri, edges):
-            ta, tb = _touching_both(a, b, idx)
-            assert (ta == a[idx].any(axis=1)).all() and (tb == b[idx].any(axis=1)).all()
+            got = _touching(flags, idx)
+            for f, g in zip(flags, got):
+                assert (g == f[idx].any(axis=1)).all()
