@@ -412,15 +412,16 @@ def _sheet(n):
     return grid, tri
 
 
-@pytest.mark.parametrize("fraction", [0.0, 0.5, 1e9])
-def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase(fraction, monkeypatch):
+@pytest.mark.parametrize("fraction, grown", [(0.0, True), (0.5, True), (1e9, True), (0.5, False)])
+def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase(fraction, grown, monkeypatch):
     """The retry rounds' incremental broad phase (round 0's grids of boxes grown by the slack; the
     elements of vertices that left their slack paired again at their new anchors) finds every pair
     a brute-force test of every box pair finds for the active vertices (less those sharing a
     vertex), each once, and none that the boxes grown by twice the slack would not pair, over
     rounds that move different vertices by less and by more than the slack, and the same vertices
     out of their anchors again and again; with the grids over what left rebuilt every round, now
-    and then, and only once (their stale entries skipped, a grid over the re-anchored ones)."""
+    and then, and only once (their stale entries skipped, a grid over the re-anchored ones); with
+    every grown box paired at round 0, or each the first round it is active."""
     from inflo.tools.collide import resolve
     from inflo.tools.collide.broad import box_pairs_brute, edge_boxes, triangle_boxes, vertex_boxes
     from inflo.tools.collide.resolve import _StepBroadPhase
@@ -449,6 +450,7 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase(fraction, monke
     x1 = x0 + rng.normal(0, 0.02, x0.shape)
     pad, cell = 1e-4, 0.1
     monkeypatch.setattr(resolve, "REBUILD_FRACTION", fraction)
+    monkeypatch.setattr(resolve, "ROUND0_GROWN_PAIRS", grown)
     bp = _StepBroadPhase(x0, tri, edges, pad, cell)
     grids = []  # the grids over what left, round by round
     vt0, ee0 = bp.first(x1)
@@ -484,6 +486,7 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase(fraction, monke
     # rebuilt every round that something left, more than once, once
     builds = sum(g is not None and (k == 0 or g is not grids[k - 1]) for k, g in enumerate(grids))
     assert builds == {0.0: 5, 0.5: 3, 1e9: 1}[fraction]
+    assert bp.have_e.all() == grown  # paired at round 0, or as they became active
 
 
 def test_box_grid_part_filter_matches_brute_force():

@@ -52,6 +52,9 @@ SPLIT_MOTION = 0.25
 #: the retry rounds' grids over the elements that left their round-0 boxes are rebuilt in full
 #: when those re-anchored since are more than this fraction of them (:meth:`_StepBroadPhase._moved_grids`)
 REBUILD_FRACTION = 0.25
+#: round 0 with pair lists pairs the grown boxes of every element at once (False: the true boxes,
+#: the grown ones of each element the first round it is active)
+ROUND0_GROWN_PAIRS = True
 
 
 @dataclass
@@ -469,13 +472,22 @@ class _StepBroadPhase:
         self.stale = (np.zeros(len(x0), np.bool_), np.zeros(len(tri), np.bool_), np.zeros(len(edges), np.bool_))
         if not pairs:
             return None
-        # this round's pairs: the true boxes against the grown grids, kept where the true boxes
-        # overlap (a grown box holds its true box: none is missed)
+        # this round's pairs: the grown boxes' pairs (those of the later rounds, all of them at once:
+        # a step that asks for round 0's pairs expects retries, whose first round is active over
+        # most of a crowded canopy), kept where the true boxes overlap (a grown box holds its true
+        # box: none is missed)
         none = np.zeros(len(x0), np.bool_)
         no_t = np.zeros(len(tri), np.bool_)
         no_e = np.zeros(len(edges), np.bool_)
-        vt = self.grid_t.query(vb, vertices=self.vid, parts=self.vpart, parts_mode=m)
-        ee = self.grid_e.query(eb, same=True, vertices=edges, parts=self.epart, parts_mode=m)
+        if ROUND0_GROWN_PAIRS:
+            vt = self.vt0 = self.grid_t.query(self.vb, vertices=self.vid, parts=self.vpart, parts_mode=m)
+            ee = self.ee0 = self.grid_e.query(self.eb, same=True, vertices=edges, parts=self.epart, parts_mode=m)
+            self.have_v[:] = True
+            self.have_t[:] = True
+            self.have_e[:] = True
+        else:
+            vt = self.grid_t.query(vb, vertices=self.vid, parts=self.vpart, parts_mode=m)
+            ee = self.grid_e.query(eb, same=True, vertices=edges, parts=self.epart, parts_mode=m)
         vt = _live_pairs(vt, self.vid, tri, x0, x1, pad, none, no_t, none, no_t, False)
         ee = _live_pairs(ee, edges, edges, x0, x1, pad, no_e, no_e, no_e, no_e, False)
         return vt, ee
