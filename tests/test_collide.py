@@ -875,3 +875,25 @@ def test_touching_flags_the_elements_with_a_flagged_vertex_of_each_set():
             got = _touching(flags, idx)
             for f, g in zip(flags, got):
                 assert (g == f[idx].any(axis=1)).all()
+
+
+def test_row_groups_is_the_inverse_of_unique_rows():
+    """The contacts' merge groups rows by (kind, indices) from two packed int64 keys: the same ids
+    as ``np.unique(rows, axis=0)``'s inverse (ranks of the rows in lexicographic order), with
+    repeated rows, large indices, and the fallback for values the keys cannot hold."""
+    from inflo.tools.collide.resolve import _row_groups
+
+    rng = np.random.default_rng(5)
+    for hi in (4, 1000, 2**31 - 1):
+        kind = rng.integers(0, 2, 400).astype(np.int8)
+        ind = rng.integers(0, hi, (400, 4)).astype(np.int32)
+        ind[200:] = ind[:200][rng.integers(0, 200, 200)]  # repeats
+        kind[200:] = kind[:200][rng.integers(0, 200, 200)] if hi == 4 else kind[200:]
+        ref = np.unique(np.concatenate([kind[:, None].astype(np.int64), ind], axis=1), axis=0,
+                        return_inverse=True)[1].ravel()
+        np.testing.assert_array_equal(_row_groups(kind, ind), ref)
+    ind[0, 0] = -1  # not packable: np.unique itself
+    ref = np.unique(np.concatenate([kind[:, None].astype(np.int64), ind], axis=1), axis=0,
+                    return_inverse=True)[1].ravel()
+    np.testing.assert_array_equal(_row_groups(kind, ind), ref)
+    assert len(_row_groups(np.zeros(0, np.int8), np.zeros((0, 4), np.int32))) == 0
