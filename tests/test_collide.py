@@ -323,6 +323,15 @@ def test_intersecting_pairs_with_a_subset_are_the_brute_force_pairs_touching_it(
     got = intersecting_pairs_with(x, tri, which)
     np.testing.assert_array_equal(got, want)
     assert len(got) > 3
+    # with the triangles' parts (some parts empty, some far away): the same pairs
+    part = rng.integers(0, 12, len(tri)) * 2
+    far = part == 10
+    x2 = x.copy()
+    x2[np.unique(tri[far])] += 50.0
+    allp = intersecting_pairs_brute(x2, tri)
+    want = allp[np.isin(allp[:, 0], which) | np.isin(allp[:, 1], which)]
+    np.testing.assert_array_equal(intersecting_pairs_with(x2, tri, which, tri_part=part), want)
+    np.testing.assert_array_equal(intersecting_pairs_with(x2, tri, which), want)
     assert intersecting_pairs_with(x, tri, []).shape == (0, 2)
 
 

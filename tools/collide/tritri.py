@@ -378,13 +378,16 @@ def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_si
 
 
 def intersecting_pairs_with(vertex_x: np.ndarray, tri_indices: np.ndarray, which, *,
-                            cell_size: float | None = None) -> np.ndarray:
+                            cell_size: float | None = None, tri_part: np.ndarray | None = None) -> np.ndarray:
     """Intersecting triangle pairs (exact static test, pairs sharing a vertex skipped) in which at
     least one triangle is one of ``which`` (indices into ``tri_indices``); the other may be any.
 
     What :func:`intersecting_pairs` would report for those triangles, at the cost of a query of
     every triangle's box against the boxes of ``which`` only (fccompose checks a newly emerging
-    floret against the canopy this way).
+    floret against the canopy this way). With ``tri_part`` ((m,) int >= 0: the part, e.g. the
+    floret, of every triangle), only the triangles of parts whose box overlaps the box of a part
+    of ``which`` are queried (the same pairs: two triangles' boxes overlap only where their
+    parts' do; a crowded 350k canopy: 32 -> 8 ms a call).
 
     Returns
     -------
@@ -398,9 +401,22 @@ def intersecting_pairs_with(vertex_x: np.ndarray, tri_indices: np.ndarray, which
     sub = np.asarray(which, dtype=np.int64).reshape(-1)
     if len(sub) == 0 or len(tri) < 2:
         return np.zeros((0, 2), np.int32)
-    boxes = triangle_boxes(x, x, tri, 0.0)
-    pairs = box_pairs(boxes, np.ascontiguousarray(boxes[sub]), cell_size=cell_size)
-    g = np.stack([pairs[:, 0].astype(np.int64), sub[pairs[:, 1]]], axis=1)
+    if tri_part is not None:
+        tp = np.ascontiguousarray(tri_part, dtype=np.int64)
+        pb = _tri_part_boxes(x, tri, tp, int(tp.max()) + 1)
+        mine = np.zeros(len(pb), np.bool_)
+        mine[tp[sub]] = True
+        ids = np.nonzero(mine)[0]
+        present = np.nonzero(pb[:, 0] <= pb[:, 3])[0]  # parts with a triangle
+        near = np.zeros(len(pb), np.bool_)
+        near[present[box_pairs(np.ascontiguousarray(pb[present]), np.ascontiguousarray(pb[ids]))[:, 0]]] = True
+        cand = np.nonzero(near[tp])[0]
+    else:
+        cand = np.arange(len(tri))
+    boxes = triangle_boxes(x, x, np.ascontiguousarray(tri[cand]), 0.0)
+    sub_boxes = triangle_boxes(x, x, np.ascontiguousarray(tri[sub]), 0.0)
+    pairs = box_pairs(boxes, sub_boxes, cell_size=cell_size)
+    g = np.stack([cand[pairs[:, 0]].astype(np.int64), sub[pairs[:, 1]]], axis=1)
     g = g[g[:, 0] != g[:, 1]]
     if len(g) == 0:
         return np.zeros((0, 2), np.int32)
@@ -408,6 +424,24 @@ def intersecting_pairs_with(vertex_x: np.ndarray, tri_indices: np.ndarray, which
     key = np.unique(g[:, 0] * np.int64(len(tri)) + g[:, 1])  # the sorted distinct rows, as one int64 each
     g = np.stack([key // len(tri), key % len(tri)], axis=1).astype(np.int32)
     return _exact_pairs(x, tri, g)
+
+
+@njit(cache=True)
+def _tri_part_boxes(x, tri, tri_part, n_parts):
+    """(n_parts, 6): the box of every part's triangles (a part without one: an empty box)."""
+    out = np.empty((n_parts, 6))
+    for p in range(n_parts):
+        for d in range(3):
+            out[p, d] = np.inf
+            out[p, d + 3] = -np.inf
+    for k in range(tri.shape[0]):
+        p = tri_part[k]
+        for j in range(3):
+            v = tri[k, j]
+            for d in range(3):
+                out[p, d] = min(out[p, d], x[v, d])
+                out[p, d + 3] = max(out[p, d + 3], x[v, d])
+    return out
 
 
 def intersecting_pairs_between(a_x: np.ndarray, a_tri: np.ndarray, b_x: np.ndarray, b_tri: np.ndarray, *,

@@ -299,7 +299,8 @@ class Simulation:
                 self._pose(x, cand, frame, size)
             ids = np.nonzero((born | due)[m.tri_floret])[0]
             which = np.nonzero(due[m.tri_floret[ids]])[0]
-            pairs = intersecting_pairs_with(x, m.tri_indices[ids], which, cell_size=self._cell(x))
+            pairs = intersecting_pairs_with(x, m.tri_indices[ids], which, cell_size=self._cell(x),
+                                            tri_part=m.tri_floret[ids])
             fl = m.tri_floret[ids[pairs]] if len(pairs) else np.zeros((0, 2), np.int32)
             blocked_by: dict = {}
             for a, b in fl.tolist():
@@ -553,7 +554,7 @@ class Simulation:
             """The florets not in ``which`` with a triangle intersecting one of ``which``'s."""
             ids = np.nonzero(which[tri_part])[0]
             out = np.zeros(nf, bool)
-            pairs = intersecting_pairs_with(xs, tri, ids, cell_size=self._cell(x))
+            pairs = intersecting_pairs_with(xs, tri, ids, cell_size=self._cell(x), tri_part=tri_part)
             if len(pairs):
                 out[tri_part[pairs.ravel()]] = True
             return out & ~which
@@ -564,7 +565,7 @@ class Simulation:
             then fit once the later has gone back)."""
             ids = np.nonzero(which[tri_part])[0]
             out = np.zeros(nf, bool)
-            pairs = intersecting_pairs_with(xs, tri, ids, cell_size=self._cell(x))
+            pairs = intersecting_pairs_with(xs, tri, ids, cell_size=self._cell(x), tri_part=tri_part)
             if len(pairs):
                 a, b = tri_part[pairs[:, 0]], tri_part[pairs[:, 1]]
                 both = which[a] & which[b]
