@@ -906,3 +906,32 @@ def test_row_groups_is_the_inverse_of_unique_rows():
                     return_inverse=True)[1].ravel()
     np.testing.assert_array_equal(_row_groups(kind, ind), ref)
     assert len(_row_groups(np.zeros(0, np.int8), np.zeros((0, 4), np.int32))) == 0
+
+
+@pytest.mark.parametrize("cell", [0.01, 0.05, 0.3])
+def test_box_grid_self_pairs_are_its_same_set_query(cell):
+    """A grid's own pairs found cell by cell (each cell's entries paired among themselves) are the
+    pairs of the query of its boxes against it (``same``), with the vertex filter and both part
+    filters, at cells smaller than the boxes (boxes in many cells) and larger (crowded buckets)."""
+    from inflo.tools.collide.broad import PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, box_pairs_brute
+
+    rng = np.random.default_rng(17)
+    lo = rng.random((400, 3))
+    b = np.concatenate([lo, lo + rng.random((400, 3)) * 0.12], axis=1)
+    b[5] = b[9]  # coincident boxes
+    verts = rng.integers(0, 300, (400, 2)).astype(np.int32)
+    part = rng.integers(0, 5, 400).astype(np.int32)
+    grid = BoxGrid(b, cell, b[:, :3].min(axis=0), verts, parts=part)
+
+    def rows(p):
+        return p[np.lexsort((p[:, 1], p[:, 0]))]
+
+    for mode in (PARTS_ANY, PARTS_SAME, PARTS_CROSS):
+        for use_verts in (False, True):
+            want = grid.query(b, same=True, vertices=verts if use_verts else None,
+                              parts=part if mode != PARTS_ANY else None, parts_mode=mode)
+            got = grid.self_pairs(vertices=use_verts, parts_mode=mode)
+            np.testing.assert_array_equal(rows(got), want)
+            assert len(want) > 20
+    np.testing.assert_array_equal(rows(grid.self_pairs()), box_pairs_brute(b, b, True))
+    assert BoxGrid(b[:0], cell, b[0, :3]).self_pairs().shape == (0, 2)

@@ -495,6 +495,79 @@ def _share_vertex(verts_a, a, verts_b, b):
     return False
 
 
+@njit(cache=True)
+def _join_buckets(lo, hi, starts, elem, key, ebox, origin, inv, verts, parts, mode, out, base, limit):
+    """The pairs of entries of buckets ``lo:hi`` that share a cell (:func:`_self_join`): counted,
+    written at ``out[base:]`` while below row ``limit``."""
+    n = 0
+    for h in range(lo, hi):
+        e = starts[h + 1]
+        for k1 in range(starts[h], e):
+            c = key[k1]
+            a = elem[k1]
+            for k2 in range(k1 + 1, e):
+                if key[k2] != c:
+                    continue
+                b = elem[k2]  # >= a: a bucket is filled in element order
+                if b == a:  # (one element twice: two of its cells with one key, 2^21 cells apart)
+                    continue
+                if mode != PARTS_ANY and (parts[a] == parts[b]) != (mode == PARTS_SAME):
+                    continue
+                if not _overlap(ebox, k1, ebox, k2):
+                    continue
+                # report once: in the cell of the intersection box's minimum corner
+                if _key(_cell(max(ebox[k1, 0], ebox[k2, 0]), origin[0], inv),
+                        _cell(max(ebox[k1, 1], ebox[k2, 1]), origin[1], inv),
+                        _cell(max(ebox[k1, 2], ebox[k2, 2]), origin[2], inv)) != c:
+                    continue
+                if verts.shape[0] and _share_vertex(verts, a, verts, b):
+                    continue
+                if base + n < limit:
+                    out[base + n, 0] = a
+                    out[base + n, 1] = b
+                n += 1
+    return n
+
+
+@njit(cache=True, parallel=True)
+def _self_join(starts, elem, key, ebox, origin, inv, verts, parts, mode):
+    """The pairs ``(a, b)``, ``a < b``, of a grid's own boxes that overlap (the query of the grid's
+    boxes against it with ``same``, without the query: each cell's entries are paired among
+    themselves, each pair of a cell visited once rather than from both sides), grouped by bucket
+    (not sorted). Blocks of buckets run in parallel, each writing into its slab of a scratch
+    buffer; a block that overflows its slab is counted and redone."""
+    size = starts.shape[0] - 1
+    nblk = max(1, min(size, 256))
+    per = (size + nblk - 1) // nblk
+    cnt = np.zeros(nblk, np.int64)
+    cap = np.zeros(nblk + 1, np.int64)
+    for blk in range(nblk):
+        lo = min(size, blk * per)
+        hi = min(size, lo + per)
+        cap[blk + 1] = cap[blk] + 4 * (starts[hi] - starts[lo]) + 64
+    buf = np.empty((cap[nblk], 2), np.int32)
+    for blk in prange(nblk):
+        lo = min(size, blk * per)
+        hi = min(size, lo + per)
+        cnt[blk] = _join_buckets(lo, hi, starts, elem, key, ebox, origin, inv, verts, parts, mode, buf,
+                                 cap[blk], cap[blk + 1])
+    offsets = np.zeros(nblk + 1, np.int64)
+    for blk in range(nblk):
+        offsets[blk + 1] = offsets[blk] + cnt[blk]
+    out = np.empty((offsets[nblk], 2), np.int32)
+    for blk in prange(nblk):
+        lo = min(size, blk * per)
+        hi = min(size, lo + per)
+        if cap[blk] + cnt[blk] > cap[blk + 1]:
+            _join_buckets(lo, hi, starts, elem, key, ebox, origin, inv, verts, parts, mode, out,
+                          offsets[blk], offsets[blk + 1])
+        else:
+            for i in range(cnt[blk]):
+                out[offsets[blk] + i, 0] = buf[cap[blk] + i, 0]
+                out[offsets[blk] + i, 1] = buf[cap[blk] + i, 1]
+    return out
+
+
 class BoxGrid:
     """A hashed grid built once over a set of boxes and queried many times (the collision
     resolution's retry rounds query it with the few boxes that moved).
@@ -549,6 +622,17 @@ class BoxGrid:
                 raise ValueError("part filter needs the query's and the grid's element parts")
         run = _query_serial if len(q) < SERIAL_QUERY_BELOW else _query
         return run(q, same, sk, va, vb, pa, pb, int(parts_mode), self.origin, self.inv, *self.tables)
+
+    def self_pairs(self, *, vertices: bool = False, parts_mode: int = PARTS_ANY) -> np.ndarray:
+        """(k, 2) int32 pairs ``(i, j)``, ``i < j``, of the grid's own boxes that overlap: the pairs
+        of ``query(boxes, same=True)`` (with ``vertices``: less those sharing a vertex; with
+        ``parts_mode``: the part filter, on the grid's ``parts``), in no particular order."""
+        if self.tables is None:
+            return np.zeros((0, 2), np.int32)
+        starts, elem, key, ebox, _ = self.tables
+        return _self_join(starts, elem, key, ebox, self.origin, self.inv,
+                          self.vertices if vertices else _NO_VERTS,
+                          self.parts if parts_mode != PARTS_ANY else _NO_PARTS, int(parts_mode))
 
 
 @njit(cache=True)

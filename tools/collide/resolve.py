@@ -499,7 +499,8 @@ class _StepBroadPhase:
         no_e = np.zeros(len(edges), np.bool_)
         if ROUND0_GROWN_PAIRS:
             vt = self.vt0 = self.grid_t.query(self.vb, vertices=self.vid, parts=self.vpart, parts_mode=m)
-            ee = self.ee0 = self.grid_e.query(self.eb, same=True, vertices=edges, parts=self.epart, parts_mode=m)
+            # (in (a, b) order: the retry rounds scan them, and in order their reads stay local)
+            ee = self.ee0 = _sorted_pairs(self.grid_e.self_pairs(vertices=True, parts_mode=m))
             self.have_v[:] = True
             self.have_t[:] = True
             self.have_e[:] = True
