@@ -495,6 +495,29 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase(fraction, grown
     # rebuilt every round that something left, more than once, once
     builds = sum(g is not None and (k == 0 or g is not grids[k - 1]) for k, g in enumerate(grids))
     assert builds == {0.0: 5, 0.5: 3, 1e9: 1}[fraction]
+    # a response that moves vertices far (boxes of more than 64 cells): that round and every later
+    # one pair the active elements afresh (with box_pairs, which lists pairs sharing a vertex too:
+    # the narrow phase skips those)
+    def unshared(vt, ee):
+        vt = vt[~(tri[vt[:, 1]] == vt[:, :1]).any(axis=1)]
+        ea, eb_ = edges[ee[:, 0]], edges[ee[:, 1]]
+        return vt, ee[~((ea[:, :1] == eb_) | (ea[:, 1:] == eb_)).any(axis=1)]
+
+    for far in (True, False):
+        active = np.zeros(len(x0), bool)
+        if far:
+            active[:3] = True
+            x1[:3] += 10.0
+        else:
+            active = rng.random(len(x0)) < 0.1
+            x1[active] += rng.normal(0, 0.0003, (int(active.sum()), 3))
+        vt, ee = unshared(*bp.again(x1, active))
+        assert bp.far
+        ref_vt, ref_ee = _candidates(x0, x1, tri, edges, pad, cell, active)
+        loose_vt, loose_ee = _candidates(x0, x1, tri, edges, wide, cell, active)
+        within(vt, ref_vt, loose_vt)
+        within(ee, ref_ee, loose_ee)
+        assert len(ref_vt) and len(ref_ee)
     assert bp.have_e.all() == grown  # paired at round 0, or as they became active
 
 
