@@ -909,6 +909,36 @@ def test_touching_flags_the_elements_with_a_flagged_vertex_of_each_set():
                 assert (g == f[idx].any(axis=1)).all()
 
 
+def test_step_box_stats_are_those_of_the_written_boxes():
+    """Round 0 reads the grid's origin, mean triangle extent and largest box side from the
+    positions (``_step_box_stats``): bit for bit those of the written vertex, triangle and edge
+    boxes (``_box_stats``), with signed zeros, a zero pad, flat and empty element sets."""
+    from inflo.tools.collide.broad import edge_boxes, triangle_boxes, vertex_boxes
+    from inflo.tools.collide.resolve import _box_stats, _step_box_stats
+
+    rng = np.random.default_rng(11)
+    x0 = rng.normal(size=(40, 3)) * np.array([1.0, 1e-3, 10.0])
+    x1 = x0 + rng.normal(size=(40, 3)) * 0.1
+    x0[:5] = 0.0
+    x1[:5] = -0.0
+    x1[5:8, 1] = x0[5:8, 1]  # no motion along y
+    tri = rng.integers(0, 40, (60, 3)).astype(np.int32)
+    tri[:4] = [0, 1, 2]  # a zero-size triangle
+    edges = mesh_edges(tri)
+    for pad in (0.0, 1e-3, 0.37):
+        for t, e in ((tri, edges), (tri, edges[:0]), (tri[:0], edges), (tri[:0], edges[:0])):
+            ref = _box_stats(vertex_boxes(x0, x1, pad), triangle_boxes(x0, x1, t, pad),
+                             edge_boxes(x0, x1, e, pad))
+            got = _step_box_stats(x0, x1, t, e, pad)
+            assert got[0].tobytes() == ref[0].tobytes()
+            assert float(got[1]).hex() == float(ref[1]).hex()
+            assert float(got[2]).hex() == float(ref[2]).hex()
+    empty = np.zeros((0, 3))
+    ref = _box_stats(np.zeros((0, 6)), np.zeros((0, 6)), np.zeros((0, 6)))
+    got = _step_box_stats(empty, empty, tri[:0], edges[:0], 0.1)
+    assert got[0].tobytes() == ref[0].tobytes() and got[1] == ref[1] and got[2] == ref[2]
+
+
 def test_row_groups_is_the_inverse_of_unique_rows():
     """The contacts' merge groups rows by (kind, indices) from two packed int64 keys: the same ids
     as ``np.unique(rows, axis=0)``'s inverse (ranks of the rows in lexicographic order), with

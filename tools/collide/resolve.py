@@ -382,6 +382,52 @@ def _box_stats(vb, tb, eb):
     return origin, mean, span
 
 
+@njit(cache=True, inline="always")
+def _element_sides(x0, x1, idx, pad, span):
+    """Sum over the elements (rows of ``idx``) of their boxes' largest sides (boxes as
+    :func:`.broad.triangle_boxes`: from ``x0`` to ``x1``, grown by ``pad``), and the largest side
+    of any, or ``span`` if larger."""
+    total = 0.0
+    for e in range(idx.shape[0]):
+        m = 0.0
+        for d in range(3):
+            lo = np.inf
+            hi = -np.inf
+            for k in range(idx.shape[1]):
+                v = idx[e, k]
+                lo = min(lo, x0[v, d], x1[v, d])
+                hi = max(hi, x0[v, d], x1[v, d])
+            m = max(m, (hi + pad) - (lo - pad))
+        span = max(span, m)
+        total += m
+    return total, span
+
+
+@njit(cache=True)
+def _step_box_stats(x0, x1, tri, edges, pad):
+    """:func:`_box_stats` of the vertex, triangle and edge boxes from ``x0`` to ``x1`` grown by
+    ``pad``, read from the positions without writing the boxes (the same values, bit for bit: the
+    same operations in the same order; round 0 of a 350k-triangle step spent 38 ms writing 70 MB of
+    boxes that only these figures were taken from)."""
+    origin = np.zeros(3)
+    if x0.shape[0]:
+        for d in range(3):
+            origin[d] = np.inf
+    span = 0.0
+    for i in range(x0.shape[0]):
+        m = 0.0
+        for d in range(3):
+            lo = min(x0[i, d], x1[i, d]) - pad
+            hi = max(x0[i, d], x1[i, d]) + pad
+            origin[d] = min(origin[d], lo)
+            m = max(m, hi - lo)
+        span = max(span, m)
+    total, span = _element_sides(x0, x1, tri, pad, span)
+    _, span = _element_sides(x0, x1, edges, pad, span)
+    mean = total / tri.shape[0] if tri.shape[0] else 0.0
+    return origin, mean, span
+
+
 @njit(cache=True)
 def _changed(x, before):
     """(n,) bool: row i of ``x`` differs from ``before``."""
@@ -449,10 +495,7 @@ class _StepBroadPhase:
         """Round 0: the grown boxes' grids for the later rounds; the pairs of the true boxes
         (None with ``pairs=False``: round 0 was detected otherwise)."""
         x0, tri, edges, pad = self.x0, self.tri, self.edges, self.pad
-        vb = vertex_boxes(x0, x1, pad)
-        tb = triangle_boxes(x0, x1, tri, pad)
-        eb = edge_boxes(x0, x1, edges, pad)
-        origin, mean, span = _box_stats(vb, tb, eb)
+        origin, mean, span = _step_box_stats(x0, x1, tri, edges, pad)
         cell = self.cell_size
         if cell is None or not cell > 0:
             cell = mean if mean > 0 else 1.0
@@ -505,7 +548,9 @@ class _StepBroadPhase:
             self.have_t[:] = True
             self.have_e[:] = True
         else:
+            vb = vertex_boxes(x0, x1, pad)
             vt = self.grid_t.query(vb, vertices=self.vid, parts=self.vpart, parts_mode=m)
+            eb = edge_boxes(x0, x1, edges, pad)
             ee = self.grid_e.query(eb, same=True, vertices=edges, parts=self.epart, parts_mode=m)
         vt = _live_pairs(vt, self.vid, tri, x0, x1, pad, none, no_t, none, no_t, False)
         ee = _live_pairs(ee, edges, edges, x0, x1, pad, no_e, no_e, no_e, no_e, False)
@@ -750,7 +795,7 @@ def step_broad_phase(x0, x1, tri, edges, pad, cell_size, vertex_part=None):
     u /= count[:, None]
     shift = u[vp]
     motion = float(np.sqrt((shift ** 2).sum(axis=1)).mean())
-    extent = _box_stats(np.zeros((0, 6)), triangle_boxes(x0, x0, tri, 0.0), np.zeros((0, 6)))[1]
+    extent = _step_box_stats(x0, x0, tri, edges[:0], 0.0)[1]
     if not motion > SPLIT_MOTION * extent:
         return plain()
     return _SplitBroadPhase(x0, tri, edges, pad, cell_size, vp, np.ascontiguousarray(shift))
