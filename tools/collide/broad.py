@@ -46,6 +46,19 @@ def vertex_boxes(x0, x1, pad):
     return out
 
 
+@njit(cache=True, inline="always")
+def _element_range(x0, x1, indices, e, d):
+    """Smallest and largest coordinate ``d`` of element ``e``'s vertices (row ``e`` of
+    ``indices``) at t = 0 and t = 1."""
+    lo = np.inf
+    hi = -np.inf
+    for k in range(indices.shape[1]):
+        v = indices[e, k]
+        lo = min(lo, x0[v, d], x1[v, d])
+        hi = max(hi, x0[v, d], x1[v, d])
+    return lo, hi
+
+
 @njit(cache=True)
 def _element_boxes(x0, x1, indices, pad):
     """(k, 6): box of each element's vertices (a row of ``indices``) at t = 0 and t = 1, grown by ``pad``."""
@@ -53,12 +66,7 @@ def _element_boxes(x0, x1, indices, pad):
     out = np.empty((n, 6))
     for e in range(n):
         for d in range(3):
-            lo = np.inf
-            hi = -np.inf
-            for k in range(indices.shape[1]):
-                v = indices[e, k]
-                lo = min(lo, x0[v, d], x1[v, d])
-                hi = max(hi, x0[v, d], x1[v, d])
+            lo, hi = _element_range(x0, x1, indices, e, d)
             out[e, d] = lo - pad
             out[e, d + 3] = hi + pad
     return out

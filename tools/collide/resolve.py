@@ -25,8 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
-from .broad import (PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, _sorted_pairs, box_pairs, edge_boxes,
-                    triangle_boxes, vertex_boxes)
+from .broad import (PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, _element_range, _sorted_pairs, box_pairs,
+                    edge_boxes, triangle_boxes, vertex_boxes)
 from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
 from .probe import can_probe, probe_contacts
 from .response import project_collision_constraints
@@ -391,12 +391,7 @@ def _element_sides(x0, x1, idx, pad, span):
     for e in range(idx.shape[0]):
         m = 0.0
         for d in range(3):
-            lo = np.inf
-            hi = -np.inf
-            for k in range(idx.shape[1]):
-                v = idx[e, k]
-                lo = min(lo, x0[v, d], x1[v, d])
-                hi = max(hi, x0[v, d], x1[v, d])
+            lo, hi = _element_range(x0, x1, idx, e, d)
             m = max(m, (hi + pad) - (lo - pad))
         span = max(span, m)
         total += m
