@@ -895,6 +895,36 @@ def test_box_pairs_with_boxes_far_longer_than_the_cell(monkeypatch, budget):
         np.testing.assert_array_equal(box_pairs(b, q, cell_size=0.02), box_pairs_brute(b, q, False))
 
 
+@pytest.mark.parametrize("budget", [None, 0])
+def test_box_pairs_with_a_few_boxes_over_many_cells_each_side_under_64(monkeypatch, budget):
+    """A squeezed head's swept boxes: 1-2 % of them across much of the scene, each side under 64
+    cells (no coarsening) but tens of thousands of cells in all. Those over BIG_BOX_CELLS cells are
+    paired directly (the grid then holds only the small ones), or, past the budget, entered in the
+    grid like the rest; the pairs are exactly the brute-force ones either way."""
+    from inflo.tools.collide import broad
+    if budget is not None:
+        monkeypatch.setattr(broad, "BIG_BOX_BUDGET", budget)
+    calls = []
+    direct = broad._pairs_with_big
+    monkeypatch.setattr(broad, "_pairs_with_big", lambda *a: calls.append(1) or direct(*a))
+    rng = np.random.default_rng(12)
+    for trial in range(6):
+        n = 600
+        c = rng.random((n, 3)) * 3
+        b = np.hstack([c, c + rng.random((n, 3)) * 0.05])
+        k = rng.choice(n, rng.integers(3, 12), replace=False)
+        b[k, 3:] = b[k, :3] + 0.5 + rng.random((len(k), 3)) * 1.5  # 10-40 cells a side
+        np.testing.assert_array_equal(box_pairs(b, None, cell_size=0.05), box_pairs_brute(b, b, True))
+        q = b[::3]
+        np.testing.assert_array_equal(box_pairs(q, b, cell_size=0.05), box_pairs_brute(q, b, False))
+        np.testing.assert_array_equal(box_pairs(b, q, cell_size=0.05), box_pairs_brute(b, q, False))
+    assert (len(calls) == 18) if budget is None else not calls
+    calls.clear()
+    small = np.hstack([c, c + 0.01])  # no big box: the grid alone
+    np.testing.assert_array_equal(box_pairs(small, None, cell_size=0.05), box_pairs_brute(small, small, True))
+    assert not calls
+
+
 def test_touching_flags_the_elements_with_a_flagged_vertex_of_each_set():
     from inflo.tools.collide.resolve import _touching
 

@@ -401,6 +401,11 @@ def box_pairs(boxes_a: np.ndarray, boxes_b: np.ndarray | None = None, *,
     a = np.ascontiguousarray(boxes_a, dtype=np.float64).reshape(-1, 6)
     same = boxes_b is None
     b = a if same else np.ascontiguousarray(boxes_b, dtype=np.float64).reshape(-1, 6)
+    return _box_pairs(a, b, same, cell_size, True)
+
+
+def _box_pairs(a, b, same, cell_size, allow_big):
+    """:func:`box_pairs` of contiguous box arrays (``allow_big``: pair the big boxes directly)."""
     if len(a) == 0 or len(b) == 0:
         return np.zeros((0, 2), np.int32)
     if cell_size is None or not cell_size > 0:
@@ -410,17 +415,22 @@ def box_pairs(boxes_a: np.ndarray, boxes_b: np.ndarray | None = None, *,
     if span * inv > 64.0:
         # boxes spanning more than 64 cells (elements a response moved far, swept over long
         # paths) would visit absurd cell counts: the cell is taken no smaller than the mean box
-        # of the two sets, the few boxes still longer than 64 such cells are paired with every
-        # box directly and the rest by the grid; where many are big, the cell is coarsened to
-        # the biggest (every box then in few, crowded cells)
+        # of the two sets
         cell_size = max(float(cell_size), _mean_extent(a), _mean_extent(b))
         inv = 1.0 / cell_size
-    if span * inv > 64.0:
-        big_a = _big_boxes(a, 64.0 / inv)
-        big_b = big_a if same else _big_boxes(b, 64.0 / inv)
+    if allow_big:
+        # the boxes over BIG_BOX_CELLS cells are paired with every box directly and the rest by
+        # the grid: entered in the grid, each would be met again in every cell of its region by
+        # every query there (a squeezed head's swept boxes, 1 % of them across the whole head:
+        # 1.2 M pairs found in 2.9 s); where too many are big, the grid takes them all, its cell
+        # coarsened to the biggest box if that spans more than 64 (every box then in few, crowded
+        # cells)
+        big_a = _big_boxes(a, origin, inv, BIG_BOX_CELLS)
+        big_b = big_a if same else _big_boxes(b, origin, inv, BIG_BOX_CELLS)
         n_big = int(np.count_nonzero(big_a)) + (0 if same else int(np.count_nonzero(big_b)))
-        if n_big * max(len(a), len(b)) <= BIG_BOX_BUDGET:
+        if n_big and n_big * max(len(a), len(b)) <= BIG_BOX_BUDGET:
             return _pairs_with_big(a, b, same, big_a, big_b, float(cell_size))
+    if span * inv > 64.0:
         inv = 64.0 / span
     run = _query_serial if len(a) < SERIAL_QUERY_BELOW else _query
     return run(a, same, _NO_SKIP, _NO_VERTS, _NO_VERTS, _NO_PARTS, _NO_PARTS, PARTS_ANY, origin, inv,
@@ -440,15 +450,20 @@ def _pair_array(out):
 #: box tests the direct pairing of big boxes may take (:func:`box_pairs`), about 0.1 s
 BIG_BOX_BUDGET = 50_000_000
 
+#: a box over this many grid cells is big (:func:`box_pairs`: paired directly, not by the grid)
+BIG_BOX_CELLS = 512
+
 
 @njit(cache=True)
-def _big_boxes(boxes, limit):
-    """(n,) bool: the boxes with a side longer than ``limit``."""
+def _big_boxes(boxes, origin, inv, limit):
+    """(n,) bool: the boxes that overlap more than ``limit`` cells of the grid (``origin``,
+    cell ``1 / inv``)."""
     out = np.zeros(boxes.shape[0], np.bool_)
     for i in range(boxes.shape[0]):
+        cells = 1.0
         for d in range(3):
-            if boxes[i, d + 3] - boxes[i, d] > limit:
-                out[i] = True
+            cells *= float(_cell(boxes[i, d + 3], origin[d], inv) - _cell(boxes[i, d], origin[d], inv) + 1)
+        out[i] = cells > limit
     return out
 
 
@@ -483,7 +498,8 @@ def _pairs_with_big(a, b, same, big_a, big_b, cell_size):
     """:func:`box_pairs` with the big boxes paired directly and the others by the grid."""
     ia = np.nonzero(~big_a)[0]
     ib = ia if same else np.nonzero(~big_b)[0]
-    small = box_pairs(a[ia], None if same else b[ib], cell_size=cell_size)
+    small = _box_pairs(np.ascontiguousarray(a[ia]), np.ascontiguousarray(a[ia] if same else b[ib]), same,
+                       cell_size, False)
     pairs = np.concatenate([np.stack([ia[small[:, 0]], ib[small[:, 1]]], axis=1).astype(np.int32),
                             _big_pairs(a, b, same, big_a, big_b)])
     return _sorted_pairs(pairs)
