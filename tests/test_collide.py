@@ -884,15 +884,25 @@ def test_box_pairs_with_boxes_far_longer_than_the_cell(monkeypatch, budget):
         monkeypatch.setattr(broad, "BIG_BOX_BUDGET", budget)
     rng = np.random.default_rng(11)
     for trial in range(12):
-        n = 300
-        c = rng.random((n, 3)) * 5
-        b = np.hstack([c, c + rng.random((n, 3)) * 0.1])
-        k = rng.choice(n, rng.integers(1, 8), replace=False)
-        b[k, 3:] = b[k, :3] + rng.random((len(k), 3)) * 10  # a few hundred cells long
-        np.testing.assert_array_equal(box_pairs(b, None, cell_size=0.02), box_pairs_brute(b, b, True))
-        q = b[::4]
-        np.testing.assert_array_equal(box_pairs(q, b, cell_size=0.02), box_pairs_brute(q, b, False))
-        np.testing.assert_array_equal(box_pairs(b, q, cell_size=0.02), box_pairs_brute(b, q, False))
+        b = _boxes_with_a_few_long(rng, 300, 5.0, 0.1, (1, 8), 0.0, 10.0)  # a few hundred cells long
+        _assert_box_pairs_are_brute_force(b, b[::4], 0.02)
+
+
+def _boxes_with_a_few_long(rng, n, extent, small, count, long_min, long_span):
+    """``n`` boxes up to ``small`` a side in a cube of side ``extent``, ``count`` (a range) of
+    them ``long_min`` plus up to ``long_span`` a side."""
+    c = rng.random((n, 3)) * extent
+    b = np.hstack([c, c + rng.random((n, 3)) * small])
+    k = rng.choice(n, rng.integers(*count), replace=False)
+    b[k, 3:] = b[k, :3] + long_min + rng.random((len(k), 3)) * long_span
+    return b
+
+
+def _assert_box_pairs_are_brute_force(b, q, cell):
+    """box_pairs of ``b`` with itself, of ``q`` with ``b`` and of ``b`` with ``q``: the brute force's."""
+    np.testing.assert_array_equal(box_pairs(b, None, cell_size=cell), box_pairs_brute(b, b, True))
+    np.testing.assert_array_equal(box_pairs(q, b, cell_size=cell), box_pairs_brute(q, b, False))
+    np.testing.assert_array_equal(box_pairs(b, q, cell_size=cell), box_pairs_brute(b, q, False))
 
 
 @pytest.mark.parametrize("budget", [None, 0])
@@ -909,17 +919,11 @@ def test_box_pairs_with_a_few_boxes_over_many_cells_each_side_under_64(monkeypat
     monkeypatch.setattr(broad, "_pairs_with_big", lambda *a: calls.append(1) or direct(*a))
     rng = np.random.default_rng(12)
     for trial in range(6):
-        n = 600
-        c = rng.random((n, 3)) * 3
-        b = np.hstack([c, c + rng.random((n, 3)) * 0.05])
-        k = rng.choice(n, rng.integers(3, 12), replace=False)
-        b[k, 3:] = b[k, :3] + 0.5 + rng.random((len(k), 3)) * 1.5  # 10-40 cells a side
-        np.testing.assert_array_equal(box_pairs(b, None, cell_size=0.05), box_pairs_brute(b, b, True))
-        q = b[::3]
-        np.testing.assert_array_equal(box_pairs(q, b, cell_size=0.05), box_pairs_brute(q, b, False))
-        np.testing.assert_array_equal(box_pairs(b, q, cell_size=0.05), box_pairs_brute(b, q, False))
+        b = _boxes_with_a_few_long(rng, 600, 3.0, 0.05, (3, 12), 0.5, 1.5)  # 10-40 cells a side
+        _assert_box_pairs_are_brute_force(b, b[::3], 0.05)
     assert (len(calls) == 18) if budget is None else not calls
     calls.clear()
+    c = rng.random((600, 3)) * 3
     small = np.hstack([c, c + 0.01])  # no big box: the grid alone
     np.testing.assert_array_equal(box_pairs(small, None, cell_size=0.05), box_pairs_brute(small, small, True))
     assert not calls
