@@ -1022,3 +1022,46 @@ def test_box_grid_self_pairs_are_its_same_set_query(cell):
             assert len(want) > 20
     np.testing.assert_array_equal(rows(grid.self_pairs()), box_pairs_brute(b, b, True))
     assert BoxGrid(b[:0], cell, b[0, :3]).self_pairs().shape == (0, 2)
+
+
+def _sheets_pushed_through():
+    """The scene of :func:`test_resolve_collisions_leaves_the_step_collision_free`."""
+    rng = np.random.default_rng(5)
+    x0, tri = sheets(gap=0.05, shift=0.03)
+    n = len(x0) // 2
+    x1 = x0.copy()
+    r2 = ((x0[n:, :2] - 0.5) ** 2).sum(axis=1)
+    x1[n:, 2] -= 0.15 * np.exp(-r2 / 0.08) + 0.01 * rng.uniform(size=n)
+    return x0, x1, tri, mesh_edges(tri), n
+
+
+@pytest.mark.parametrize("fallback", ["none", "vertices"])
+def test_rounds_that_run_away_stop_and_end_on_their_best_round(fallback):
+    """A relaxation that undoes the response (the second pushes the whole upper sheet through the
+    lower one) makes round 2 find over RUNAWAY_FACTOR x the fewest pairs so far: the rounds stop
+    there and end on the positions of their best round, whose crossing pairs are the ones
+    reported (a fresh detection of the step finds exactly those); the fallback then makes the
+    step collision-free from there."""
+    from inflo.tools.collide.resolve import RUNAWAY_FACTOR
+
+    x0, x1, tri, edges, n = _sheets_pushed_through()
+    calls = []
+
+    def relax(x, moved):
+        calls.append(1)
+        if len(calls) == 1:
+            x[n + 14, 2] -= 0.3  # one vertex through: round 1 finds a few pairs
+        elif len(calls) == 2:
+            x[n:, 2] -= 0.3  # the whole sheet through: round 2 runs away
+
+    res = resolve_collisions(x0, x1, np.ones(len(x0)), tri, edges, thickness=0.005, iterations=10,
+                             max_retries=20, relax=relax, fallback=fallback)
+    assert len(res.found) == 3 and len(calls) == 2
+    best = min(res.found[:2])
+    assert 0 < best and res.found[2] > RUNAWAY_FACTOR * best
+    fresh, _ = detect_collisions(x0, x1, tri, edges, tolerance=1e-9)
+    if fallback == "none":
+        assert len(res.remaining) == best == len(fresh)
+    else:
+        assert len(fresh) == 0 and res.reverted > 0
+        assert len(intersecting_pairs(x1, tri)) == 0

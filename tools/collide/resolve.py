@@ -8,10 +8,12 @@ edges of one triangle fan): self-collisions within one floret count like any oth
 
 :func:`resolve_collisions` is lines 10-20 of Algorithm 1 with the retries of the ``max collision
 retries`` key: detect, add the new collision constraints to the set, solve the set for
-``collision iterations`` sweeps, re-detect; pairs still crossing after the last retry are reported
-and, so that the output stays collision-free, their vertices are put back where they were at the
-start of the step (``x0`` is collision-free; repeated while crossings are left, at most 10 times,
-then the whole step is put back). Used by
+``collision iterations`` sweeps, re-detect. The rounds stop early when the crossing pairs stall
+(``STALL_ROUNDS``) or run away (``RUNAWAY_FACTOR``), and then end on the positions of their best
+round (fewest pairs crossing), not their last. Pairs still crossing are reported and, so that the
+output stays collision-free, their vertices are put back where they were at the start of the step
+(``x0`` is collision-free; repeated while crossings are left, at most 10 times, then the whole
+step is put back). Used by
 ``fccompose`` (growth) and ``subdivide`` (from the in-plane quadrisected mesh to the Loop positions).
 ``fccompose`` uses the whole-part fallback instead (``fallback="parts"``, :func:`retreat_parts`,
 :func:`reshape_parts`), with a relaxation of the internal constraints between rounds and repair
@@ -42,6 +44,11 @@ REPAIR_PASSES = 2
 REPAIR_RELAXATIONS = 4
 #: detect/solve rounds without fewer crossing pairs after which the retries stop early
 STALL_ROUNDS = 4
+#: a round that finds more than this many times the fewest crossing pairs of the rounds before it
+#: ends the retries at once: the response is diverging (florets squeezed with no room, each round
+#: undoing the last: a squeezed head's rounds went 2,659 -> 110 -> 4,548 -> ... -> 426,428 pairs,
+#: each round slower than the one before); the rounds then end on their best round's positions
+RUNAWAY_FACTOR = 8
 #: slack of the round-0 broad-phase boxes, in mean triangle box extents (:class:`_StepBroadPhase`;
 #: about what a collision round moves a vertex: more slack keeps more vertices inside their round-0
 #: boxes but pairs more boxes; flat, densely packed florets (the yarrow's) pair many more)
@@ -1046,7 +1053,11 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         ``collision iterations``: sweeps over the collision constraints per round.
     max_retries : int
         ``max collision retries``: detect/solve rounds after the first. The rounds stop early
-        when the number of crossing pairs has not gone down for ``STALL_ROUNDS`` (4) rounds.
+        when the number of crossing pairs has not gone down for ``STALL_ROUNDS`` (4) rounds, or
+        at once when a round finds more than ``RUNAWAY_FACTOR`` (8) times the fewest so far.
+        Rounds that end with more pairs crossing than their best round had end on that round's
+        positions (``x1`` as it was detected then; ``remaining`` its pairs): the retries never
+        leave the step worse than they found it.
     tolerance : float or None
         Inside-test tolerance; None: :func:`default_tolerance`.
     cell_size : float or None
@@ -1117,16 +1128,26 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
     if probe and can_probe(tri, edges, vertex_part):
         broad = _ProbedBroadPhase(broad, x0, tri, edges, 0.5 * tol, tol, vertex_part)
     state = {"constraints": Contacts.empty()}
+    # vertices put back to an earlier round's positions (run_rounds' end): active in the next
+    # detection, whatever its caller names (the broad phase anchors only what it saw move)
+    restored = np.zeros(len(x1), np.bool_)
+
+    def again(xs, active):
+        if restored.any():
+            active = active | restored
+            restored[:] = False
+        return broad.again(xs, active)
 
     def detect(active):
         if active is None and isinstance(broad, _ProbedBroadPhase):
             return broad.round0(x1)
-        pairs = broad.first(x1) if active is None else broad.again(x1, active)
+        pairs = broad.first(x1) if active is None else again(x1, active)
         return _narrow(x0, x1, tri, edges, pairs[0], pairs[1], tol)
 
     def run_rounds(active):
         """Detect/solve rounds from ``active`` (None: everything); returns the pairs still crossing."""
         best, stalled = None, 0
+        best_x = best_found = None
         found = Contacts.empty()
         for r in range(max_retries + 1):
             found, stats = detect(active)
@@ -1136,6 +1157,8 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
                 res.stats = stats
             if len(found) == 0 or r == max_retries:
                 break
+            if best is not None and len(found) > RUNAWAY_FACTOR * best:
+                break  # the response diverges: more rounds only cost more
             if best is None or len(found) < best:
                 best, stalled = len(found), 0
             else:
@@ -1144,6 +1167,8 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
                     break
             constraints = state["constraints"] = state["constraints"].concat(found)
             before = x1.copy()
+            if len(found) == best:  # (``before``: this round's detected positions)
+                best_x, best_found = before, found
             project_collision_constraints(x1, w, constraints.indices, constraints.coef,
                                           constraints.normal, h, float(stiffness),
                                           int(iterations), constraints.reach)
@@ -1158,6 +1183,14 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
             # still-crossing pairs whose vertices did not move are re-found too
             moved[found.indices.ravel()] = True
             active = moved
+        if best is not None and len(found) > best:
+            # the rounds end on the positions of their best round (fewest pairs crossing): its
+            # pairs are all the pairs crossing there (each round detects the pairs with a vertex
+            # moved since the last and those still crossing), the caller's fallback has the fewest
+            # florets to move back
+            restored[:] |= _changed(x1, best_x)
+            x1[:] = best_x
+            found = best_found
         return found
 
     found = run_rounds(None)
@@ -1182,7 +1215,7 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
     res.remaining = found
     if fallback == "parts":
         _retreat_fallback(res, x0, x1, tri, edges, tol, parts,
-                          lambda xs, act: _narrow(x0, xs, tri, edges, *broad.again(xs, act), tol)[0])
+                          lambda xs, act: _narrow(x0, xs, tri, edges, *again(xs, act), tol)[0])
         return res
     if fallback == "none" or len(found) == 0:
         return res
