@@ -375,15 +375,20 @@ def sheets(nx=6, gap=0.05, shift=0.0):
     return np.concatenate([lower, upper]), np.concatenate([tri, tri + nx * nx]).astype(np.int32)
 
 
-def test_resolve_collisions_leaves_the_step_collision_free():
+def _sheets_pushed_through():
+    """Two sheets, the middle of the upper one pushed down through the lower one over the step:
+    ``(x0, x1, tri, edges, n)``, ``n`` the vertices of one sheet."""
     rng = np.random.default_rng(5)
     x0, tri = sheets(gap=0.05, shift=0.03)
-    edges = mesh_edges(tri)
     n = len(x0) // 2
     x1 = x0.copy()
-    # the middle of the upper sheet is pushed down through the lower one
     r2 = ((x0[n:, :2] - 0.5) ** 2).sum(axis=1)
     x1[n:, 2] -= 0.15 * np.exp(-r2 / 0.08) + 0.01 * rng.uniform(size=n)
+    return x0, x1, tri, mesh_edges(tri), n
+
+
+def test_resolve_collisions_leaves_the_step_collision_free():
+    x0, x1, tri, edges, n = _sheets_pushed_through()
     w = np.ones(len(x0))
     w[:6] = 0.0
     assert len(intersecting_pairs(x0, tri)) == 0
@@ -1024,24 +1029,13 @@ def test_box_grid_self_pairs_are_its_same_set_query(cell):
     assert BoxGrid(b[:0], cell, b[0, :3]).self_pairs().shape == (0, 2)
 
 
-def _sheets_pushed_through():
-    """The scene of :func:`test_resolve_collisions_leaves_the_step_collision_free`."""
-    rng = np.random.default_rng(5)
-    x0, tri = sheets(gap=0.05, shift=0.03)
-    n = len(x0) // 2
-    x1 = x0.copy()
-    r2 = ((x0[n:, :2] - 0.5) ** 2).sum(axis=1)
-    x1[n:, 2] -= 0.15 * np.exp(-r2 / 0.08) + 0.01 * rng.uniform(size=n)
-    return x0, x1, tri, mesh_edges(tri), n
-
-
 @pytest.mark.parametrize("fallback", ["none", "vertices"])
 def test_rounds_that_run_away_stop_and_end_on_their_best_round(fallback):
     """A relaxation that undoes the response (the second pushes the whole upper sheet through the
     lower one) makes round 2 find more pairs than round 0 and over RUNAWAY_FACTOR x the fewest so
-    far: the rounds stop there and end on the positions of their best round, whose crossing pairs are the ones
-    reported (a fresh detection of the step finds exactly those); the fallback then makes the
-    step collision-free from there."""
+    far: the rounds stop there and end on the positions of their best round, whose crossing pairs
+    are the ones reported (a fresh detection of the step finds exactly those); the fallback then
+    makes the step collision-free from there."""
     from inflo.tools.collide.resolve import RUNAWAY_FACTOR
 
     x0, x1, tri, edges, n = _sheets_pushed_through()
