@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
+
 from .atomic import write_text_atomic
 from .errors import parse_float, parse_int, read_lines, shorten
 from ._vlab import _Cursor, _fmt
@@ -57,7 +59,15 @@ def bezier_patch(control, u, v) -> np.ndarray:
     if p.shape != (4, 4, 3):
         raise ValueError(f"control points must have shape (4, 4, 3), got {p.shape}")
     u, v = np.broadcast_arrays(np.asarray(u, dtype=np.float64), np.asarray(v, dtype=np.float64))
-    return np.einsum("...i,...j,ijk->...k", bernstein3(u), bernstein3(v), p)
+    bu, bv = bernstein3(u)[..., None], bernstein3(v)[..., None]
+    # sum over i of bu_i * (sum over j of bv_j P[i, j]), each sum in the order 0, 1, 2, 3
+    out = None
+    for i in range(4):
+        row = bv[..., 0, :] * p[i, 0]
+        for j in range(1, 4):
+            row = row + bv[..., j, :] * p[i, j]
+        out = bu[..., i, :] * row if out is None else out + bu[..., i, :] * row
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,16 +146,16 @@ def _frame(heading, up) -> np.ndarray:
     """(3, 3) rows (right = heading x up, heading, up), orthonormalized; raises ValueError."""
     h = np.asarray(heading, dtype=np.float64)
     u = np.asarray(up, dtype=np.float64)
-    if np.linalg.norm(h) < _MIN_VECTOR:
+    if la.norm(h) < _MIN_VECTOR:
         raise ValueError("the heading vector is (nearly) zero")
-    if np.linalg.norm(u) < _MIN_VECTOR:
+    if la.norm(u) < _MIN_VECTOR:
         raise ValueError("the up vector is (nearly) zero")
-    h = h / np.linalg.norm(h)
-    u = u / np.linalg.norm(u)
-    u = u - np.dot(u, h) * h
-    if np.linalg.norm(u) < _MIN_VECTOR:
+    h = h / la.norm(h)
+    u = u / la.norm(u)
+    u = u - la.dot(u, h) * h
+    if la.norm(u) < _MIN_VECTOR:
         raise ValueError("the up vector is parallel to the heading")
-    u = u / np.linalg.norm(u)
+    u = u / la.norm(u)
     return np.stack([np.cross(h, u), h, u])
 
 
@@ -228,7 +238,7 @@ class BezierSurface:
         r = self.frame()
 
         def move(p):
-            return ((np.asarray(p) - self.contact) / self.size) @ r.T
+            return la.matmul((np.asarray(p) - self.contact) / self.size, r.T)
 
         patches = tuple(
             BezierPatch(p.name, move(p.control_points), p.top_color, p.top_diffuse, p.bottom_color,
@@ -357,12 +367,12 @@ def read_bezier_surface(path) -> BezierSurface:
     contact = _xyz_line(cur, ["CONTACT", "POINT"])[2]
     end = _xyz_line(cur, ["END", "POINT"])[2]
     line, text, heading = _xyz_line(cur, ["HEADING"])
-    if np.linalg.norm(heading) < _MIN_VECTOR:
+    if la.norm(heading) < _MIN_VECTOR:
         raise cur.error(line, "a non-zero HEADING vector", shorten(text))
     line, text, up = _xyz_line(cur, ["UP"])
-    if np.linalg.norm(up) < _MIN_VECTOR:
+    if la.norm(up) < _MIN_VECTOR:
         raise cur.error(line, "a non-zero UP vector", shorten(text))
-    if np.linalg.norm(np.cross(heading / np.linalg.norm(heading), up / np.linalg.norm(up))) < _MIN_VECTOR:
+    if la.norm(np.cross(heading / la.norm(heading), up / la.norm(up))) < _MIN_VECTOR:
         raise cur.error(line, "an UP vector not parallel to HEADING", shorten(text))
     line, value = cur.field("SIZE", "'SIZE: s'")
     size = parse_float(value, p, line, "a number after 'SIZE:'")

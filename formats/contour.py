@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
+
 from .atomic import write_text_atomic
 from .errors import parse_float, parse_int, read_lines, shorten
 from ._vlab import _Cursor, _fmt, read_gallery
@@ -96,7 +98,10 @@ def uniform_bspline(control, t) -> np.ndarray:
     w3 = w2 * w
     basis = np.stack([(1.0 - w) ** 3, 3.0 * w3 - 6.0 * w2 + 4.0, -3.0 * w3 + 3.0 * w2 + 3.0 * w + 1.0, w3], axis=1) / 6.0
     idx = i[:, None] + np.arange(4)[None, :]
-    out = np.einsum("nj,njd->nd", basis, c[idx])
+    pts = c[idx]
+    out = basis[:, 0, None] * pts[:, 0]
+    for j in range(1, 4):  # sum the four weighted control points in the order j = 0, 1, 2, 3
+        out = out + basis[:, j, None] * pts[:, j]
     return out.reshape(shape + (c.shape[1],))
 
 
@@ -236,7 +241,7 @@ class Contour:
             n = max(_ARC_STEPS_MIN, _ARC_STEPS_PER_SPAN * m) + 1
             t = np.linspace(0.0, 1.0, n)
             p = self.evaluate(t)
-            cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+            cum = np.concatenate([[0.0], np.cumsum(la.norm(np.diff(p, axis=0), axis=1))])
             table = (t, cum)
             object.__setattr__(self, "_arc", table)
         return table

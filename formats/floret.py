@@ -23,6 +23,8 @@ from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
+
 from .atomic import write_text_atomic
 from .errors import FormatError, InputError, did_you_mean, parse_float, parse_int, read_lines, shorten
 
@@ -356,7 +358,7 @@ def full_petal(organ: Organ) -> np.ndarray:
         t = math.radians(organ.tilt_deg)
         c, s = math.cos(t), math.sin(t)
         rz = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # R_z(-t): +Y toward +X
-        cp = (cp - pivot) @ rz.T + pivot
+        cp = la.matmul(cp - pivot, rz.T) + pivot
     k = organ.fused
     if k > 0:
         h = math.pi / organ.symmetry_n
@@ -365,7 +367,7 @@ def full_petal(organ: Organ) -> np.ndarray:
             (-1, np.array([-math.sin(h), 0.0, math.cos(h)])),  # +Z side, toward copy n-1
         ):
             pts = cp[:k, col]
-            cp[:k, col] = pts - np.outer(pts @ normal, normal)
+            cp[:k, col] = pts - np.outer(la.matmul(pts, normal), normal)
     return cp
 
 
@@ -393,7 +395,7 @@ def petals(organ: Organ) -> np.ndarray:
     net = full_petal(organ)
     out = np.empty((organ.symmetry_n, *net.shape), dtype=np.float64)
     for i, a in enumerate(petal_angles_deg(organ)):
-        out[i] = net @ _rot_y(math.radians(a)).T
+        out[i] = la.matmul(net, _rot_y(math.radians(a)).T)
     return out
 
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
+
 from .errors import FormatError, parse_float, parse_int, shorten
 
 __all__ = ["PREAMBLE_FIELDS", "parse_preamble", "format_preamble", "format_nonzero", "placement_matrix", "frame_axes", "FLOAT_FMT"]
@@ -26,10 +28,10 @@ def frame_axes(up, right) -> np.ndarray:
         Need not be unit or orthogonal; ``right`` is projected off ``up`` (Gram-Schmidt).
     """
     u = np.asarray(up, dtype=np.float64)
-    u = u / np.linalg.norm(u)
+    u = u / la.norm(u)
     r = np.asarray(right, dtype=np.float64)
-    r = r - np.dot(r, u) * u
-    r = r / np.linalg.norm(r)
+    r = r - la.dot(r, u) * u
+    r = r / la.norm(r)
     return np.stack([r, u, np.cross(r, u)])
 
 
@@ -61,12 +63,12 @@ def parse_preamble(tokens, path, line, what: str = "placement"):
     pos, scale, up, right = (np.array(vals[k:k + 3]) for k in (0, 3, 6, 9))
     if np.any(scale == 0):
         raise FormatError(path, line, "non-zero scale components", " ".join(tokens[4:7]))
-    nu, nr = np.linalg.norm(up), np.linalg.norm(right)
+    nu, nr = la.norm(up), la.norm(right)
     if nu == 0:
         raise FormatError(path, line, "a non-zero up vector", " ".join(tokens[7:10]))
     if nr == 0:
         raise FormatError(path, line, "a non-zero right vector", " ".join(tokens[10:13]))
-    if np.linalg.norm(np.cross(up / nu, right / nr)) < _PARALLEL_TOL:
+    if la.norm(np.cross(up / nu, right / nr)) < _PARALLEL_TOL:
         raise FormatError(path, line, "a right vector not parallel to up",
                           f"up {' '.join(tokens[7:10])} and right {' '.join(tokens[10:13])}")
     return pid, pos, scale, up, right

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
+
 from .atomic import atomic_write, frame_name, list_sequence
 from .errors import FormatError, read_lines, shorten
 from .placement import _PARALLEL_TOL, FLOAT_FMT, PREAMBLE_FIELDS, format_preamble, parse_preamble, placement_matrix
@@ -133,11 +135,11 @@ def _read_rba_fast(lines, scene):
     scale, up, right = vals[:, 3:6], vals[:, 6:9], vals[:, 9:12]
     if (scale == 0).any():
         return None
-    nu = np.linalg.norm(up, axis=1)
-    nr = np.linalg.norm(right, axis=1)
+    nu = la.norm(up, axis=1)
+    nr = la.norm(right, axis=1)
     if (nu == 0).any() or (nr == 0).any():
         return None
-    if (np.linalg.norm(np.cross(up / nu[:, None], right / nr[:, None]), axis=1) < _PARALLEL_TOL).any():
+    if (la.norm(np.cross(up / nu[:, None], right / nr[:, None]), axis=1) < _PARALLEL_TOL).any():
         return None
     if len(np.unique(ids)) != len(ids):
         return None

@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from inflo.tools.common import linalg as la
+
 __all__ = ["generalized_cylinders", "parallel_transport", "chain_radii"]
 
 
@@ -243,7 +245,7 @@ def chain_radii(chain_list, node_radius, node_pos=None, node_parent=None):
         if r1 == r0 or node_pos is None:
             out.append(np.full(len(ch), r0))
             continue
-        seg = np.linalg.norm(np.diff(np.asarray(node_pos)[ch], axis=0), axis=1)
+        seg = la.norm(np.diff(np.asarray(node_pos)[ch], axis=0), axis=1)
         s = np.concatenate([[0.0], np.cumsum(seg)])
         frac = s / s[-1] if s[-1] > 0 else np.linspace(0.0, 1.0, len(ch))
         out.append(r0 + (r1 - r0) * frac)

@@ -19,6 +19,7 @@ import numpy as np
 from inflo.formats.atomic import atomic_write, frame_name
 from inflo.formats.errors import InputError
 from inflo.formats.obj import ObjMesh, write_obj
+from inflo.tools.common import linalg as la
 
 from .cylinders import generalized_cylinders
 from .envelope import envelope_from_params
@@ -210,7 +211,7 @@ def check_rodkaew_work(inp: RodkaewInput, params: Params) -> None:
         raise InputError(f"the scene: expected floret and group positions within +-{COORD_LIMIT:g}, found "
                          f"{' '.join(f'{c:g}' for c in pts[int(np.argmax(big))])}")
     rp = params.rodkaew
-    reach = float(np.linalg.norm(pts - np.asarray(params.base, float), axis=1).max())
+    reach = float(la.norm(pts - np.asarray(params.base, float), axis=1).max())
     if reach / rp.step > rp.max_steps:
         raise InputError(f"{params.source or 'branch-gen parameters'}: rodkaew.step: expected a step >= {reach / rp.max_steps:.3g} (the "
                          f"farthest floret is {reach:.4g} from the base, at most max_steps = {rp.max_steps} "

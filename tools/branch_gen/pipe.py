@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from inflo.tools.common import linalg as la
+
 __all__ = [
     "children_csr",
     "basipetal_order",
@@ -218,7 +220,7 @@ def decimate(node_pos, node_parent, node_tip, tau_d: float):
         for ch in chains(node_parent, node_tip):
             d_a = 0.0
             for a, b in zip(ch[:-2], ch[1:-1]):
-                d_a += float(np.linalg.norm(pos[b] - pos[a]))
+                d_a += la.norm(pos[b] - pos[a])
                 if d_a < tau_d:
                     keep[b] = False
                 else:

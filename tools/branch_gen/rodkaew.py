@@ -37,6 +37,7 @@ import numpy as np
 from numba import njit
 
 from inflo.formats.errors import InputError
+from inflo.tools.common import linalg as la
 
 from .skeleton import Skeleton, growth_scale
 
@@ -419,7 +420,7 @@ def grow_level(level: Level, params, *, base, end_frame: float, wb_table=None, p
             d0 = level.initial_dir[i]
             if not np.all(np.isfinite(d0)):
                 d0 = target - pos
-                nn = np.linalg.norm(d0)
+                nn = la.norm(d0)
                 d0 = d0 / nn if nn > 0 else np.array([0.0, -1.0, 0.0])
             parts.dir[i] = d0
             parts.active[i] = True
@@ -550,7 +551,7 @@ def grow_rodkaew(inp: RodkaewInput, params, *, wb_table=None, n_frames: int | No
     end_frame = _end_frame(inp, params, n_frames)
     emergence = np.nan_to_num(np.asarray(inp.emergence, dtype=np.float64), nan=0.0)
     up = np.asarray(inp.up, dtype=np.float64)
-    up = up / np.linalg.norm(up, axis=1, keepdims=True)
+    up = up / la.norm(up, axis=1, keepdims=True)
     floret_dir = -up if params.rodkaew.initial_direction == "floret" else np.full((n, 3), np.nan)
 
     use_groups = params.rodkaew.hierarchy and len(inp.groups) > 0

@@ -37,6 +37,7 @@ import numpy as np
 from numba import njit
 
 from inflo.formats.errors import InputError
+from inflo.tools.common import linalg as la
 
 from .rodkaew import _cell, _hash
 from .skeleton import Skeleton
@@ -184,7 +185,7 @@ def attraction_points(envelope, n: int, rng, *, min_distance: float = 0.0, obsta
         cand = lo + (hi - lo) * rng.random((batch, 3))
         cand = cand[envelope.contains(cand)]
         if len(planes):
-            cand = cand[np.all(cand @ planes[:, :3].T <= planes[:, 3], axis=1)]
+            cand = cand[np.all(la.matmul(cand, planes[:, :3].T) <= planes[:, 3], axis=1)]
         if min_distance > 0:
             n_acc = _dart_throw(np.ascontiguousarray(cand), min_distance, accepted, n_acc, total, grid_head,
                                 grid_next, mask)

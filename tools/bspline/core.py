@@ -6,7 +6,9 @@ Everything is expressed through **basis matrices**: for parameters ``t`` (k valu
 so a curve is ``N @ P`` and a surface sampled at scattered ``(u, v)`` points is ``W @ P.reshape(-1, 3)``
 with ``W = surface_weights(...)``. ``polygonize`` builds ``W`` once per organ (its (u, v) samples
 never change) and evaluates every frame, every petal copy, with one matrix product: vectorized
-numpy, no per-point Python loop and nothing to compile.
+numpy, no per-point Python loop and nothing to compile. The products are
+:func:`inflo.tools.common.linalg.matmul`'s fixed-order sums, not BLAS, so a surface has the same
+bits on every processor.
 
 Knot vectors are clamped (end-point interpolating) and uniform on [0, 1]: ``p + 1`` zeros, the
 interior knots ``i / (n - p)``, ``i = 1 .. n - p - 1``, then ``p + 1`` ones (formats/floret.md,
@@ -16,6 +18,8 @@ interior knots ``i / (n - p)``, ``i = 1 .. n - p - 1``, then ``p + 1`` ones (for
 from __future__ import annotations
 
 import numpy as np
+
+from inflo.tools.common import linalg as la
 
 __all__ = [
     "MAX_DEGREE",
@@ -102,7 +106,7 @@ def basis_matrix(n_ctrl: int, degree: int, t) -> np.ndarray:
 def curve_points(control, degree: int, t) -> np.ndarray:
     """Points of the clamped uniform B-spline curve over ``control`` ((n, d)) at ``t`` ((k,))."""
     c = np.asarray(control, dtype=np.float64)
-    return basis_matrix(len(c), degree, t) @ c
+    return la.matmul(basis_matrix(len(c), degree, t), c)
 
 
 def surface_weights(nv: int, nu: int, degree_u: int, degree_v: int, u, v) -> np.ndarray:
@@ -148,8 +152,8 @@ def surface_points(control_net, degree_u: int, degree_v: int, u, v) -> np.ndarra
     nv, nu, d = net.shape[-3:]
     w = surface_weights(nv, nu, degree_u, degree_v, u, v)
     if net.ndim == 3:
-        return w @ net.reshape(nv * nu, d)
-    return np.matmul(w[None], net.reshape(-1, nv * nu, d))
+        return la.matmul(w, net.reshape(nv * nu, d))
+    return la.matmul(w[None], net.reshape(-1, nv * nu, d))
 
 
 def surface_grid(control_net, degree_u: int, degree_v: int, us, vs) -> np.ndarray:
@@ -164,4 +168,6 @@ def surface_grid(control_net, degree_u: int, degree_v: int, us, vs) -> np.ndarra
     nv, nu = net.shape[:2]
     bu = basis_matrix(nu, degree_u, us)
     bv = basis_matrix(nv, degree_v, vs)
-    return np.einsum("bj,jid,ai->bad", bv, net, bu)
+    # sum over i (u) first, then over j (v), each in index order
+    rows = la.matmul(bu, net)  # (nv, len(us), d): the u-curves of every control row
+    return la.matmul(bv, rows.reshape(nv, -1)).reshape(len(bv), len(bu), -1)

@@ -19,6 +19,7 @@ from typing import Sequence
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
 from inflo.formats.atomic import atomic_path
 from inflo.formats.obj import ObjMesh
 
@@ -55,7 +56,7 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
         corners = f.T.reshape(-1)
         for c in range(3):
             acc[:, c] = np.bincount(corners, weights=np.tile(fn[:, c], 3), minlength=len(v))
-    length = np.linalg.norm(acc, axis=1, keepdims=True)
+    length = la.norm(acc, axis=1, keepdims=True)
     out = np.divide(acc, length, out=np.zeros_like(acc), where=length > 0)
     return out.astype(np.float32)
 

@@ -32,6 +32,8 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
+from inflo.tools.common import linalg as la
+
 __all__ = ["FATE_DISK", "FATE_RAY", "FATE_SMALL_RAY", "cone_directions", "first_in_cone", "d_min",
            "d_min_reference", "fates"]
 
@@ -43,7 +45,7 @@ FATE_SMALL_RAY = 2
 def cone_directions(pos: np.ndarray, centre: np.ndarray) -> np.ndarray:
     """Unit cone axes ``(P - O)^`` (n, 3) float64; a zero row where P coincides with O."""
     d = np.asarray(pos, dtype=np.float64) - np.asarray(centre, dtype=np.float64)
-    n = np.linalg.norm(d, axis=1)
+    n = la.norm(d, axis=1)
     out = np.zeros_like(d)
     ok = n > 1e-12
     out[ok] = d[ok] / n[ok, None]
@@ -149,10 +151,10 @@ def d_min_reference(pos, centre, alpha: float, *, half_angle: bool = False) -> n
             out[p] = 0.0
             continue
         v = pos - pos[p]
-        d = np.linalg.norm(v, axis=1)
+        d = la.norm(v, axis=1)
         other = d > 0  # Q = P (or a floret at the same point) has no direction
         inside = np.zeros(len(pos), dtype=bool)
-        inside[other] = (v[other] @ axis[p]) / d[other] > cos_half
+        inside[other] = la.matmul(v[other], axis[p]) / d[other] > cos_half
         if inside.any():
             out[p] = d[inside].min()
     return out

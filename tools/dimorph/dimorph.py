@@ -9,6 +9,7 @@ import numpy as np
 
 from inflo.formats.errors import InputError
 from inflo.formats.scn import Scene
+from inflo.tools.common import linalg as la
 
 from .cones import FATE_DISK, FATE_RAY, FATE_SMALL_RAY, d_min, fates
 
@@ -85,11 +86,11 @@ class DimorphOptions:
 def orient_outward(p, centre) -> bool:
     """Turn placement ``p`` about its ``up`` so that ``right`` points away from ``centre`` (the
     component of ``pos - centre`` orthogonal to ``up``); False (unchanged) where that is ~0."""
-    up = np.asarray(p.up, float) / np.linalg.norm(p.up)
+    up = la.normalize(np.asarray(p.up, float))
     d = np.asarray(p.pos, float) - np.asarray(centre, float)
-    d = d - np.dot(d, up) * up
-    n = float(np.linalg.norm(d))
-    if n <= 1e-12 * max(1.0, float(np.linalg.norm(p.pos))):
+    d = d - la.dot(d, up) * up
+    n = la.norm(d)
+    if n <= 1e-12 * max(1.0, la.norm(p.pos)):
         return False
     p.right = d / n
     return True
@@ -149,7 +150,7 @@ def outermost(pos: np.ndarray, centre: np.ndarray, group: np.ndarray, count: int
     out = np.zeros(n, dtype=bool)
     if count <= 0 or n == 0:
         return out
-    d = np.linalg.norm(np.asarray(pos, float) - np.asarray(centre, float), axis=1)
+    d = la.norm(np.asarray(pos, float) - np.asarray(centre, float), axis=1)
     for g in np.unique(group):
         rows = np.nonzero(group == g)[0]
         scale = max(float(d[rows].max()), 1e-300)
@@ -236,7 +237,7 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
                 raise InputError(f"--orient-rays: placement {k} is 'rba:' (its orientation comes from the RBA "
                                  "files); orient the rays of a static scene")
             target = orient_centre[k]
-            if opts.orient_rays == "top" and np.dot(arr["pos"][k] - own_centre[k], arr["pos"][k] - target) < 0:
+            if opts.orient_rays == "top" and la.dot(arr["pos"][k] - own_centre[k], arr["pos"][k] - target) < 0:
                 target = own_centre[k]  # its free space faces the inflorescence's inside
             oriented += orient_outward(p, target)
         p.type = TYPE_LABELS[f]

@@ -72,6 +72,7 @@ from inflo.formats.atomic import frame_name, remove_stale_frames, write_bytes_at
 from inflo.formats.errors import InputError
 from inflo.formats.fcc import CanopyParams, check_references
 from inflo.formats.obj import ObjMesh, write_obj, written_vertices
+from inflo.tools.common import linalg as la
 from inflo.tools.collide.broad import lattice_cell_size, triangle_boxes
 from inflo.tools.collide.resolve import CollisionResult, default_tolerance, resolve_collisions
 from inflo.tools.collide.tritri import intersecting_pairs, intersecting_pairs_with
@@ -458,7 +459,7 @@ class Simulation:
         full_new = np.zeros_like(full_old)
         full_new[:, :3] = new.matrix
         full_new[:, 3, 3] = 1.0
-        delta = np.ascontiguousarray((full_new @ np.linalg.inv(full_old))[:, :3])
+        delta = np.ascontiguousarray(la.matmul(full_new, la.inv(full_old))[:, :3])
         xp = np.empty_like(x)
         m.predict(x, delta=delta, old=old, new=new, out=xp)
         m.template_positions(new, vertices=m.vertex_fixed, out=xp)

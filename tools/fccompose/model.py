@@ -68,6 +68,7 @@ from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import read_scn
 from inflo.formats.weights import read_petal_weight_file, read_weight_file
+from inflo.tools.common import linalg as la
 from inflo.tools.pbd.constraints import signed_dihedral_angle, wrap_angle
 from inflo.tools.pbd.solver import mesh_edges, mesh_hinges
 
@@ -380,12 +381,12 @@ class Model:
         t = frame
         outer = np.eye(4)
         for lv in floret.outer:
-            outer = outer @ _level_matrix(lv, t)
+            outer = la.matmul(outer, _level_matrix(lv, t))
             t -= lv.shift
         if floret.outer:
-            m = outer @ m
+            m = la.matmul(outer, m)
         scale = np.diag(list(self.params.scene_scale) + [1.0])
-        return scale @ m
+        return la.matmul(scale, m)
 
     def schedule(self, frame: float) -> Schedule:
         """Per-floret tables at ``frame`` for the kernels.
@@ -552,9 +553,9 @@ def _ramp(frame: float, start, end) -> float:
 
 def _rotation(axis, angle: float) -> np.ndarray:
     a = np.asarray(axis, float)
-    a = a / np.linalg.norm(a)
+    a = a / la.norm(a)
     k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * la.matmul(k, k)
 
 
 def _rba_rows(frames, n_placements: int) -> np.ndarray:
@@ -599,7 +600,7 @@ def _level_matrix(level, frame: float) -> np.ndarray:
         t1[:3, 3] = p.pos
         t0 = np.eye(4)
         t0[:3, 3] = -np.asarray(p.pos, float)
-        m = t1 @ r @ t0 @ m
+        m = la.matmul(t1, la.matmul(r, la.matmul(t0, m)))
     return m
 
 
@@ -904,7 +905,7 @@ def check_spacing(params: CanopyParams, florets) -> None:
         t = fl.template
         if t.key not in extent:
             pts = t.frames.reshape(-1, 3)
-            extent[t.key] = float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))) if len(pts) else 0.0
+            extent[t.key] = la.norm(pts.max(axis=0) - pts.min(axis=0)) if len(pts) else 0.0
         size = extent[t.key] * float(np.abs(fl.placement.scale).max()) * rba_factor(fl)
         for lv in fl.outer:
             size *= float(np.abs(lv.placement.scale).max()) * rba_factor(lv)

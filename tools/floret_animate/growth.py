@@ -65,6 +65,7 @@ import numpy as np
 from inflo.formats.errors import InputError
 from inflo.formats.floret import Floret, Organ
 from inflo.formats.func import Function
+from inflo.tools.common import linalg as la
 
 from .animate import frame_times
 
@@ -202,13 +203,13 @@ def read_lu_params(path) -> LuParams:
 def _petal_axes(cp: np.ndarray) -> np.ndarray:
     """(3, 3): rows L (length), W (width), D (depth) of the initial petal."""
     length = cp[-1].mean(axis=0) - cp[0].mean(axis=0)
-    if np.linalg.norm(length) < 1e-12:
+    if la.norm(length) < 1e-12:
         length = np.array([0.0, 1.0, 0.0])
-    length = length / np.linalg.norm(length)
+    length = length / la.norm(length)
     width = np.array([0.0, 0.0, 1.0]) - length[2] * length
-    if np.linalg.norm(width) < 1e-9:
+    if la.norm(width) < 1e-9:
         width = np.array([1.0, 0.0, 0.0]) - length[0] * length
-    width /= np.linalg.norm(width)
+    width /= la.norm(width)
     depth = np.cross(length, width)
     return np.stack([length, width, depth])
 
@@ -244,7 +245,7 @@ class _GrowingPetal:
         g = _piecewise_growth(self.coeffs, self.starts, t)  # (nv, nu, 3) per component
         if np.isscalar(g):
             g = np.zeros(self.factors.shape)
-        disp = (g * self.factors) @ self.axes  # sum over components of growth * axis
+        disp = la.matmul(g * self.factors, self.axes)  # sum over components of growth * axis
         return self.cp0 + disp
 
 

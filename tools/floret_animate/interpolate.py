@@ -32,6 +32,8 @@ import math
 import numpy as np
 from numba import njit
 
+from inflo.tools.common import linalg as la
+
 __all__ = [
     "PolylineCode",
     "encode_polylines",
@@ -336,11 +338,11 @@ def reference_vectors(*polyline_sets) -> np.ndarray:
     worst = np.full((polyline_sets[0].shape[0], 3), np.inf)
     for pts in polyline_sets:
         seg = np.diff(np.asarray(pts, dtype=np.float64), axis=1)
-        ln = np.linalg.norm(seg, axis=2)
+        ln = la.norm(seg, axis=2)
         first = np.argmax(ln > _EPS, axis=1)
         t = seg[np.arange(len(seg)), first]
-        t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
-        sin = np.sqrt(np.maximum(0.0, 1.0 - (t @ cands.T) ** 2))  # (P, 3)
+        t /= np.maximum(la.norm(t, axis=1, keepdims=True), 1e-300)
+        sin = np.sqrt(np.maximum(0.0, 1.0 - la.matmul(t, cands.T) ** 2))  # (P, 3)
         worst = np.minimum(worst, sin)
     choice = np.argmax(worst > 0.5, axis=1)  # the first well-conditioned candidate
     none_ok = ~(worst > 0.5).any(axis=1)

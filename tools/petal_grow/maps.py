@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from inflo.formats.errors import FormatError, shorten
+from inflo.tools.common import linalg as la
 
 __all__ = ["ScalarMap", "DirectionMap", "parse_scalar_map", "parse_direction_map", "triangle_values",
            "triangle_directions", "EXPRESSION_NAMES"]
@@ -196,7 +197,7 @@ def triangle_directions(m: DirectionMap, tri_uv: np.ndarray) -> np.ndarray:
     n = len(tri_uv)
     s = m(_corner_and_centroid(tri_uv)).reshape(4, n, 2)
     d = (s[0] + s[1] + s[2] + 3.0 * s[3]) / 6.0
-    norm = np.linalg.norm(d, axis=1)
+    norm = la.norm(d, axis=1)
     ok = norm > 1e-12
     out = np.zeros_like(d)
     out[:, 1] = 1.0

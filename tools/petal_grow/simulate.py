@@ -41,6 +41,7 @@ from inflo.formats.atomic import frame_name, remove_stale_frames, write_text_ato
 from inflo.formats.errors import InputError
 from inflo.formats.obj import ObjMesh, as_written, write_obj
 from inflo.tools.collide import intersecting_pairs, resolve_collisions
+from inflo.tools.common import linalg as la
 from inflo.tools.pbd import mesh_edges, mesh_hinges, project_bending_constraints, project_distance_constraints
 from inflo.tools.pbd.solver import bending_residual, distance_residual, edge_lengths, edge_stretch_range, hinge_angles
 
@@ -63,10 +64,10 @@ LOG_COLUMNS = ["frame", "step", "joint_deg", "growth", "min_edge_stretch", "max_
 def rotation_matrix(axis, degrees: float) -> np.ndarray:
     """(3, 3) rotation by ``degrees`` about the unit ``axis`` (right-hand rule)."""
     a = np.asarray(axis, dtype=np.float64)
-    a = a / np.linalg.norm(a)
+    a = a / la.norm(a)
     t = math.radians(degrees)
     k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + math.sin(t) * k + (1 - math.cos(t)) * (k @ k)
+    return np.eye(3) + math.sin(t) * k + (1 - math.cos(t)) * la.matmul(k, k)
 
 
 def joint_angle_at(schedule, step: float) -> float:
@@ -79,14 +80,11 @@ def joint_angle_at(schedule, step: float) -> float:
 
 def shape_match(current: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rigid (R, t) minimizing ``sum |R current_i + t - target_i|^2`` (Kabsch; shape matching of
-    Mueller et al. 2005 with equal masses, sec. 5.3). ``current``, ``target``: (k, 3)."""
-    cc = current.mean(axis=0)
-    ct = target.mean(axis=0)
-    h = (current - cc).T @ (target - ct)
-    u, _, vt = np.linalg.svd(h)
-    dsign = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
-    r = vt.T @ np.diag([1.0, 1.0, dsign]) @ u.T
-    return r, ct - r @ cc
+    Mueller et al. 2005 with equal masses, sec. 5.3). ``current``, ``target``: (k, 3).
+
+    Solved by Horn's quaternion form (:func:`inflo.tools.common.linalg.kabsch`), not LAPACK's SVD,
+    so a keyframe has the same bits on every processor; a proper rotation for coplanar rings."""
+    return la.kabsch(current, target)
 
 
 @dataclass
@@ -144,7 +142,7 @@ def build_model(params: Params) -> Model:
         if key not in cache:
             cache[key] = read_bud_obj(o.mesh)
         bud = cache[key]
-        x = bud.vertices @ _placement(o).T + np.asarray(o.translate)
+        x = la.matmul(bud.vertices, _placement(o).T) + np.asarray(o.translate)
         xs.append(x)
         uvs.append(bud.uv)
         tris.append(bud.faces + nv)
@@ -161,15 +159,15 @@ def build_model(params: Params) -> Model:
             axis = np.asarray(o.joint_axis, dtype=np.float64)
         else:  # the tangent of the receptacle at the organ: +joint angle turns its tip outwards
             radial = np.array([pivot[0], 0.0, pivot[2]])
-            if np.linalg.norm(radial) < 1e-9:
+            if la.norm(radial) < 1e-9:
                 radial = np.array([bx[:, 0].mean() - x[:, 0].mean(), 0.0, bx[:, 2].mean() - x[:, 2].mean()])
-                radial = -radial if np.linalg.norm(radial) > 1e-9 else np.array([1.0, 0.0, 0.0])
-            radial /= np.linalg.norm(radial)
+                radial = -radial if la.norm(radial) > 1e-9 else np.array([1.0, 0.0, 0.0])
+            radial /= la.norm(radial)
             axis = np.cross([0.0, 1.0, 0.0], radial)
-        if np.linalg.norm(axis) < 1e-12:
+        if la.norm(axis) < 1e-12:
             raise InputError(f"{params.source}: organ {o.name!r}: joint_axis must not be zero")
         organs.append(OrganData(o.name, o.material, nv, nv + len(x), nt, nt + len(bud.faces), base + nv, bx.copy(),
-                                pivot, axis / np.linalg.norm(axis), o.joint, [], o.layer, o.beneath))
+                                pivot, axis / la.norm(axis), o.joint, [], o.layer, o.beneath))
         nv += len(x)
         nt += len(bud.faces)
     x = np.ascontiguousarray(np.concatenate(xs))
@@ -266,7 +264,7 @@ def _blend(keys: list, step: float) -> dict:
             for k in ("dir", "e", "w", "e_in", "w_in", "dg", "thickness", "K_s", "K_b", "c_s", "c_b"):
                 out[k] = (1 - f) * np.asarray(a[k]) + f * np.asarray(b[k])
             d = out["dir"]
-            out["dir"] = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
+            out["dir"] = d / np.maximum(la.norm(d, axis=1, keepdims=True), 1e-12)
             return out
     return keys[-1][1]
 
@@ -349,7 +347,7 @@ def arrangement_violations(model: Model, x: np.ndarray) -> list[tuple[str, str, 
         o = np.ascontiguousarray(x[outer.v0:outer.v1])
         d = o.copy()
         d[:, 1] = 0.0
-        n = np.linalg.norm(d, axis=1)
+        n = la.norm(d, axis=1)
         keep = n > 1e-9
         d = np.ascontiguousarray(d[keep] / n[keep, None])
         tri = np.ascontiguousarray(model.tri_indices[inner.t0:inner.t1])
@@ -445,14 +443,14 @@ class Simulation:
 
     def targets(self, step: int) -> list:
         """Each organ's base-particle targets at ``step``: the bud's turned by the joint angle."""
-        return [(o.base_rest - o.pivot) @ rotation_matrix(o.axis, joint_angle_at(o.joint, step)).T + o.pivot
+        return [la.matmul(o.base_rest - o.pivot, rotation_matrix(o.axis, joint_angle_at(o.joint, step)).T) + o.pivot
                 for o in self.m.organs]
 
     def attach(self, x: np.ndarray, targets: list) -> None:
         """Shape matching of each organ's base particles to its targets (sec. 5.3, fig. 11)."""
         for o, target in zip(self.m.organs, targets):
             r, t = shape_match(x[o.base], target)
-            x[o.v0:o.v1] = x[o.v0:o.v1] @ r.T + t
+            x[o.v0:o.v1] = la.matmul(x[o.v0:o.v1], r.T) + t
 
     def solve(self, step: int) -> np.ndarray:
         f = self.flower

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from inflo.formats.scn import Group, Placement, Scene
+from inflo.tools.common import linalg as la
 
 from .ridley import AreaFunction, diameter_of_area, static_pattern
 from .surface import Profile, load_curve
@@ -81,7 +82,7 @@ def compound_pattern(profile: Profile, head_area: AreaFunction, *, head_curve: s
         basis = np.stack([x, y, z])  # rows: images of local X, Y, Z
 
         def to_world(v, translate):
-            return (v @ rot.T) @ basis + (heads.pos[k] if translate else 0.0)
+            return la.matmul(la.matmul(v, rot.T), basis) + (heads.pos[k] if translate else 0.0)
 
         fp.append(to_world(sub.pos, True))
         fu.append(to_world(sub.up, False))

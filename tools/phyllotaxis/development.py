@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from inflo.formats.scn import Scene
+from inflo.tools.common import linalg as la
 
 __all__ = ["round_frame", "age_window", "development_ranks", "apply_development_order"]
 
@@ -53,7 +54,7 @@ def development_ranks(pos: np.ndarray, centres: np.ndarray, group: np.ndarray, o
     index, so the result does not depend on rounding noise.
     """
     n = len(pos)
-    dist = np.linalg.norm(np.asarray(pos, float) - np.asarray(centres, float), axis=1)
+    dist = la.norm(np.asarray(pos, float) - np.asarray(centres, float), axis=1)
     scale = float(dist.max()) if n and dist.max() > 0 else 1.0
     key = np.round(dist / scale, 12)
     if order == "centripetal":

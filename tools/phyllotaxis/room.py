@@ -27,6 +27,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from inflo.tools.common import linalg as la
+
 __all__ = ["fill_room", "apply_room"]
 
 #: the most raster cells the outline is sampled with (the cell size follows from it and from the
@@ -103,8 +105,8 @@ def _no_new_overlap(p, d0, q, w, floor, birth=None, sweeps: int = 100):
         if len(pairs) == 0:
             return w
     i, j = pairs[:, 0], pairs[:, 1]
-    dq = np.linalg.norm(q[i] - q[j], axis=1)
-    dp = np.linalg.norm(p[i] - p[j], axis=1)
+    dq = la.norm(q[i] - q[j], axis=1)
+    dp = la.norm(p[i] - p[j], axis=1)
     allow = np.full(len(i), np.inf)  # coincident in the pattern: no bound to keep
     ok = dp > 0
     allow[ok] = dq[ok] * np.maximum(1.0, 0.5 * (d0[i] + d0[j])[ok] / dp[ok])

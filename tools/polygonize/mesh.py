@@ -29,6 +29,7 @@ from scipy.spatial import Delaunay
 from inflo.formats.floret import Floret, Organ, petals
 from inflo.formats.obj import ObjMesh
 from inflo.tools.bspline import basis_matrix, clamped_knots, surface_weights
+from inflo.tools.common import linalg as la
 
 from .sampling import Profile, row_counts, row_parameters, row_points
 
@@ -146,7 +147,7 @@ def collapsed_rows(organs_over_frames, v_rows, degree_u: int, degree_v: int) -> 
         if bu is None:
             bu = basis_matrix(net.shape[1], degree_u, us)
             bv = basis_matrix(net.shape[0], degree_v, v_rows)
-        pts = np.einsum("bj,jid,ai->bad", bv, net, bu)  # (rows, 9, 3)
+        pts = la.matmul(bv, la.matmul(bu, net).reshape(len(net), -1)).reshape(len(bv), len(us), 3)  # (rows, 9, 3)
         size = max(float(np.ptp(net.reshape(-1, 3), axis=0).max()), 1e-300)
         ext = np.ptp(pts, axis=1).max(axis=1)
         out |= ext <= COLLAPSE_TOL * size
@@ -245,7 +246,7 @@ class FloretMesher:
             organ = frame.organs[part.organ_index]
             nets = petals(organ)  # (n, nv, nu_full, 3)
             w = part.template.weights
-            raw = np.matmul(w[None], nets.reshape(part.n_copies, -1, 3)).reshape(-1, 3)
+            raw = la.matmul(w[None], nets.reshape(part.n_copies, -1, 3)).reshape(-1, 3)
             out[part.vertex_offset:part.vertex_offset + len(part.src_a)] = 0.5 * (
                 raw[part.src_a] + raw[part.src_b])
         return out
@@ -265,7 +266,7 @@ class FloretMesher:
 def triangle_areas(vertices, faces) -> np.ndarray:
     """(m,) areas of the triangles."""
     p = vertices[faces]
-    return 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    return 0.5 * la.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
 
 
 def _angles_and_double_area(vertices, faces):
@@ -274,10 +275,10 @@ def _angles_and_double_area(vertices, faces):
     e1 = p[:, 2] - p[:, 1]
     e2 = p[:, 0] - p[:, 2]
     n = np.cross(e0, -e2)
-    twice_area = np.sqrt(np.einsum("ij,ij->i", n, n))
-    dots = np.stack([-np.einsum("ij,ij->i", e2, e0),  # at vertex 0: between e0 and -e2
-                     -np.einsum("ij,ij->i", e0, e1),  # at vertex 1
-                     -np.einsum("ij,ij->i", e1, e2)], axis=1)  # at vertex 2
+    twice_area = np.sqrt(la.rowdot(n, n))
+    dots = np.stack([-la.rowdot(e2, e0),  # at vertex 0: between e0 and -e2
+                     -la.rowdot(e0, e1),  # at vertex 1
+                     -la.rowdot(e1, e2)], axis=1)  # at vertex 2
     return np.degrees(np.arctan2(twice_area[:, None], dots)), twice_area
 
 

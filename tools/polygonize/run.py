@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
 from inflo.formats.atomic import frame_name, list_sequence, remove_stale_frames
 from inflo.formats.errors import InputError
 from inflo.formats.floret import check_compatible, full_petal, read_floret
@@ -75,9 +76,9 @@ def auto_aspect(nets, degree_u: int, degree_v: int) -> float:
     ts = np.linspace(0.0, 1.0, 33)
     for net in nets:
         rows = surface_grid(net, degree_u, degree_v, ts, [0.25, 0.5, 0.75])
-        width = np.linalg.norm(np.diff(rows, axis=1), axis=2).sum(axis=1).mean()
+        width = la.norm(np.diff(rows, axis=1), axis=2).sum(axis=1).mean()
         mid = surface_grid(net, degree_u, degree_v, [0.5], ts)[:, 0]
-        length = np.linalg.norm(np.diff(mid, axis=0), axis=1).sum()
+        length = la.norm(np.diff(mid, axis=0), axis=1).sum()
         if length > 0 and width > 0:
             ratios.append(width / length)
     return float(np.clip(np.mean(ratios), 0.05, 20.0)) if ratios else 1.0

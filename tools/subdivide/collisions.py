@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
 from inflo.tools.collide import resolve_collisions
 from inflo.tools.pbd.solver import mesh_edges  # re-exported: unique edges (i < j), sorted, (e, 2) int32
 
@@ -18,7 +19,7 @@ __all__ = ["mesh_edges", "collision_resolver", "default_spacing"]
 def default_spacing(vertices: np.ndarray) -> float:
     """Default thickness h: 1/2000 of the bounding-box diagonal (documented in the CLI help)."""
     V = np.asarray(vertices)
-    return float(np.linalg.norm(V.max(axis=0) - V.min(axis=0))) / 2000.0
+    return la.norm(V.max(axis=0) - V.min(axis=0)) / 2000.0
 
 
 def collision_resolver(*, spacing: float, iterations: int = 10, max_retries: int = 20, stiffness: float = 1.0):

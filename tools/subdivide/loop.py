@@ -82,11 +82,11 @@ class LoopLevel:
 
     def midpoints(self, vertices: np.ndarray) -> np.ndarray:
         """``M_s``: the quadrisected mesh's vertices, (n + e, 3) float64."""
-        return self.S_mid @ vertices
+        return self.S_mid @ vertices  # fixed-order: scipy.sparse's own CSR loop, no BLAS
 
     def loop(self, vertices: np.ndarray) -> np.ndarray:
         """``M_f``: the Loop-subdivided vertices, (n + e, 3) float64."""
-        return self.S_loop @ vertices
+        return self.S_loop @ vertices  # fixed-order: scipy.sparse's own CSR loop, no BLAS
 
 
 def loop_level(faces: np.ndarray, n_vertices: int, name: str = "mesh") -> LoopLevel:

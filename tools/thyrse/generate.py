@@ -43,6 +43,7 @@ import numpy as np
 from inflo.formats.scn import Placement, Scene, write_scn
 from inflo.tools.branch_gen.generate import BranchResult, skeleton_geometry, write_branch_gen
 from inflo.tools.branch_gen.skeleton import Skeleton
+from inflo.tools.common import linalg as la
 
 from .params import Params
 
@@ -86,7 +87,7 @@ class ThyrseLayout:
 
 
 def _unit(v):
-    return v / np.linalg.norm(v)
+    return la.normalize(v)
 
 
 def perpendicular_basis(d):
@@ -135,22 +136,22 @@ class _Builder:
         tp = self.p.thyrse
         if tp.min_distance <= 0:
             return True
-        h = min(max(float((np.asarray(pos) - np.asarray(self.p.base, float)) @ Y) / tp.length, 0.0), 1.0)
+        h = min(max(la.dot(np.asarray(pos, float) - np.asarray(self.p.base, float), Y) / tp.length, 0.0), 1.0)
         size = float(self.f["floret_size"](h))
         q = np.asarray(pos, float) + tp.reach * size * _unit(np.asarray(up, float))
         if self.limb:
             pts = np.array([a for a, _ in self.limb])
             sz = np.array([b for _, b in self.limb])
-            if np.any(np.linalg.norm(pts - q, axis=1) < tp.min_distance * 0.5 * (sz + size)):
+            if np.any(la.norm(pts - q, axis=1) < tp.min_distance * 0.5 * (sz + size)):
                 return False
         self.limb.append((q, size))
         return True
 
     def floret(self, node: int, up, axis, fallback, order: int) -> None:
         up = _unit(np.asarray(up, float))
-        r = np.asarray(axis, float) - np.dot(axis, up) * up
-        if np.linalg.norm(r) < 1e-6:
-            r = np.asarray(fallback, float) - np.dot(fallback, up) * up
+        r = np.asarray(axis, float) - la.dot(axis, up) * up
+        if la.norm(r) < 1e-6:
+            r = np.asarray(fallback, float) - la.dot(fallback, up) * up
         self.fl_node.append(node)
         self.fl_up.append(up)
         self.fl_right.append(_unit(r))
@@ -164,10 +165,10 @@ class _Builder:
             return dirs
         r = self.pos[node] - np.asarray(self.p.base, float)
         r[1] = 0.0
-        if np.linalg.norm(r) < 1e-12:
+        if la.norm(r) < 1e-12:
             return dirs
-        r = r / np.linalg.norm(r)
-        return [c for c in dirs if c @ r > -INWARD]
+        r = r / la.norm(r)
+        return [c for c in dirs if la.dot(c, r) > -INWARD]
 
     def turn_up(self, d):
         """A floret's axis: its stalk's direction turned towards +Y by ``tropism``."""
@@ -245,7 +246,7 @@ def grow_thyrse(p: Params) -> ThyrseLayout:
 
 def floret_heights(layout: ThyrseLayout, p: Params) -> np.ndarray:
     """Each floret's relative height h = (pos - base) . Y / length, clamped to [0, 1]."""
-    h = (layout.floret_pos - np.asarray(p.base, float)) @ Y / p.thyrse.length
+    h = la.matmul(layout.floret_pos - np.asarray(p.base, float), Y) / p.thyrse.length
     return np.clip(h, 0.0, 1.0)
 
 

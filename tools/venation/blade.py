@@ -16,6 +16,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from inflo.tools.common import linalg as la
+
 __all__ = ["Blade", "BladeBands", "Growth", "blade_from_points", "inside_blade", "triangulate_blade",
            "polygon_area", "self_intersections", "GROWTH_TYPES"]
 
@@ -43,7 +45,7 @@ def polygon_area(poly) -> float:
     """Signed area (positive counter-clockwise) of the closed polygon ``poly`` (m, 2)."""
     p = np.asarray(poly, dtype=np.float64)
     x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    return 0.5 * (la.dot(x, np.roll(y, -1)) - la.dot(np.roll(x, -1), y))
 
 
 def self_intersections(poly) -> tuple[int, int] | None:
@@ -170,7 +172,7 @@ class Blade:
         a, b = poly, np.roll(poly, -1, axis=0)
         p = np.asarray(pts, dtype=np.float64).reshape(-1, 1, 2)
         ab = b - a
-        t = np.clip(np.einsum("ijk,jk->ij", p - a, ab) / np.maximum(np.einsum("jk,jk->j", ab, ab), 1e-300), 0, 1)
+        t = np.clip(la.rowdot(p - a, ab) / np.maximum(la.rowdot(ab, ab), 1e-300), 0, 1)  # (n, m) / (m,)
         q = a + t[..., None] * ab
         return np.sqrt(((p - q) ** 2).sum(-1)).min(axis=1)
 
@@ -280,7 +282,7 @@ def triangulate_blade(poly, spacing: float | None = None) -> tuple[np.ndarray, n
     p = np.asarray(poly, dtype=np.float64)
     if polygon_area(p) < 0:
         p = p[::-1]
-    edge = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
+    edge = la.norm(np.roll(p, -1, axis=0) - p, axis=1)
     h = float(spacing) if spacing else float(np.ptp(p, axis=0).max()) / 48.0
     # margin edges longer than the spacing are divided
     pieces = np.maximum(1, np.ceil(edge / h - 1e-9).astype(np.int64))

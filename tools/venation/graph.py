@@ -23,6 +23,7 @@ import numpy as np
 from numba import njit
 
 from inflo.tools.branch_gen.pipe import basipetal_order, chains
+from inflo.tools.common import linalg as la
 
 __all__ = ["vein_widths", "strahler_orders", "cycle_rank", "polylines", "check_forest", "elongation_widths",
            "refine_veins"]
@@ -143,7 +144,7 @@ def elongation_widths(node_pos, node_parent, step: float, tip_width: float) -> n
     n = len(parent)
     e = np.ones(n)
     has = parent >= 0
-    e[has] = np.linalg.norm(pos[has] - pos[parent[has]], axis=1) / float(step)
+    e[has] = la.norm(pos[has] - pos[parent[has]], axis=1) / float(step)
     roots = np.flatnonzero(~has)
     if len(roots) and has.any():
         best = np.zeros(n)
