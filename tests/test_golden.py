@@ -255,6 +255,37 @@ def test_csv_timings_ignored_counts_exact_floats_within_tolerance(tmp_path):
     assert not d.ok and "column rms_edge_error" in d.format()
 
 
+def test_chaotic_tolerance_lets_counts_and_positions_drift_but_keeps_zeros_and_words(tmp_path):
+    """A ``chaotic = true`` stage (fccompose's crowded frames): counts within 25 %, numbers within
+    10 %, coordinates within 1 % of the scene; a zero, a word, a face stay exact."""
+    chaos = G.CHAOTIC
+    text = "frames with contacts: 32 of 32; 0 intersecting pairs; stretch 0.509-1.425\nOK\n"
+    assert _diff(tmp_path, text, text.replace("32 of 32", "28 of 32"), "check.txt", tol=chaos).ok
+    assert not _diff(tmp_path, text, text.replace("32 of 32", "20 of 32"), "check.txt", tol=chaos).ok
+    assert not _diff(tmp_path, text, text.replace("; 0 inter", "; 1 inter"), "check.txt", tol=chaos).ok
+    assert _diff(tmp_path, text, text.replace("0.509", "0.540"), "check.txt", tol=chaos).ok
+    assert not _diff(tmp_path, text, text.replace("0.509", "0.600"), "check.txt", tol=chaos).ok
+    assert not _diff(tmp_path, text, text.replace("OK", "FAILED"), "check.txt", tol=chaos).ok
+    assert not _diff(tmp_path, text, text.replace("32 of 32", "31 of 32"), "check.txt").ok  # exact by default
+    assert _diff(tmp_path, OBJ, _moved(OBJ, 2, 0.01), tol=chaos).ok  # 0.7 % of sqrt(2)
+    assert not _diff(tmp_path, OBJ, _moved(OBJ, 2, 0.02), tol=chaos).ok
+    assert not _diff(tmp_path, OBJ, OBJ.replace("f 1 3 4", "f 1 4 3"), tol=chaos).ok
+
+
+def test_manifest_chaotic_key(tmp_path):
+    repo = _fake_repo(tmp_path)
+    path = repo / "tests" / "golden" / "fake" / "manifest.toml"
+    path.write_text('[[golden]]\nfiles = "log.csv"\nchaotic = true\n[[golden]]\nfiles = "seq/frame_*.obj"\n'
+                    '[[golden]]\nfiles = "x.txt"\nchaotic = true\ntolerance = { int_rel = 0.5 }\n')
+    log, seq, txt = G.load_species("fake", repo).entries
+    assert log.tolerance == G.CHAOTIC and seq.tolerance == G.DEFAULT
+    assert txt.tolerance.int_rel == 0.5 and txt.tolerance.coord_rel == G.CHAOTIC.coord_rel
+    assert "chaotic" not in log.options
+    path.write_text('[[golden]]\nfiles = "log.csv"\nchaotic = "yes"\n')
+    with pytest.raises(ValueError, match="chaotic must be true or false"):
+        G.load_species("fake", repo)
+
+
 def test_text_numbers_within_the_written_precision(tmp_path):
     text = "frame  11: 3780 triangles, joint angle 28.78 deg\nOK: no intersecting triangle pairs\n"
     assert _diff(tmp_path, text, text.replace("28.78", "28.79"), "check.txt").ok  # one unit of 2 decimals

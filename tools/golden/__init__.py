@@ -14,6 +14,7 @@ This is test tooling (``tests/test_golden.py``, ``make golden``, ``make golden-c
 pipeline stage.
 """
 from .compare import (
+    CHAOTIC,
     DEFAULT,
     MAX_DETAILS,
     MAX_FINDINGS,
@@ -42,6 +43,7 @@ from .species import (
 __all__ = [
     "Tolerance",
     "DEFAULT",
+    "CHAOTIC",
     "Finding",
     "FileDiff",
     "MAX_DETAILS",

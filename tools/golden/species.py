@@ -20,7 +20,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from .compare import DEFAULT, GZ, FileDiff, Finding, Tolerance, diff_files, natural_key, shorten, tree_files
+from .compare import CHAOTIC, DEFAULT, GZ, FileDiff, Finding, Tolerance, diff_files, natural_key, shorten, tree_files
 
 __all__ = [
     "Entry",
@@ -215,10 +215,13 @@ def load_species(name: str, repo=None) -> Species:
         pick = t.pop("pick", None)
         if isinstance(pick, str) and pick != "all":
             pick = [pick]
-        tol = base_tol.updated(t.pop("tolerance", None))
+        chaotic = t.pop("chaotic", False)
         compress = t.pop("compress", False)
-        if not isinstance(compress, bool):
-            raise ValueError(f"{path}: [[golden]] table {k + 1}: compress must be true or false, found {compress!r}")
+        for key, value in (("chaotic", chaotic), ("compress", compress)):
+            if not isinstance(value, bool):
+                raise ValueError(f"{path}: [[golden]] table {k + 1}: {key} must be true or false, found {value!r}")
+        # a chaotic stage (fccompose's crowded frames and what follows them) starts from CHAOTIC
+        tol = (CHAOTIC if chaotic else base_tol).updated(t.pop("tolerance", None))
         entries.append(Entry(files, pick, tol, t, compress))
     if not entries:
         raise ValueError(f"{path}: no [[golden]] tables")
