@@ -68,7 +68,8 @@ class PolygonizeReport:
 
 
 def auto_aspect(nets, degree_u: int, degree_v: int) -> float:
-    """Width / length of a petal (mean over the given full control nets), in [0.05, 20].
+    """Width / length of a petal (mean over the given full control nets), in [0.05, 20], rounded to
+    6 decimals.
 
     Width: 3D length of the rows v = 1/4, 1/2, 3/4; length: of the midline u = 1/2.
     """
@@ -81,7 +82,10 @@ def auto_aspect(nets, degree_u: int, degree_v: int) -> float:
         length = la.norm(np.diff(mid, axis=0), axis=1).sum()
         if length > 0 and width > 0:
             ratios.append(width / length)
-    return float(np.clip(np.mean(ratios), 0.05, 20.0)) if ratios else 1.0
+    # rounded to 6 decimals: the samples of a row grid are cocircular in (aspect u, v), so the
+    # Delaunay triangulation's tie-breaks would follow the ratio's last bits (another numpy or
+    # libm version); rounded, the faces are the same on every machine
+    return round(float(np.clip(np.mean(ratios), 0.05, 20.0)), 6) if ratios else 1.0
 
 
 def _profile(organ_value, override, default, name, where):
