@@ -1,0 +1,158 @@
+"""Same bytes on every machine (issue 53).
+
+OpenBLAS picks its kernels by processor, numpy its SIMD loops, numba its target CPU; a result
+that follows any of them differs in its last bits between an Intel Xeon and an AMD EPYC, and
+fccompose's collision response grows such bits into visibly different crowded frames. So:
+
+* no result-affecting module calls BLAS or LAPACK (``@``, ``np.dot``, ``np.matmul``,
+  ``np.einsum``, ``np.linalg``, ...): an AST scan of ``tools/`` and ``formats/`` finds none
+  outside the renderer, the plots and the golden diff (``inflo.tools.common.linalg`` does that
+  arithmetic in a fixed order);
+* draft stages built on this machine under every OpenBLAS kernel it runs (Haswell, Zen,
+  SkylakeX), without numpy's AVX-512 and AVX2 loops, and with numba compiling for a generic
+  x86-64 are byte-identical to the default build: every file, fccompose's full-precision state
+  included.
+
+What is promised, and what is not, is in docs/architecture.md (Determinism).
+"""
+from __future__ import annotations
+
+import ast
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# modules whose numbers never reach a written result: the OpenGL renderer (pictures are not
+# compared), matplotlib plots, the golden diff's tolerances, the Blender probe; and the
+# fixed-order module itself
+EXEMPT = ("tools/canopy_render/", "tools/golden/", "tools/canopy_export/blender_probe.py",
+          "tools/common/linalg.py")
+EXEMPT_NAMES = ("plot.py",)
+BANNED = {"dot", "matmul", "inner", "vdot", "tensordot", "einsum", "einsum_path", "cov", "corrcoef",
+          "polyfit", "lstsq", "kron", "linalg"}
+"""numpy/scipy attributes that reach BLAS/LAPACK or reduce with SIMD accumulators"""
+
+
+def blas_calls(source: str, rel: str) -> list[str]:
+    """``path:line: what`` for each BLAS-reaching expression of a module: the ``@`` operator and
+    ``np.<banned>`` / ``scipy.<banned>`` / ``x.dot(...)``. A line may carry ``# fixed-order:
+    <reason>`` when the call provably does not reach BLAS (a scipy.sparse product)."""
+    lines = source.splitlines()
+    out = []
+    for node in ast.walk(ast.parse(source)):
+        what = None
+        if isinstance(node, (ast.BinOp, ast.AugAssign)) and isinstance(node.op, ast.MatMult):
+            what = "the @ operator"
+        elif isinstance(node, ast.Attribute) and node.attr in BANNED:
+            if isinstance(node.value, ast.Name) and node.value.id in ("np", "numpy", "scipy"):
+                what = f"np.{node.attr}"
+            elif node.attr == "dot" and not (isinstance(node.value, ast.Name) and node.value.id == "la"):
+                what = ".dot()"
+        if what and "fixed-order:" not in lines[node.lineno - 1]:
+            out.append(f"{rel}:{node.lineno}: {what}: {lines[node.lineno - 1].strip()}")
+    return out
+
+
+def test_no_blas_in_result_paths():
+    found = []
+    for base in ("tools", "formats"):
+        for path in sorted((ROOT / base).rglob("*.py")):
+            rel = path.relative_to(ROOT).as_posix()
+            if rel.startswith(EXEMPT) or path.name in EXEMPT_NAMES:
+                continue
+            found += blas_calls(path.read_text(), rel)
+    assert not found, ("BLAS/LAPACK-backed arithmetic in result paths (use inflo.tools.common.linalg):\n"
+                       + "\n".join(found))
+
+
+def test_the_scan_finds_what_it_bans():
+    src = ("import numpy as np\nx = a @ b\ny = np.linalg.norm(v)\nz = np.einsum('ij,ij->i', a, a)\n"
+           "w = v.dot(u)\nq = s @ v  # fixed-order: scipy.sparse\nr = np.add.reduce(v * v)\nt = la.dot(v, u)\n")
+    found = blas_calls(src, "m.py")
+    assert sorted(int(f.split(":")[1]) for f in found) == [2, 3, 4, 5]
+
+
+# -- the same build under other kernels ----------------------------------------------------------
+
+
+def _cpu_flags() -> set[str]:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("flags"):
+                return set(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    return set()
+
+
+def _numpy_dispatch() -> list[str]:
+    from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__  # noqa: PLC0415
+    return [f for f in __cpu_dispatch__ if __cpu_features__.get(f)]
+
+
+def _variants() -> list:
+    flags = _cpu_flags()
+    avx2 = {"avx2", "fma"} <= flags
+    avx512 = "avx512f" in flags
+    dispatch = _numpy_dispatch()
+    out = []
+    for kernel, ok in (("Haswell", avx2), ("Zen", avx2), ("SkylakeX", avx512)):
+        out.append(pytest.param({"OPENBLAS_CORETYPE": kernel}, id=f"openblas-{kernel}",
+                                marks=pytest.mark.skipif(not ok, reason=f"this processor cannot run {kernel}")))
+    out.append(pytest.param({"NPY_DISABLE_CPU_FEATURES": " ".join(dispatch), "OPENBLAS_CORETYPE": "Sandybridge"},
+                            id="numpy-baseline-simd",
+                            marks=pytest.mark.skipif(not dispatch, reason="numpy dispatches nothing here")))
+    out.append(pytest.param({"NUMBA_CPU_NAME": "generic"}, id="numba-generic"))
+    return out
+
+
+STAGES = [("gaillardia", ["canopy"]), ("eustoma", ["flowers"]), ("lilac", ["canopy"])]
+"""draft builds between them running every stage tool but the renderer and exporter: floret-animate,
+polygonize, phyllotaxis, dimorph, fccompose (a crowded head that diverged on other kernels
+before, with its full-precision state file), petal-grow, thyrse and branch-gen"""
+
+
+def _tree(root: Path, env: dict) -> Path:
+    """A repository root of its own (tools, formats and the venv linked, the pipelines copied)
+    whose build/ is written by the species Makefiles under ``env``."""
+    root.mkdir(parents=True)
+    for name in ("tools", "formats", ".venv", "pyproject.toml"):
+        (root / name).symlink_to(ROOT / name)
+    shutil.copytree(ROOT / "pipelines", root / "pipelines", ignore=shutil.ignore_patterns("__pycache__"))
+    full = dict(os.environ, **env, QUALITY="draft", PYTHONHASHSEED="0")
+    full.pop("MAKEFLAGS", None)
+    for species, targets in STAGES:
+        res = subprocess.run(["make", "-s", "-C", str(root / "pipelines" / species), "QUALITY=draft", *targets],
+                             env=full, capture_output=True, text=True)
+        assert res.returncode == 0, f"{species} under {env}:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}"
+    return root / "build"
+
+
+def _digests(build: Path) -> dict[str, str]:
+    skip = ("log.csv", "run.json")  # timings
+    return {p.relative_to(build).as_posix(): hashlib.md5(p.read_bytes()).hexdigest()
+            for p in sorted(build.rglob("*")) if p.is_file() and p.name not in skip}
+
+
+@pytest.fixture(scope="module")
+def default_build(tmp_path_factory):
+    if shutil.which("make") is None or not (ROOT / ".venv" / "bin" / "fccompose").exists():
+        pytest.skip("needs make and the repository's .venv (make test sets both up)")
+    return _digests(_tree(tmp_path_factory.mktemp("default") / "root", {}))
+
+
+@pytest.mark.parametrize("env", _variants())
+def test_stage_outputs_are_byte_identical_under(env, default_build, tmp_path):
+    if "NUMBA_CPU_NAME" in env:  # compile afresh for that target, away from the sources' cache
+        env = dict(env, NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))
+    got = _digests(_tree(tmp_path / "root", env))
+    assert sorted(got) == sorted(default_build)
+    differ = [k for k in default_build if got[k] != default_build[k]]
+    assert not differ, f"{len(differ)} of {len(got)} files differ under {env}: {differ[:10]}"
