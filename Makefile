@@ -1,4 +1,4 @@
-# inflo top-level Makefile: make lily | make yarrow | make sunflower | make gaillardia | make dahlia | make dyssodia | make orlaya | make lilac | make test | make test-blender | make bench | make golden | make clean
+# inflo top-level Makefile: make <species> (make species lists them: lily, yarrow, sunflower, ...) | make test | make test-blender | make bench | make golden | make clean
 # The first target run on a fresh clone creates .venv and installs inflo with its test extras.
 
 QUALITY ?= draft
@@ -12,7 +12,7 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: all venv bytecode test test-blender bench golden golden-check lily yarrow sunflower gaillardia dahlia dyssodia orlaya lilac eustoma clean distclean
+.PHONY: all venv bytecode test test-blender bench golden golden-check species $(SPECIES_DIRS) clean distclean
 
 all: lily
 
@@ -66,36 +66,15 @@ golden: $(STAMP) bytecode
 golden-check: $(STAMP) bytecode
 	$(PY) -m inflo.tools.golden check all --rebuild
 
-lily: $(STAMP) bytecode
-	@if [ -f pipelines/lily/Makefile ]; then \
-		$(MAKE) -C pipelines/lily QUALITY=$(QUALITY); \
-	else echo "pipeline not built yet: pipelines/lily/Makefile (issue 8)"; fi
+# every species is a folder pipelines/<species>/ with its species.toml (formats/species.md): found,
+# not listed; `make <species>` builds one, `make species` lists them
+SPECIES_DIRS := $(sort $(patsubst pipelines/%/species.toml,%,$(wildcard pipelines/*/species.toml)))
 
-yarrow: $(STAMP) bytecode
-	@if [ -f pipelines/yarrow/Makefile ]; then \
-		$(MAKE) -C pipelines/yarrow QUALITY=$(QUALITY); \
-	else echo "pipeline not built yet: pipelines/yarrow/Makefile (issue 8)"; fi
+species: $(STAMP)
+	@$(PY) -m inflo.tools.species list
 
-sunflower: $(STAMP) bytecode
-	$(MAKE) -C pipelines/sunflower QUALITY=$(QUALITY)
-
-gaillardia: $(STAMP) bytecode
-	$(MAKE) -C pipelines/gaillardia QUALITY=$(QUALITY)
-
-dahlia: $(STAMP) bytecode
-	$(MAKE) -C pipelines/dahlia QUALITY=$(QUALITY)
-
-dyssodia: $(STAMP) bytecode
-	$(MAKE) -C pipelines/dyssodia QUALITY=$(QUALITY)
-
-orlaya: $(STAMP) bytecode
-	$(MAKE) -C pipelines/orlaya QUALITY=$(QUALITY)
-
-lilac: $(STAMP) bytecode
-	$(MAKE) -C pipelines/lilac QUALITY=$(QUALITY)
-
-eustoma: $(STAMP) bytecode
-	$(MAKE) -C pipelines/eustoma QUALITY=$(QUALITY)
+$(SPECIES_DIRS): $(STAMP) bytecode
+	$(MAKE) -C pipelines/$@ QUALITY=$(QUALITY)
 
 clean:
 	rm -rf build bench/out .pytest_cache .hypothesis

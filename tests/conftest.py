@@ -66,3 +66,11 @@ def write(tmp_path):
 def no_partial_files(folder) -> bool:
     """True when no temporary (.part) file of an atomic write is left in ``folder``."""
     return not any(p.name.endswith(".part") for p in Path(folder).rglob("*"))
+
+
+def species_setting(species: str, quality: str, name: str) -> str:
+    """A setting of ``pipelines/<species>/species.toml`` at ``quality`` (its ``[settings]`` or
+    ``[draft]``/``[final]`` table), as the species Makefile sees it (``ALPHA`` -> ``"120"``)."""
+    from inflo.formats.species import _text, read_species
+
+    return _text(read_species(REPO / "pipelines" / species / "species.toml").setting(quality, name))

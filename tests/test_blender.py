@@ -35,6 +35,7 @@ import pytest
 
 from conftest import REPO, run_cli
 from inflo.formats.obj import list_obj_sequence, read_obj
+from inflo.formats.species import find_species
 
 pytestmark = pytest.mark.blender
 
@@ -187,15 +188,10 @@ def test_obj_frame_in_blender(bpy_python, lily_build, tmp_path):
                                        err_msg=f"{folder}: {m['name']} (Blender's default grey: no materials.mtl?)")
 
 
-# the parts of every species' usd stage (pipelines/*/Makefile): name -> sequence folder or OBJ file
-SPECIES_PARTS = {
-    "yarrow": {"heads": "canopy", "branches": "branches/frames"},  # one branch mesh per canopy frame (issue 19)
-    "orlaya": {"florets": "canopy", "branches": "branches/branches.obj"},
-    "sunflower": {"florets": "canopy", "receptacle": "head/receptacle"},
-    "gaillardia": {"florets": "canopy", "receptacle": "head/receptacle"},
-    "dahlia": {"florets": "canopy", "receptacle": "head/receptacle"},
-    "dyssodia": {"florets": "canopy", "receptacle": "head/receptacles.obj"},
-}
+# the parts of every other species' usd stage, from its species.toml [usd] parts (formats/species.md):
+# name -> sequence folder or OBJ file under build/<species>/ (the lily has its own test above)
+SPECIES_PARTS = {sp.name: sp.usd_parts for sp in find_species(REPO / "pipelines")
+                 if sp.usd_parts and sp.name != "lily"}
 
 
 @pytest.mark.parametrize("species", sorted(SPECIES_PARTS))

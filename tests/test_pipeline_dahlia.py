@@ -25,7 +25,7 @@ import pytest
 from inflo.formats.floret import check_compatible, read_floret
 from inflo.formats.scn import read_scn
 
-from conftest import REPO, run_cli
+from conftest import REPO, run_cli, species_setting
 
 DAH = REPO / "pipelines" / "dahlia"
 BUILD = REPO / "build" / "dahlia"
@@ -40,10 +40,8 @@ def _make_keys():
 
 
 def _make_var(quality: str, name: str) -> str:
-    text = (DAH / "Makefile").read_text()
-    block = re.search(rf"ifeq \(\$\(QUALITY\),{quality}\)(.*?)(?:else ifeq|else\n)", text, re.S)
-    m = re.search(rf"^{name} := (\S+)", block.group(1), re.M) or re.search(rf"^{name} := (\S+)", text, re.M)
-    return m.group(1)
+    """A setting of species.toml (formats/species.md), as the Makefile sees it."""
+    return species_setting("dahlia", quality, name)
 
 
 @pytest.fixture(scope="module", params=["draft", "final"])

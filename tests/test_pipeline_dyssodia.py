@@ -11,7 +11,6 @@ over the whole inflorescence, and the draft build's check.
 """
 from __future__ import annotations
 
-import re
 import subprocess
 import sys
 
@@ -21,16 +20,15 @@ import pytest
 from inflo.formats.obj import read_obj
 from inflo.formats.scn import read_scn
 
-from conftest import REPO, run_cli
+from conftest import REPO, run_cli, species_setting
 
 DYS = REPO / "pipelines" / "dyssodia"
 BUILD = REPO / "build" / "dyssodia"
 
 
 def _make_var(quality: str, name: str) -> str:
-    text = (DYS / "Makefile").read_text()
-    block = re.search(rf"ifeq \(\$\(QUALITY\),{quality}\)(.*?)(?:else ifeq|else\n)", text, re.S)
-    return re.search(rf"^{name} := (\S+)", block.group(1), re.M).group(1)
+    """A setting of species.toml (formats/species.md), as the Makefile sees it."""
+    return species_setting("dyssodia", quality, name)
 
 
 @pytest.fixture(scope="module", params=["draft", "final"])

@@ -38,7 +38,7 @@ from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.scn import read_scn
 from inflo.tools.collide import intersecting_pairs
 
-from conftest import REPO, run_cli
+from conftest import REPO, run_cli, species_setting
 
 GAI = REPO / "pipelines" / "gaillardia"
 BUILD = REPO / "build" / "gaillardia"
@@ -54,11 +54,8 @@ def _make_keys():
 
 
 def _make_var(quality: str, name: str) -> str:
-    """A variable of the pipeline Makefile's QUALITY block (e.g. ALPHA of the final block)."""
-    text = (GAI / "Makefile").read_text()
-    block = re.search(rf"ifeq \(\$\(QUALITY\),{quality}\)(.*?)(?:else ifeq|else\n)", text, re.S)
-    m = re.search(rf"^{name} := (\S+)", block.group(1), re.M)
-    return m.group(1)
+    """A setting of species.toml (formats/species.md), as the Makefile sees it."""
+    return species_setting("gaillardia", quality, name)
 
 
 def _dimorph(out, alpha, bracts, *extra):

@@ -12,7 +12,6 @@ resolved (thesis sec. 4.5, figs. 4.9, 4.10, table 4.1).
 """
 from __future__ import annotations
 
-import re
 import subprocess
 import sys
 
@@ -24,7 +23,7 @@ from inflo.formats.obj import ObjMesh
 from inflo.tools.thyrse.generate import thyrse
 from inflo.tools.thyrse.params import read_params
 
-from conftest import REPO
+from conftest import REPO, species_setting
 
 LIL = REPO / "pipelines" / "lilac"
 BUILD = REPO / "build" / "lilac"
@@ -33,9 +32,8 @@ from compare import cut_out, worst_pair  # noqa: E402
 
 
 def _make_var(name: str, quality: str) -> str:
-    text = (LIL / "Makefile").read_text()
-    block = re.search(rf"ifeq \(\$\(QUALITY\),{quality}\)(.*?)(?:else ifeq|else\n)", text, re.S).group(1)
-    return re.search(rf"^{name} := (\S+)", block, re.M).group(1)
+    """A setting of species.toml (formats/species.md), as the Makefile sees it."""
+    return species_setting("lilac", quality, name)
 
 
 def test_key_poses_are_up_to_date(tmp_path):

@@ -13,7 +13,6 @@
 """
 from __future__ import annotations
 
-import re
 import subprocess
 import sys
 
@@ -22,7 +21,7 @@ import pytest
 
 from inflo.formats.scn import read_scn
 
-from conftest import REPO, run_cli
+from conftest import REPO, run_cli, species_setting
 
 ORL = REPO / "pipelines" / "orlaya"
 BUILD = REPO / "build" / "orlaya"
@@ -32,13 +31,8 @@ from umbel_centres import lower_centres  # noqa: E402
 
 
 def _make_var(name: str, quality: str | None = None) -> str:
-    text = (ORL / "Makefile").read_text()
-    if quality is not None:
-        block = re.search(rf"ifeq \(\$\(QUALITY\),{quality}\)(.*?)(?:else ifeq|else\n)", text, re.S).group(1)
-        m = re.search(rf"^{name} := (\S+)", block, re.M)
-        if m:
-            return m.group(1)
-    return re.search(rf"^{name} := (\S+)", text, re.M).group(1)
+    """A setting of species.toml (formats/species.md), as the Makefile sees it."""
+    return species_setting("orlaya", quality or "draft", name)
 
 
 def test_key_poses_are_up_to_date(tmp_path):

@@ -29,7 +29,7 @@ import pytest
 from inflo.formats.floret import check_compatible, read_floret
 from inflo.formats.scn import read_scn
 
-from conftest import REPO, run_cli
+from conftest import REPO, run_cli, species_setting
 
 SUN = REPO / "pipelines" / "sunflower"
 BUILD = REPO / "build" / "sunflower"
@@ -37,13 +37,8 @@ KEYS = {"disk": ("bud", "open", "late"), "ray": ("bud", "mid", "open"), "bract":
 
 
 def _make_var(quality: str, name: str) -> str:
-    """A variable of the pipeline Makefile's QUALITY block (e.g. ALPHA of the final block)."""
-    text = (SUN / "Makefile").read_text()
-    block = re.search(rf"ifeq \(\$\(QUALITY\),{quality}\)(.*?)(?:else ifeq|else\n)", text, re.S)
-    if block is None:
-        block = re.search(rf"else ifeq \(\$\(QUALITY\),{quality}\)(.*?)else\n", text, re.S)
-    m = re.search(rf"^{name} := (\S+)", block.group(1), re.M)
-    return m.group(1)
+    """A setting of species.toml (formats/species.md), as the Makefile sees it."""
+    return species_setting("sunflower", quality, name)
 
 
 @pytest.fixture(scope="module", params=["draft", "final"])
