@@ -1,0 +1,35 @@
+# The end of every species Makefile: the rules every species shares (formats/species.md).
+#
+# Included last, after the species has set (in its Makefile) what these rules depend on:
+#
+# - CHECK_DEPS: what its check reads; `check` runs check_$(SPECIES).py on the build and keeps its
+#   report, $(B)/check.txt, only when it passes (printed either way);
+# - USD_DEPS: the last frames of its USD parts ([usd] parts of species.toml, USD_PARTS); `usd`
+#   writes $(B)/$(SPECIES).usdc with canopy-export (USD_FLAGS, `--mtl` unless set: materials.mtl
+#   beside each part's OBJ frames), coloured by colors.toml, one unit a centimetre, 24 fps;
+# - $(B)/quality.txt, rewritten only when QUALITY changes, so a draft/final switch reruns what
+#   depends on it; clean; FORCE.
+
+USD_FLAGS ?= --mtl
+
+$(B)/quality.txt: FORCE
+	@mkdir -p $(B)
+	@if [ "$$(cat $@ 2>/dev/null)" != "$(QUALITY)" ]; then echo "$(QUALITY)" > $@; fi
+
+check: $(B)/check.txt
+$(B)/check.txt: $(CHECK_DEPS) check_$(SPECIES).py
+	@$(PY) check_$(SPECIES).py $(B) > $@.tmp; status=$$?; cat $@.tmp; \
+		if [ $$status -eq 0 ]; then mv $@.tmp $@; else rm -f $@.tmp; exit 1; fi
+
+ifneq ($(strip $(USD_PARTS)),)
+usd: $(B)/$(SPECIES).usdc
+$(B)/$(SPECIES).usdc: $(USD_DEPS) colors.toml $(EXPORT_SRC)
+	$(BIN)canopy-export -q $(USD_FLAGS) $(USD_PARTS) --colors colors.toml --units cm --fps 24 -o $@
+endif
+
+clean:
+	rm -rf $(B)
+
+FORCE:
+
+.PHONY: check usd clean FORCE
