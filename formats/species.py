@@ -20,7 +20,8 @@ from pathlib import Path
 from .atomic import write_text_atomic
 from .errors import FormatError, InputError
 
-__all__ = ["Species", "FAMILIES", "STAGES", "BENCH_KEYS", "read_species", "find_species", "make_variables", "write_make_variables"]
+__all__ = ["Species", "FAMILIES", "STAGES", "BENCH_KEYS", "read_species", "species_of", "find_species", "make_variables",
+           "write_make_variables"]
 
 FAMILIES = ("head", "compound", "branching-first", "single flower")
 """the chains a species can be built on (formats/species.md)"""
@@ -35,7 +36,7 @@ BENCH_KEYS = {"quality": str, "unit": str, "row": str, "anchor": str, "anchor_va
 
 _NAME = re.compile(r"[a-z][a-z0-9_]*")
 _SETTING = re.compile(r"[a-z][a-z0-9_]*")
-_TOP = {"name", "title", "latin", "figures", "family", "stages", "usd", "bench", "settings", "draft", "final"}
+_TOP = {"name", "title", "latin", "figures", "family", "stages", "usd", "bench", "check", "settings", "draft", "final"}
 
 
 @dataclass
@@ -57,6 +58,8 @@ class Species:
     """{setting name: value} of the ``[settings]`` table: the same at every quality"""
     bench: dict = field(default_factory=dict)
     """the ``[bench]`` table: ``make bench``'s row of the whole build (:data:`BENCH_KEYS`)"""
+    check: dict = field(default_factory=dict)
+    """the ``[check]`` table: the facts the species' check script asserts (ray count, ...)"""
 
     @property
     def folder(self) -> Path:
@@ -140,9 +143,9 @@ def read_species(path) -> Species:
     if bench.get("unit", "min") not in ("min", "s"):
         raise err("unit", "unit = \"min\" or \"s\"", repr(bench["unit"]))
     settings = {}
-    for q in ("settings", "draft", "final"):
+    for q in ("check", "settings", "draft", "final"):
         if q not in data:
-            if q == "settings":
+            if q in ("check", "settings"):
                 continue
             raise FormatError(path, 1, f"a [{q}] table of settings", "none")
         table = data[q]
@@ -156,6 +159,7 @@ def read_species(path) -> Species:
             if not ok:
                 raise err(k, "a number, a string or a list of them", repr(v))
         settings[q] = dict(table)
+    check = settings.pop("check", {})
     common = settings.pop("settings", {})
     both = sorted(set(common) & (set(settings["draft"]) | set(settings["final"])))
     if both:
@@ -164,7 +168,12 @@ def read_species(path) -> Species:
         only = sorted(set(settings["draft"]) ^ set(settings["final"]))
         raise err(only[0], "the same settings in [draft] and [final]", f"{only[0]!r} in only one of them")
     return Species(path, name, data["title"], data.get("latin", ""), figures, data["family"], list(stages), parts,
-                   settings, common, bench)
+                   settings, common, bench, check)
+
+
+def species_of(script) -> Species:
+    """The species file of the folder a species' own script is in (``species_of(__file__)``)."""
+    return read_species(Path(script).resolve().parent / "species.toml")
 
 
 def find_species(pipelines) -> list[Species]:

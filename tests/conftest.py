@@ -74,3 +74,14 @@ def species_setting(species: str, quality: str, name: str) -> str:
     from inflo.formats.species import _text, read_species
 
     return _text(read_species(REPO / "pipelines" / species / "species.toml").setting(quality, name))
+
+
+def species_module(species: str, name: str):
+    """A species' own script ``pipelines/<species>/<name>.py``, imported by its path (the species
+    folders are not packages; shared code is ``inflo.tools.species``)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(f"{species}_{name}", REPO / "pipelines" / species / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod

@@ -10,7 +10,7 @@ What is checked (Owens thesis ch. 9, figs. 9.3, 9.4; ch. 6, figs. 6.2, 6.3; fig.
   of more than 270 degrees with a slit on the upper side whose edges stay well apart; lying
   outward (+X) and rising a little when open, short and erect in bud; the limb never touches the
   tube in any template frame and only the tube's base ring is on the receptacle (the vertices
-  ``pipelines/yarrow/weights.py base`` fixes);
+  ``python -m inflo.tools.species.weights base`` fixes);
 - the disk floret is five-fold with its corolla fused almost to the tips, the anther tube and then
   the pistil rising above it (the sunflower's design);
 - the head at both qualities, typed as the Makefile types it (its ALPHA and BRACTS): exactly 21

@@ -23,12 +23,12 @@ from inflo.formats.obj import ObjMesh
 from inflo.tools.thyrse.generate import thyrse
 from inflo.tools.thyrse.params import read_params
 
-from conftest import REPO, species_setting
+from conftest import REPO, species_module, species_setting
 
 LIL = REPO / "pipelines" / "lilac"
 BUILD = REPO / "build" / "lilac"
-sys.path.insert(0, str(LIL))
-from compare import cut_out, worst_pair  # noqa: E402
+_compare = species_module("lilac", "compare")
+cut_out, worst_pair = _compare.cut_out, _compare.worst_pair
 
 
 def _make_var(name: str, quality: str) -> str:

@@ -21,13 +21,12 @@ import pytest
 
 from inflo.formats.scn import read_scn
 
-from conftest import REPO, run_cli, species_setting
+from conftest import REPO, run_cli, species_module, species_setting
 
 ORL = REPO / "pipelines" / "orlaya"
 BUILD = REPO / "build" / "orlaya"
-sys.path.insert(0, str(ORL))
-from petal_weights import petal_weights  # noqa: E402
-from umbel_centres import lower_centres  # noqa: E402
+petal_weights = species_module("orlaya", "petal_weights").petal_weights
+lower_centres = species_module("orlaya", "umbel_centres").lower_centres
 
 
 def _make_var(name: str, quality: str | None = None) -> str:

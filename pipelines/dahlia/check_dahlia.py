@@ -34,18 +34,16 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from heads import check_head, floret_heights  # noqa: E402  (pipelines/heads.py)
+from inflo.formats.obj import list_obj_sequence, read_obj
+from inflo.formats.species import species_of
+from inflo.tools.collide import intersecting_pairs
+from inflo.tools.species.checks import check_head, floret_heights
 
-from inflo.formats.obj import list_obj_sequence, read_obj  # noqa: E402
-from inflo.tools.collide import intersecting_pairs  # noqa: E402
-
-BALL = 0.75
-# at two thirds of the run the last fifth of the ray florets formed (the top of the ball) are at
-# most this fraction of the first fifth's height (the bud key pose is 0.70 floret units long, the
-# open one 2.2)
-LAG = 0.8
-PRESS = 2.0
+# the species' facts: the [check] table of species.toml (formats/species.md)
+CHECK = species_of(__file__).check
+BALL = CHECK["ball"]
+LAG = CHECK["lag"]
+PRESS = CHECK["press"]
 
 
 def collisions(folder: Path) -> int:

@@ -26,12 +26,13 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from heads import check_head, floret_faces, frames_with_contacts  # noqa: E402  (pipelines/heads.py)
+from inflo.formats.obj import read_obj
+from inflo.formats.species import species_of
+from inflo.tools.species.checks import check_head, floret_faces, frames_with_contacts
 
-from inflo.formats.obj import read_obj  # noqa: E402
-
-HEADS = 6
+# the species' facts: the [check] table of species.toml (formats/species.md)
+CHECK = species_of(__file__).check
+HEADS = CHECK["heads"]
 
 
 def heights(mesh, scene) -> dict:

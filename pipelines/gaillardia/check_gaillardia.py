@@ -32,17 +32,16 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from heads import check_head, check_phase, floret_faces  # noqa: E402  (pipelines/heads.py)
-from make_keys import GAP, M_LIMB, M_TUBE  # noqa: E402
+from inflo.formats.species import species_of
+from inflo.tools.species.checks import check_head, check_phase, floret_faces
+from make_keys import GAP, M_LIMB, M_TUBE
 
-RAYS = 21
-LIMB_GAP = (0.3, 2.0)
-GROWTH = 3.0
-# a disk floret is in bud below this height (floret units): the bud is 0.78 high, the anther tube
-# rises above the corolla (0.9) to 1.12 by the open key pose (developmental time 0.55)
-BUD = 1.0
+# the species' facts: the [check] table of species.toml (formats/species.md)
+CHECK = species_of(__file__).check
+RAYS = CHECK["rays"]
+LIMB_GAP = tuple(CHECK["limb_gap"])
+GROWTH = CHECK["growth"]
+BUD = CHECK["bud"]
 
 
 def limb_gaps(mesh, frame_rba, scene, rays) -> np.ndarray:

@@ -18,7 +18,7 @@ points away from the head centre along the receptacle's meridian.
   either is an arc of 2 x ARC_HALF = 300 degrees round the tube's centre line: the half petal's
   columns go from the midline at the bottom of the tube (column 0) round the +Z side to the edge
   of the slit, and the bilateral mirror gives the -Z half. The tube's base row is a ring on the
-  receptacle (y = 0, the only vertices there: pipelines/yarrow/weights.py fixes the lowest ones);
+  receptacle (y = 0, the only vertices there: tools/species/weights.py fixes the lowest ones);
   the limb starts GAP beyond the tube's end along its centre line, so the two organs never touch
   (fccompose's exact test counts touching as intersecting) and the limb is not fixed: it moves
   with the tube's animation. Five key poses (``bud``, ``early``, ``mid``, ``late``, ``open``) of
@@ -43,8 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from floret_keys import blade_net, cylinder_net, fmt_rows, organ, ring_net  # noqa: E402,F401  (pipelines/floret_keys.py)
+from inflo.tools.species.keys import blade_net, cylinder_net, fmt_rows, organ, ring_net  # noqa: F401
 
 HERE = Path(__file__).resolve().parent
 

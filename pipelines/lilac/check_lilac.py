@@ -2,7 +2,7 @@
 
 Usage: python check_lilac.py BUILD_DIR   (BUILD_DIR = build/lilac)
 
-Prints, and fails (exit 1) on any of (pipelines/heads.py's shared report first):
+Prints, and fails (exit 1) on any of (inflo.tools.species.checks' shared report first):
 
 - **intersections**: intersecting triangle pairs (inflo.tools.collide, exact static test; touching
   counts) in any written canopy frame;
@@ -29,14 +29,14 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from heads import check_head, floret_faces, frames_with_contacts  # noqa: E402  (pipelines/heads.py)
+from inflo.formats.obj import read_obj
+from inflo.formats.species import species_of
+from inflo.tools.collide import intersecting_pairs_between
+from inflo.tools.species.checks import check_head, floret_faces, frames_with_contacts
 
-from inflo.formats.obj import read_obj  # noqa: E402
-from inflo.tools.collide import intersecting_pairs_between  # noqa: E402
-
-#: the open limb reaches 0.49 floret units from the axis (make_keys.py); open enough at the end
-OPEN = 0.3
+# the species' facts: the [check] table of species.toml (formats/species.md)
+CHECK = species_of(__file__).check
+OPEN = CHECK["open"]
 
 
 def spreads(mesh, scene) -> dict:

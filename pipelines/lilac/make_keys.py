@@ -30,8 +30,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from floret_keys import organ, ring_net  # noqa: E402  (pipelines/floret_keys.py)
+from inflo.tools.species.keys import organ, ring_net
 
 HERE = Path(__file__).resolve().parent
 

@@ -36,10 +36,8 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from heads import check_head, floret_faces, frames_with_contacts  # noqa: E402  (pipelines/heads.py)
-
-from inflo.formats.obj import read_obj  # noqa: E402
+from inflo.formats.obj import read_obj
+from inflo.tools.species.checks import check_head, floret_faces, frames_with_contacts
 
 PETAL, STYLO = "mtl0", "mtl1"
 

@@ -32,8 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from floret_keys import blade_net, organ, ring_net  # noqa: E402  (pipelines/floret_keys.py)
+from inflo.tools.species.keys import blade_net, organ, ring_net
 
 HERE = Path(__file__).resolve().parent
 

@@ -22,12 +22,13 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from heads import check_head, check_phase  # noqa: E402  (pipelines/heads.py)
+from inflo.formats.species import species_of
+from inflo.tools.species.checks import check_head, check_phase
 
-RAYS = 34
-# a disk floret is in bud below this height (floret units): bud 0.8, open with the anthers up 1.1
-BUD = 0.95
+# the species' facts: the [check] table of species.toml (formats/species.md)
+CHECK = species_of(__file__).check
+RAYS = CHECK["rays"]
+BUD = CHECK["bud"]
 
 
 def main(build: Path) -> int:

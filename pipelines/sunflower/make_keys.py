@@ -40,8 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from floret_keys import blade_net, cylinder_net, fmt_rows, organ, ring_net  # noqa: E402,F401  (pipelines/floret_keys.py)
+from inflo.tools.species.keys import blade_net, cylinder_net, fmt_rows, organ, ring_net  # noqa: F401
 
 HERE = Path(__file__).resolve().parent
 

@@ -33,13 +33,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 from scipy.stats import spearmanr
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from heads import BOUNDS  # noqa: E402  (pipelines/heads.py)
-
-from inflo.formats.obj import list_obj_sequence, read_obj  # noqa: E402
-from inflo.formats.rba import list_rba_sequence, read_rba  # noqa: E402
-from inflo.formats.scn import read_scn  # noqa: E402
-from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between  # noqa: E402
+from inflo.formats.obj import list_obj_sequence, read_obj
+from inflo.formats.rba import list_rba_sequence, read_rba
+from inflo.formats.scn import read_scn
+from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
+from inflo.tools.species.checks import BOUNDS
 
 
 def count(mesh) -> int:

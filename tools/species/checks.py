@@ -1,11 +1,11 @@
-"""Checks shared by the dense-head species builds (pipelines/sunflower, pipelines/gaillardia).
+"""Checks shared by the species builds' check scripts (``check_<species>.py``).
 
 Each species' ``check_<species>.py`` runs :func:`check_head` with its own facts (ray count, bud
 height, extra per-frame or whole-run checks) and prints the same report: intersections of every
 written canopy frame (exact static test, within the canopy and with the receptacle), the edge
 stretch bounds from fccompose's log, every floret present at the end, the ray florets on the
-margin, and the phase effect at two thirds of the run. Imported by path (the scripts put this
-folder on ``sys.path``).
+margin, and the phase effect at two thirds of the run. ``from inflo.tools.species.checks import
+check_head``.
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
-"""Builders of floret key poses shared by the species' make_keys.py scripts (pipelines/sunflower,
-pipelines/gaillardia): control-point nets of whorls, cylinders and blades, and the organ block of
-the .floret format (formats/floret.md). Imported by path (the scripts put this folder on
-``sys.path``); numbers are written with 4 decimals, so the committed key poses are reproducible.
+"""Builders of floret key poses shared by the species' make_keys.py scripts: control-point nets of
+whorls, cylinders and blades, and the organ block of the .floret format (formats/floret.md), so a
+species' script holds only its own geometry (``from inflo.tools.species.keys import organ``);
+numbers are written with 4 decimals, so the committed key poses are reproducible.
 """
 from __future__ import annotations
 

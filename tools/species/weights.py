@@ -1,13 +1,13 @@
-"""Weight files (fixed vertices, formats/weights.md) of the yarrow pipeline's fccompose runs.
+"""Weight files (fixed vertices, formats/weights.md) of the species builds' fccompose runs.
 
-    python weights.py base FRAME.obj OUT.weights
+    python -m inflo.tools.species.weights base FRAME.obj OUT.weights
         the vertices of a floret OBJ (polygonize output, local frame) on its base row: those at the
         lowest local height (every key pose keeps row 0 of each organ at y = 0), so the floret stays
         attached to the receptacle while collisions push its petals;
-    python weights.py all FRAME.obj OUT.weights
+    python -m inflo.tools.species.weights all FRAME.obj OUT.weights
         every vertex of an OBJ (a part that moves only as its animation says: the sunflower's
         receptacle);
-    python weights.py head SCENE.scn OUT.weights ID=FRAME.obj:IDS.weights [ID=...]
+    python -m inflo.tools.species.weights head SCENE.scn OUT.weights ID=FRAME.obj:IDS.weights [ID=...]
         the fixed vertices of the head canopy written by fccompose: the placements of SCENE.scn in
         order, each one the vertices of its id's OBJ, its fixed ids shifted by the vertices before it
         (fccompose's vertex order: scene placements in file order, each template's vertex order).
