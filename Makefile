@@ -12,7 +12,7 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: all venv bytecode test test-blender bench golden golden-check species $(SPECIES_DIRS) clean distclean
+.PHONY: all venv bytecode test test-blender bench golden golden-check species new-species $(SPECIES_DIRS) clean distclean
 
 all: lily
 
@@ -72,6 +72,10 @@ SPECIES_DIRS := $(sort $(patsubst pipelines/%/species.toml,%,$(wildcard pipeline
 
 species: $(STAMP)
 	@$(PY) -m inflo.tools.species list
+
+# a new species from an existing one, by data (docs/new_species.md): make new-species NAME=daisy FROM=sunflower
+new-species: $(STAMP)
+	@$(PY) -m inflo.tools.species new '$(NAME)' --from '$(FROM)' $(if $(TITLE),--title '$(TITLE)')
 
 $(SPECIES_DIRS): $(STAMP) bytecode
 	$(MAKE) -C pipelines/$@ QUALITY=$(QUALITY)

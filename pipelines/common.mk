@@ -2,8 +2,9 @@
 #
 # Included last, after the species has set (in its Makefile) what these rules depend on:
 #
-# - CHECK_DEPS: what its check reads; `check` runs check_$(SPECIES).py on the build and keeps its
-#   report, $(B)/check.txt, only when it passes (printed either way);
+# - CHECK_DEPS: what its check reads; `check` runs check_$(SPECIES).py (or, with CHECK_SRC set
+#   empty, the shared head check with the facts of species.toml [check]) on the build and keeps
+#   its report, $(B)/check.txt, only when it passes (printed either way);
 # - USD_DEPS: the last frames of its USD parts ([usd] parts of species.toml, USD_PARTS); `usd`
 #   writes $(B)/$(SPECIES).usdc with canopy-export (USD_FLAGS, `--mtl` unless set: materials.mtl
 #   beside each part's OBJ frames), coloured by colors.toml, one unit a centimetre, 24 fps;
@@ -11,14 +12,20 @@
 #   depends on it; clean; FORCE.
 
 USD_FLAGS ?= --mtl
+# the check: the species' own check_<species>.py, or (CHECK_SRC empty: a head whose facts are all
+# in species.toml [check]) the shared one, python -m inflo.tools.species.checks
+ifeq ($(origin CHECK_SRC),undefined)
+CHECK_SRC := check_$(SPECIES).py
+endif
+CHECK ?= $(if $(CHECK_SRC),$(PY) $(CHECK_SRC),$(PY) -m inflo.tools.species.checks $(HERE))
 
 $(B)/quality.txt: FORCE
 	@mkdir -p $(B)
 	@if [ "$$(cat $@ 2>/dev/null)" != "$(QUALITY)" ]; then echo "$(QUALITY)" > $@; fi
 
 check: $(B)/check.txt
-$(B)/check.txt: $(CHECK_DEPS) check_$(SPECIES).py
-	@$(PY) check_$(SPECIES).py $(B) > $@.tmp; status=$$?; cat $@.tmp; \
+$(B)/check.txt: $(CHECK_DEPS) $(CHECK_SRC)
+	@$(CHECK) $(B) > $@.tmp; status=$$?; cat $@.tmp; \
 		if [ $$status -eq 0 ]; then mv $@.tmp $@; else rm -f $@.tmp; exit 1; fi
 
 ifneq ($(strip $(USD_PARTS)),)

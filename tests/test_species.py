@@ -20,7 +20,7 @@ WITHOUT_USD = {"eustoma": "three cultivars at one place: their USD file is still
 
 
 def test_every_species_folder_has_a_species_file():
-    assert len(SPECIES) >= 9
+    assert len(SPECIES) >= 10
     assert [s.name for s in find_species(PIPELINES)] == SPECIES
 
 
@@ -120,3 +120,64 @@ def test_species_makefile_stops_on_a_bad_quality_or_file(tmp_path):
     res = subprocess.run(["make", "-n", "-C", str(PIPELINES / "gaillardia"), "QUALITY=best"], capture_output=True,
                          text=True)
     assert res.returncode != 0 and "QUALITY must be draft or final, found 'best'" in res.stderr
+
+
+# -- make new-species ------------------------------------------------------------------------------
+
+
+def _tree(root: Path) -> Path:
+    """A project of its own: tools, formats and the venv linked, pipelines and goldens copied."""
+    import shutil
+
+    root.mkdir(parents=True)
+    for name in ("tools", "formats", ".venv", "pyproject.toml"):
+        (root / name).symlink_to(REPO / name)
+    shutil.copytree(PIPELINES, root / "pipelines", ignore=shutil.ignore_patterns("__pycache__", "docs"))
+    shutil.copytree(REPO / "tests" / "golden", root / "tests" / "golden")
+    return root
+
+
+def _tree_digest(folder: Path) -> dict:
+    import hashlib
+
+    return {p.relative_to(folder).as_posix(): hashlib.md5(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def test_scaffold_refuses_bad_names(tmp_path):
+    from inflo.tools.species.scaffold import scaffold
+
+    root = _tree(tmp_path / "repo")
+    with pytest.raises(InputError, match="lower-case name"):
+        scaffold(root, "Daisy2", "sunflower")
+    with pytest.raises(InputError, match="exists already"):
+        scaffold(root, "lily", "sunflower")
+    with pytest.raises(InputError, match="expected a species .*sunflower.*, found 'aster'"):
+        scaffold(root, "daisy2", "aster")
+    assert not list((root / "pipelines").glob(".*.tmp"))
+
+
+@pytest.mark.skipif(not (REPO / ".venv" / "bin" / "fccompose").exists(), reason="needs the .venv (make test)")
+def test_a_scaffolded_species_builds_and_checks(tmp_path):
+    """make new-species NAME=aster FROM=daisy in a copy of the project: a folder of its own (and a
+    golden manifest), the daisy untouched, and `make aster` at draft quality builds the canopy,
+    passes the shared head check and writes its USD file."""
+    root = _tree(tmp_path / "repo")
+    before = _tree_digest(root / "pipelines" / "daisy")
+    res = subprocess.run([sys.executable, "-m", "inflo.tools.species", "new", "aster", "--from", "daisy", "--title",
+                          "New England aster", "--repo", str(root)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert _tree_digest(root / "pipelines" / "daisy") == before
+    sp = read_species(root / "pipelines" / "aster" / "species.toml")
+    assert (sp.name, sp.title) == ("aster", "New England aster")
+    assert (root / "pipelines" / "aster" / "aster.fcc").is_file() and not (root / "pipelines" / "aster" / "daisy.fcc").exists()
+    assert "../../build/aster/" in (root / "pipelines" / "aster" / "aster.fcc").read_text()
+    assert (root / "tests" / "golden" / "aster" / "manifest.toml").is_file()
+    res = subprocess.run(["make", "-s", "-C", str(root / "pipelines" / "aster"), "QUALITY=draft", "check", "usd"],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    build = root / "build" / "aster"
+    assert (build / "check.txt").read_text().rstrip().endswith("OK")
+    assert "ray florets: 21 (expected 21)" in (build / "check.txt").read_text()
+    assert (build / "aster.usdc").stat().st_size > 0
+    assert not (REPO / "build" / "aster").exists() and not (REPO / "pipelines" / "aster").exists()

@@ -165,3 +165,28 @@ def check_phase(head: Head, *, bud: float, failures: list) -> None:
         failures.append(f"no phase effect at frame {k}: rank correlation {rho:.2f}")
     if buds == 0:
         failures.append(f"no disk floret in bud at frame {k}")
+
+
+def main(argv=None) -> int:
+    """``python -m inflo.tools.species.checks PIPELINE_DIR BUILD_DIR``: the shared report of a head
+    whose facts are all in the [check] table of its species.toml (``rays``, ``bud``: the
+    phase effect's bud height; a species with facts of its own has its check_<species>.py)."""
+    import sys
+
+    from inflo.formats.species import read_species
+
+    args = sys.argv[1:] if argv is None else argv
+    if len(args) != 2:
+        print("usage: python -m inflo.tools.species.checks PIPELINE_DIR BUILD_DIR", file=sys.stderr)
+        return 2
+    facts = read_species(Path(args[0]) / "species.toml").check
+    failures = []
+    head = check_head(Path(args[1]), rays=facts.get("rays"), failures=failures)
+    if "bud" in facts:
+        check_phase(head, bud=facts["bud"], failures=failures)
+    print("OK" if not failures else "FAILED: " + "; ".join(failures))
+    return 0 if not failures else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
