@@ -52,6 +52,10 @@ class Species:
     stages: list
     usd_parts: dict
     """USD part name -> its OBJ sequence folder or OBJ file, relative to the build folder"""
+    usd_translate: dict = field(default_factory=dict)
+    """USD part name -> (x, y, z) it is moved by in the USD file (canopy-export --translate)"""
+    usd_units: str = "cm"
+    """what one unit of its OBJ files is (canopy-export --units)"""
     settings: dict = field(default_factory=dict)
     """quality -> {setting name: value}"""
     common: dict = field(default_factory=dict)
@@ -130,6 +134,18 @@ def read_species(path) -> Species:
         raise err("parts", "[usd] parts = { NAME = \"folder or file under build/<species>\" }", repr(usd))
     if "usd" in stages and not parts:
         raise err("stages", "[usd] parts for the 'usd' stage", "none")
+    usd = usd if isinstance(usd, dict) else {}
+    bad = sorted(set(usd) - {"parts", "translate", "units"})
+    if bad:
+        raise err(bad[0], "[usd] keys parts, translate, units", repr(bad[0]))
+    translate = usd.get("translate", {})
+    if not isinstance(translate, dict) or any(
+            k not in parts or not isinstance(v, list) or len(v) != 3
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v) for k, v in translate.items()):
+        raise err("translate", "[usd] translate = { PART = [x, y, z] } for parts of [usd] parts", repr(translate))
+    units = usd.get("units", "cm")
+    if units not in ("m", "dm", "cm", "mm", "in", "ft"):
+        raise err("units", "[usd] units: m, dm, cm, mm, in or ft", repr(units))
     bench = data.get("bench", {})
     if not isinstance(bench, dict):
         raise err("bench", "a [bench] table", repr(bench))
@@ -168,7 +184,7 @@ def read_species(path) -> Species:
         only = sorted(set(settings["draft"]) ^ set(settings["final"]))
         raise err(only[0], "the same settings in [draft] and [final]", f"{only[0]!r} in only one of them")
     return Species(path, name, data["title"], data.get("latin", ""), figures, data["family"], list(stages), parts,
-                   settings, common, bench, check)
+                   {k: tuple(float(x) for x in v) for k, v in translate.items()}, units, settings, common, bench, check)
 
 
 def species_of(script) -> Species:
@@ -191,14 +207,17 @@ def _text(value) -> str:
 
 def make_variables(species: Species, quality: str, build: str = "$(B)") -> str:
     """The make assignments of the ``[settings]`` and ``quality``'s (``TEMPLATE_FRAMES := 30``: names upper-cased,
-    lists joined by commas), the species' NAME and TITLE, and ``USD_PARTS`` (``NAME=$(B)/path``
-    for canopy-export)."""
+    lists joined by commas), the species' NAME and TITLE, and for canopy-export ``USD_PARTS``
+    (``NAME=$(B)/path``), ``USD_UNITS`` and ``USD_TRANSLATE`` (``--translate NAME=x,y,z``)."""
     if quality not in species.settings:
         raise InputError(f"{species.path}: QUALITY must be {' or '.join(species.qualities)}, found {quality!r}")
     lines = [f"# from {species.path.name} [{quality}] (formats/species.md); written by pipelines/species.mk",
              f"SPECIES := {species.name}", f"TITLE := {species.title}"]
     lines += [f"{k.upper()} := {_text(v)}" for k, v in {**species.common, **species.settings[quality]}.items()]
     lines.append("USD_PARTS := " + " ".join(f"{k}={build}/{v}" for k, v in species.usd_parts.items()))
+    lines.append(f"USD_UNITS := {species.usd_units}")
+    lines.append("USD_TRANSLATE := " + " ".join(f"--translate {k}={','.join(_text(x) for x in v)}"
+                                                for k, v in species.usd_translate.items()))
     return "\n".join(lines) + "\n"
 
 

@@ -7,7 +7,7 @@
 #   its report, $(B)/check.txt, only when it passes (printed either way);
 # - USD_DEPS: the last frames of its USD parts ([usd] parts of species.toml, USD_PARTS); `usd`
 #   writes $(B)/$(SPECIES).usdc with canopy-export (USD_FLAGS, `--mtl` unless set: materials.mtl
-#   beside each part's OBJ frames), coloured by colors.toml, one unit a centimetre, 24 fps;
+#   beside each part's OBJ frames), coloured by colors.toml, its [usd] units and translate, 24 fps;
 # - $(B)/quality.txt, rewritten only when QUALITY changes, so a draft/final switch reruns what
 #   depends on it; clean; FORCE.
 
@@ -31,7 +31,7 @@ $(B)/check.txt: $(CHECK_DEPS) $(CHECK_SRC)
 ifneq ($(strip $(USD_PARTS)),)
 usd: $(B)/$(SPECIES).usdc
 $(B)/$(SPECIES).usdc: $(USD_DEPS) colors.toml $(EXPORT_SRC)
-	$(BIN)canopy-export -q $(USD_FLAGS) $(USD_PARTS) --colors colors.toml --units cm --fps 24 -o $@
+	$(BIN)canopy-export -q $(USD_FLAGS) $(USD_PARTS) $(USD_TRANSLATE) --colors colors.toml --units $(USD_UNITS) --fps 24 -o $@
 endif
 
 clean:

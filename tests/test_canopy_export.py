@@ -290,3 +290,26 @@ def test_floret_subsets(build):
     assert not UsdShade.MaterialBindingAPI(florets["floret_1"].GetPrim()).GetDirectBinding().GetMaterial()
     res = _run(seq, "--subsets", "organ", "-o", out)
     assert res.exit_code == 2
+
+
+def test_translate_moves_a_part_by_an_xform_op_and_keeps_its_points(build):
+    """--translate NAME=X,Y,Z: flowers built at one place (Eustoma's cultivars) stand side by side;
+    the part's prim gets an xformOp:translate, its points stay those of the OBJ files."""
+    tmp, seq, static, colors = build
+    out = tmp / "flower.usda"
+    res = _run(f"petals={seq}", f"stem={static}", "--translate", "stem=2.5,0,-1", "-o", out)
+    assert res.exit_code == 0, res.output
+    stage = Usd.Stage.Open(str(out))
+    stem = UsdGeom.Mesh.Get(stage, "/flower/stem")
+    ops = stem.GetOrderedXformOps()
+    assert [op.GetOpName() for op in ops] == ["xformOp:translate"]
+    assert tuple(ops[0].Get()) == (2.5, 0.0, -1.0)
+    np.testing.assert_allclose(np.asarray(stem.GetPointsAttr().Get()), read_obj(static).vertices, atol=1e-7)
+    world = stem.ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+    assert tuple(world.ExtractTranslation()) == (2.5, 0.0, -1.0)
+    assert UsdGeom.Mesh.Get(stage, "/flower/petals").GetOrderedXformOps() == []
+    for bad, what in (("stem=1,2", "NAME=X,Y,Z"), ("=1,2,3", "NAME=X,Y,Z"), ("stem=1,x,3", "NAME=X,Y,Z"),
+                      ("leaf=1,2,3", "no part named 'leaf'")):
+        res = _run(f"petals={seq}", f"stem={static}", "--translate", bad, "-o", tmp / "bad.usda")
+        assert res.exit_code == 2 and what in res.output, (bad, res.output)
+        assert not (tmp / "bad.usda").exists()

@@ -16,7 +16,7 @@ from conftest import REPO
 
 PIPELINES = REPO / "pipelines"
 SPECIES = [p.parent.name for p in sorted(PIPELINES.glob("*/Makefile")) if p.parent.name != "examples"]
-WITHOUT_USD = {"eustoma": "three cultivars at one place: their USD file is still to come (issue 42)"}
+WITHOUT_USD = {}
 
 
 def test_every_species_folder_has_a_species_file():

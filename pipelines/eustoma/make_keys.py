@@ -105,7 +105,8 @@ def cultivar_toml(name: str, mesh: str) -> str:
         out += [f'{k} = "{g[k]}"' for k in ("direction", "e", "w", "e_in", "w_in")]
         out += [f'stretch = "{STRETCH}"', f'bend = "{BEND}"']
     for k in range(5):
-        out += ["", "[[organ]]", f'name = "petal_{k}"', f'mesh = "{mesh}"', 'material = "petal"',
+        # the cultivar's name as the petals' material: its colour in colors.toml (the USD file)
+        out += ["", "[[organ]]", f'name = "petal_{k}"', f'mesh = "{mesh}"', f'material = "{name}"',
                 f"rotate = {72 * k}", "# contorted: its right side lies beneath the next petal's left side",
                 f'beneath = "petal_{(k + 1) % 5}"', 'growth = [[0, "early"], [40, "early"], [60, "late"]]']
     return "\n".join(out) + "\n"

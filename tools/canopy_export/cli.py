@@ -25,6 +25,8 @@ Open it in Blender: File > Import > Universal Scene Description, press play.
 """
 from __future__ import annotations
 
+import math
+
 import click
 
 from inflo.tools.common.cli import inflo_command, progress
@@ -48,6 +50,20 @@ def _output(ctx, param, value):
     return value
 
 
+def _translate(ctx, param, values):
+    out = {}
+    for text in values:
+        name, _, xyz = text.partition("=")
+        try:
+            vec = tuple(float(v) for v in xyz.split(","))
+        except ValueError:
+            vec = ()
+        if not name or len(vec) != 3 or not all(math.isfinite(v) for v in vec):
+            raise click.BadParameter(f"expected NAME=X,Y,Z (three numbers), found {text!r}")
+        out[name] = vec
+    return out
+
+
 @inflo_command("canopy-export", help="OBJ sequences + colours -> one USD growth animation (formats/usd.md).",
                epilog="Open it in Blender: File > Import > Universal Scene Description, press play.")
 @click.argument("inputs", nargs=-1, required=True, metavar="[NAME=]IN_DIR|GLOB|IN.obj...")
@@ -69,10 +85,12 @@ def _output(ctx, param, value):
               help="GeomSubsets per material of a part; 'floret': also one per OBJ group (family 'floret').")
 @click.option("--mtl", is_flag=True,
               help="Also write materials.mtl (the OBJ files' mtllib) beside each part's OBJ files, Kd linear.")
+@click.option("--translate", "translate", multiple=True, metavar="NAME=X,Y,Z", callback=_translate,
+              help="Move part NAME by (X, Y, Z) (an xformOp on its prim; the points are kept). Repeatable.")
 @click.option("--pc2", "pc2_dir", type=click.Path(file_okay=False), default=None,
               help="Also write DIR/<part>.pc2 point caches (fixed topology; Blender's Mesh Cache modifier).")
-def main(inputs, output, color_file, units, fps, start_frame, normals, constant_topology, subsets, mtl, pc2_dir,
-         quiet, debug):
+def main(inputs, output, color_file, units, fps, start_frame, normals, constant_topology, subsets, mtl, translate,
+         pc2_dir, quiet, debug):
     colors = None
     if color_file:
         from inflo.tools.canopy_render.colors import load_color_file
@@ -81,7 +99,7 @@ def main(inputs, output, color_file, units, fps, start_frame, normals, constant_
     parts = resolve_parts(inputs)
     n_frames = frame_count(parts)
     options = ExportOptions(fps=fps, start_frame=start_frame, meters_per_unit=units, normals=normals,
-                            constant_topology=constant_topology, subsets=subsets, mtl=mtl)
+                            constant_topology=constant_topology, subsets=subsets, mtl=mtl, translate=translate)
     with progress(length=n_frames, label="canopy-export", quiet=quiet, unit="frames") as bar:
         report = export_canopy(parts, output, colors=colors, options=options, pc2_dir=pc2_dir,
                                on_frame=lambda k: bar.update(1))

@@ -65,6 +65,9 @@ class ExportOptions:
     mtl : bool
         Also write ``materials.mtl`` (the name the OBJ frames' ``mtllib`` gives) beside each
         part's OBJ files: its materials with ``Kd`` the colour file's colour, linear.
+    translate : dict
+        Part name -> (x, y, z): the part's Mesh prim is moved by this (an ``xformOp:translate``;
+        its points stay as in the OBJ files), e.g. to stand flowers built at one place side by side.
     """
 
     fps: float = 24.0
@@ -74,6 +77,7 @@ class ExportOptions:
     constant_topology: bool = False
     subsets: str = "material"
     mtl: bool = False
+    translate: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -158,12 +162,16 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
                          f"found {output.suffix or 'no suffix'!r}")
     n_frames = frame_count(parts)
     table = dict(colors or {})
+    unknown = sorted(set(opts.translate) - {p.name for p in parts})
+    if unknown:
+        raise InputError(f"--translate: no part named {unknown[0]!r}; expected one of {', '.join(p.name for p in parts)}")
     builder = UsdBuilder(
         prim_name(output.stem), [p.name for p in parts], [p.is_static for p in parts],
         material_color=lambda name: material_color(name, table),
         default_colors=[INPUT_PALETTE[i % len(INPUT_PALETTE)] for i in range(len(parts))],
         n_frames=n_frames, start_frame=opts.start_frame, fps=opts.fps,
         meters_per_unit=opts.meters_per_unit, normals=opts.normals, subsets=opts.subsets,
+        translate=opts.translate,
     )
     caches = {p.name: [] for p in parts if not p.is_static} if pc2_dir is not None else {}
     topology = {p.name: 0 for p in parts}

@@ -5,7 +5,8 @@ writes it once, atomically (``.usdc`` binary crate, ``.usda`` text, ``.usd`` bin
 
     /<root>                   Xform, the stage's default prim (named after the output file)
         /<part>               Mesh: points, extent (time-sampled), faceVertexCounts/Indices
-                              (once, or sampled where the faces change), optional normals
+                              (once, or sampled where the faces change), optional normals,
+                              an xformOp:translate where --translate moves the part
             /<material>       GeomSubset, family materialBind, the faces of one OBJ usemtl
         /Materials/<material> Material with a UsdPreviewSurface (diffuseColor in linear RGB)
 
@@ -120,13 +121,15 @@ class UsdBuilder:
         ``floret``: also one per OBJ group (``g``, a floret of a canopy), family ``floret``,
         bound to nothing (Blender 4.5 gives every materialBind subset a slot of its own and
         leaves all but the first of a material empty, so per-floret binding broke its colours).
+    translate : dict
+        Part name -> (x, y, z): an ``xformOp:translate`` on that part's Mesh prim.
     """
 
     def __init__(self, root_name: str, part_names: Sequence[str], static: Sequence[bool], *,
                  material_color, default_colors: Sequence[RGB], n_frames: int, start_frame: float = 1.0,
                  fps: float = 24.0, meters_per_unit: float = 0.01, normals: bool = False,
-                 subsets: str = "material"):
-        from pxr import Sdf, Usd, UsdGeom
+                 subsets: str = "material", translate=None):
+        from pxr import Gf, Sdf, Usd, UsdGeom
 
         if subsets not in SUBSET_MODES:
             raise ValueError(f"subsets must be one of {', '.join(SUBSET_MODES)}, got {subsets!r}")
@@ -160,6 +163,8 @@ class UsdBuilder:
             mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
             mesh.CreateDoubleSidedAttr(True)
             mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
+            if st.name in (translate or {}):
+                mesh.AddTranslateOp().Set(Gf.Vec3d(*map(float, translate[st.name])))
             self._meshes.append(mesh)
 
     def time(self, frame: int) -> float:
