@@ -19,6 +19,7 @@ from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.rba import read_rba
 from inflo.formats.scn import read_scn
 from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
+from inflo.tools.common import linalg as la
 
 BOUNDS = (0.5, 1.5)
 
@@ -41,9 +42,9 @@ def floret_heights(mesh, frame_rba, scene) -> dict:
             continue
         r = rows[pid]
         v = mesh.vertices[np.unique(mesh.faces[faces])]
-        up = frame_rba.up[r] / np.linalg.norm(frame_rba.up[r])
+        up = frame_rba.up[r] / la.norm(frame_rba.up[r])
         scale = float(frame_rba.scale[r, 1]) * float(scene.placements[pid].scale[1])
-        out[pid] = float(((v - frame_rba.pos[r]) @ up).max()) / scale
+        out[pid] = float(la.matmul(v - frame_rba.pos[r], up).max()) / scale
     return out
 
 
@@ -61,7 +62,7 @@ class Head:
         self.rba = sorted((self.build / folder / "rba").glob("*.rba"))
         pos = self.scene.arrays()["pos"]
         centre = self.scene.groups[0].centre if 0 in self.scene.groups else pos.mean(axis=0)
-        self.radius = np.linalg.norm((pos - centre)[:, [0, 2]], axis=1)
+        self.radius = la.norm((pos - centre)[:, [0, 2]], axis=1)
 
     def rba_frame(self, k: int):
         return read_rba(self.rba[min(k, len(self.rba) - 1)])

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
+
 
 def fmt_rows(pts):
     return "\n".join("  " + "   ".join(f"{x:.4f} {y:.4f} {z:.4f}" for x, y, z in row) for row in pts)
@@ -41,7 +43,7 @@ def blade_net(p, nu, nv, u, recess=None, base_r=None):
     pts = np.zeros((nv, nu, 3))
     for j in range(nv):
         a = mid[min(j + 1, nv - 1)] - mid[max(j - 1, 0)]
-        t = a / np.linalg.norm(a)
+        t = a / la.norm(a)
         n = np.array([-t[1], t[0]])
         w = p["half"][j]
         if j == 0 and base_r is not None:
