@@ -188,9 +188,7 @@ def test_limb_never_touches_the_tube_and_only_the_tube_base_is_fixed(ray_frames)
     first = meshes[0]
     groups = {n: np.unique(first.faces[first.face_group == g]) for g, n in enumerate(first.groups)}
     tube, limb = groups["tube_0"], groups["limb_0"]
-    spec = importlib.util.spec_from_file_location("yarrow_weights", REPO / "pipelines" / "yarrow" / "weights.py")
-    weights = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(weights)
+    from inflo.tools.species import weights
     for k, mesh in enumerate(meshes):
         x = mesh.vertices
         assert len(intersecting_pairs(x, mesh.faces)) == 0, f"frame {k}: the floret intersects itself"

@@ -237,7 +237,7 @@ def test_makefile_chains_the_stages():
     assert r.returncode == 0, r.stderr
     out = r.stdout
     # each stage after the stages it reads (make may interleave independent ones)
-    before = [("floret-animate", "polygonize"), ("polygonize", "weights.py base"),
+    before = [("floret-animate", "polygonize"), ("polygonize", "inflo.tools.species.weights base"),
               ("phyllotaxis -q draft/head.toml", "corymb_heads.py"), ("phyllotaxis -q draft/corymb.toml", "corymb_heads.py"),
               ("corymb_heads.py", "dimorph"), ("dimorph", "yarrow.fcc"), ("corymb_heads.py", "branch-gen"),
               ("yarrow.fcc", "subdivide"), ("subdivide", "check_yarrow.py"), ("branch-gen", "check_yarrow.py"),
