@@ -121,3 +121,15 @@ def test_kabsch_of_coincident_points_is_a_rotation():
     r, t = la.kabsch(p, p + 1.0)
     np.testing.assert_allclose(la.matmul(r, r.T), np.eye(3), atol=1e-14)
     np.testing.assert_allclose(t, 1.0)
+
+
+@pytest.mark.parametrize("sa, sb", [((4, 4), (4, 4)), ((300, 64), (64, 3)), ((1, 50, 16), (5, 16, 3)),
+                                    ((7, 3, 4), (4, 2)), ((2, 1, 3, 4), (5, 4, 2))])
+def test_matmul_kernel_gives_the_bits_of_the_elementwise_loop(sa, sb):
+    """float64 products go to a numba kernel; it sums in the order of the numpy loop (the float32
+    path), so both give the same bits: no FMA, no reassociation on this processor's code."""
+    a, b = rng.normal(size=sa), rng.normal(size=sb)
+    import numba  # noqa: F401  (the kernel path)
+
+    assert np.array_equal(la.matmul(a, b), la._matmul_loop(a, b))
+    np.testing.assert_allclose(la.matmul(a, b), a @ b, rtol=1e-12, atol=1e-12)

@@ -18,8 +18,10 @@ module instead. Its operation order is written out:
 * reductions over an axis (``norm``, ``rowdot``) use ``np.add.reduce``, whose pairwise sum is
   scalar code whose order depends only on the length;
 * ``inv``, ``det`` and the symmetric eigenproblem behind :func:`kabsch` are numba kernels
-  (Gauss-Jordan and LU with partial pivoting, cyclic Jacobi rotations) with no fast-math, so
-  LLVM neither reassociates nor contracts them whatever processor it compiles for.
+  (:mod:`._linalg_kernels`: Gauss-Jordan and LU with partial pivoting, cyclic Jacobi rotations)
+  with no fast-math, so LLVM neither reassociates nor contracts them whatever processor it
+  compiles for; float64 products go to a kernel of the same order where numba is loaded already
+  (bit for bit the numpy loop's: tested), so a numpy-only tool (polygonize) does not import it.
 
 ``tests/test_linalg.py`` checks each function against numpy on random input (to rounding) and
 ``tests/test_portable.py`` builds stages under other OpenBLAS kernels, without numpy's
@@ -28,9 +30,9 @@ AVX-512 paths and with numba compiling for a generic x86-64, byte for byte.
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
-from numba import njit
 
 __all__ = ["matmul", "dot", "rowdot", "norm", "normalize", "inv", "det", "kabsch", "eigh_jacobi"]
 
@@ -65,17 +67,38 @@ def matmul(a, b) -> np.ndarray:
     k = a.shape[-1]
     if b.shape[-2] != k:
         raise ValueError(f"matmul: mismatch in the core dimension: {a.shape} and {b.shape}")
+    lead = np.broadcast_shapes(a.shape[:-2], b.shape[:-2])
     if k == 0:
-        out = np.zeros(np.broadcast_shapes(a.shape[:-2], b.shape[:-2]) + (a.shape[-2], b.shape[-1]),
-                       np.result_type(a, b))
+        out = np.zeros(lead + (a.shape[-2], b.shape[-1]), np.result_type(a, b))
+    elif a.dtype == np.float64 and b.dtype == np.float64 and "numba" in sys.modules:
+        # the kernel (where numba is loaded already: a numpy-only tool does not pay its import):
+        # the same sums in the same order as the loop, without a temporary per k
+        kernel = _kernels()._matmul_kernel
+        if a.ndim == 2 and b.ndim == 2:
+            out = np.empty((1, a.shape[0], b.shape[1]))
+            kernel(a[None], b[None], out)
+            out = out[0]
+        else:
+            a3 = np.broadcast_to(a, lead + a.shape[-2:]).reshape((-1,) + a.shape[-2:])
+            b3 = np.broadcast_to(b, lead + b.shape[-2:]).reshape((-1,) + b.shape[-2:])
+            out = np.empty((a3.shape[0], a.shape[-2], b.shape[-1]))
+            kernel(a3, b3, out)
+            out = out.reshape(lead + out.shape[1:])
     else:
-        out = a[..., :, 0:1] * b[..., 0:1, :]
-        for j in range(1, k):
-            out = out + a[..., :, j:j + 1] * b[..., j:j + 1, :]
+        out = _matmul_loop(a, b)
     if va:
         out = out[..., 0, :]
     if vb:
         out = out[..., 0]
+    return out
+
+
+def _matmul_loop(a, b) -> np.ndarray:
+    """``a @ b`` for (..., n, k) and (..., k, m) by numpy elementwise operations, k = 0, 1, ... in order
+    (any float type; float64 goes to the numba kernel where numba is loaded: the same bits)."""
+    out = a[..., :, 0:1] * b[..., 0:1, :]
+    for j in range(1, a.shape[-1]):
+        out = out + a[..., :, j:j + 1] * b[..., j:j + 1, :]
     return out
 
 
@@ -110,146 +133,11 @@ def normalize(x, axis=None, floor: float = 0.0) -> np.ndarray:
     return x / np.maximum(norm(x, axis=axis, keepdims=True), floor)
 
 
-# -- kernels ----------------------------------------------------------------------------------
+def _kernels():
+    """The numba kernels (:mod:`._linalg_kernels`), imported on first use."""
+    from . import _linalg_kernels
 
-
-@njit(cache=True)
-def _inv_kernel(a, out):
-    """Gauss-Jordan with partial pivoting on each (n, n) matrix of ``a`` (s, n, n) into
-    ``out``; returns the index of the first singular matrix, or -1."""
-    s, n, _ = a.shape
-    w = np.empty((n, 2 * n))
-    for q in range(s):
-        for i in range(n):
-            for j in range(n):
-                w[i, j] = a[q, i, j]
-                w[i, n + j] = 1.0 if i == j else 0.0
-        for c in range(n):
-            p = c
-            best = abs(w[c, c])
-            for r in range(c + 1, n):
-                v = abs(w[r, c])
-                if v > best:
-                    best = v
-                    p = r
-            if best == 0.0 or not np.isfinite(best):
-                return q
-            if p != c:
-                for j in range(2 * n):
-                    t = w[c, j]
-                    w[c, j] = w[p, j]
-                    w[p, j] = t
-            piv = w[c, c]
-            for j in range(2 * n):
-                w[c, j] = w[c, j] / piv
-            for r in range(n):
-                if r != c:
-                    f = w[r, c]
-                    if f != 0.0:
-                        for j in range(2 * n):
-                            w[r, j] = w[r, j] - f * w[c, j]
-        for i in range(n):
-            for j in range(n):
-                out[q, i, j] = w[i, n + j]
-    return -1
-
-
-@njit(cache=True)
-def _det_kernel(a, out):
-    """Determinant of each (n, n) matrix of ``a`` (s, n, n) by LU with partial pivoting."""
-    s, n, _ = a.shape
-    w = np.empty((n, n))
-    for q in range(s):
-        for i in range(n):
-            for j in range(n):
-                w[i, j] = a[q, i, j]
-        d = 1.0
-        for c in range(n):
-            p = c
-            best = abs(w[c, c])
-            for r in range(c + 1, n):
-                v = abs(w[r, c])
-                if v > best:
-                    best = v
-                    p = r
-            if best == 0.0:
-                d = 0.0
-                break
-            if p != c:
-                for j in range(n):
-                    t = w[c, j]
-                    w[c, j] = w[p, j]
-                    w[p, j] = t
-                d = -d
-            piv = w[c, c]
-            d = d * piv
-            for r in range(c + 1, n):
-                f = w[r, c] / piv
-                if f != 0.0:
-                    for j in range(c, n):
-                        w[r, j] = w[r, j] - f * w[c, j]
-        out[q] = d
-
-
-@njit(cache=True)
-def _eigh_kernel(a, values, vectors, sweeps):
-    """Cyclic Jacobi eigen-decomposition of each symmetric (n, n) matrix of ``a`` (s, n, n):
-    ``values`` (s, n) ascending and the unit eigenvectors as the columns of ``vectors``
-    (s, n, n), each column's largest component made positive. Rotations zero (p, q) in row
-    order until the off-diagonal is below 1e-300 or after ``sweeps`` sweeps."""
-    s, n, _ = a.shape
-    m = np.empty((n, n))
-    v = np.empty((n, n))
-    for t in range(s):
-        for i in range(n):
-            for j in range(n):
-                m[i, j] = 0.5 * (a[t, i, j] + a[t, j, i])
-                v[i, j] = 1.0 if i == j else 0.0
-        for _ in range(sweeps):
-            off = 0.0
-            for i in range(n):
-                for j in range(i + 1, n):
-                    off += m[i, j] * m[i, j]
-            if off < 1e-300:
-                break
-            for p in range(n):
-                for q in range(p + 1, n):
-                    apq = m[p, q]
-                    if apq == 0.0:
-                        continue
-                    theta = (m[q, q] - m[p, p]) / (2.0 * apq)
-                    tt = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
-                    if theta < 0.0:
-                        tt = -tt
-                    c = 1.0 / math.sqrt(tt * tt + 1.0)
-                    sn = tt * c
-                    for k in range(n):
-                        mkp = m[k, p]
-                        mkq = m[k, q]
-                        m[k, p] = c * mkp - sn * mkq
-                        m[k, q] = sn * mkp + c * mkq
-                    for k in range(n):
-                        mpk = m[p, k]
-                        mqk = m[q, k]
-                        m[p, k] = c * mpk - sn * mqk
-                        m[q, k] = sn * mpk + c * mqk
-                    for k in range(n):
-                        vkp = v[k, p]
-                        vkq = v[k, q]
-                        v[k, p] = c * vkp - sn * vkq
-                        v[k, q] = sn * vkp + c * vkq
-        # ascending order (stable selection), sign fixed by the largest component
-        order = np.argsort(np.array([m[i, i] for i in range(n)]), kind="mergesort")
-        for jj in range(n):
-            j = order[jj]
-            values[t, jj] = m[j, j]
-            big = 0
-            for k in range(1, n):
-                if abs(v[k, j]) > abs(v[big, j]):
-                    big = k
-            sg = -1.0 if v[big, j] < 0.0 else 1.0
-            for k in range(n):
-                vectors[t, k, jj] = sg * v[k, j]
+    return _linalg_kernels
 
 
 def _stack(m, what: str) -> tuple[np.ndarray, tuple]:
@@ -265,7 +153,7 @@ def inv(m) -> np.ndarray:
     Raises ``np.linalg.LinAlgError`` on a singular matrix, as ``np.linalg.inv`` does."""
     a, lead = _stack(m, "inv")
     out = np.empty_like(a)
-    bad = _inv_kernel(a, out)
+    bad = _kernels()._inv_kernel(a, out)
     if bad >= 0:
         raise np.linalg.LinAlgError(f"Singular matrix (matrix {bad} of the stack)")
     return out.reshape(lead + a.shape[1:])
@@ -275,7 +163,7 @@ def det(m):
     """Determinant of a square matrix (``float``) or of each of a stack (array)."""
     a, lead = _stack(m, "det")
     out = np.empty(len(a))
-    _det_kernel(a, out)
+    _kernels()._det_kernel(a, out)
     return float(out[0]) if not lead else out.reshape(lead)
 
 
@@ -286,7 +174,7 @@ def eigh_jacobi(m, sweeps: int = 64) -> tuple[np.ndarray, np.ndarray]:
     n = a.shape[1]
     values = np.empty((len(a), n))
     vectors = np.empty_like(a)
-    _eigh_kernel(a, values, vectors, sweeps)
+    _kernels()._eigh_kernel(a, values, vectors, sweeps)
     return values.reshape(lead + (n,)), vectors.reshape(lead + (n, n))
 
 
