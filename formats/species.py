@@ -114,8 +114,9 @@ def read_species(path) -> Species:
     name = data["name"]
     if not isinstance(name, str) or not _NAME.fullmatch(name):
         raise err("name", "a lower-case name (letters, digits, _)", repr(name))
-    if name != path.parent.name:
-        raise err("name", f"the folder's name {path.parent.name!r}", repr(name))
+    folder = path.resolve().parent.name
+    if name != folder:
+        raise err("name", f"the folder's name {folder!r}", repr(name))
     for key in ("title", "latin"):
         if not isinstance(data.get(key, ""), str):
             raise err(key, "a string", repr(data[key]))
