@@ -25,6 +25,26 @@ def _matmul_kernel(a, b, out):
                 out[q, i, j] = acc
 
 
+@njit(cache=True, inline="always")
+def _pivot_swap(w, c, n):
+    """Partial pivoting in column ``c`` of the working rows ``w`` (rows c..n-1): the row of the
+    largest magnitude (the first of equals) swapped into row ``c``. Returns that magnitude (0:
+    singular) and whether rows were swapped."""
+    p = c
+    best = abs(w[c, c])
+    for r in range(c + 1, n):
+        v = abs(w[r, c])
+        if v > best:
+            best = v
+            p = r
+    if p != c and best != 0.0:
+        for j in range(w.shape[1]):
+            t = w[c, j]
+            w[c, j] = w[p, j]
+            w[p, j] = t
+    return best, p != c
+
+
 @njit(cache=True)
 def _inv_kernel(a, out):
     """Gauss-Jordan with partial pivoting on each (n, n) matrix of ``a`` (s, n, n) into
@@ -37,20 +57,9 @@ def _inv_kernel(a, out):
                 w[i, j] = a[q, i, j]
                 w[i, n + j] = 1.0 if i == j else 0.0
         for c in range(n):
-            p = c
-            best = abs(w[c, c])
-            for r in range(c + 1, n):
-                v = abs(w[r, c])
-                if v > best:
-                    best = v
-                    p = r
+            best, _ = _pivot_swap(w, c, n)
             if best == 0.0 or not np.isfinite(best):
                 return q
-            if p != c:
-                for j in range(2 * n):
-                    t = w[c, j]
-                    w[c, j] = w[p, j]
-                    w[p, j] = t
             piv = w[c, c]
             for j in range(2 * n):
                 w[c, j] = w[c, j] / piv
@@ -77,21 +86,11 @@ def _det_kernel(a, out):
                 w[i, j] = a[q, i, j]
         d = 1.0
         for c in range(n):
-            p = c
-            best = abs(w[c, c])
-            for r in range(c + 1, n):
-                v = abs(w[r, c])
-                if v > best:
-                    best = v
-                    p = r
+            best, swapped = _pivot_swap(w, c, n)
             if best == 0.0:
                 d = 0.0
                 break
-            if p != c:
-                for j in range(n):
-                    t = w[c, j]
-                    w[c, j] = w[p, j]
-                    w[p, j] = t
+            if swapped:
                 d = -d
             piv = w[c, c]
             d = d * piv
