@@ -21,7 +21,7 @@ from .atomic import write_text_atomic
 from .errors import FormatError, InputError
 
 __all__ = ["Species", "FAMILIES", "STAGES", "BENCH_KEYS", "read_species", "species_of", "find_species", "make_variables",
-           "write_make_variables"]
+           "setting_text", "write_make_variables"]
 
 FAMILIES = ("head", "compound", "branching-first", "single flower")
 """the chains a species can be built on (formats/species.md)"""
@@ -198,9 +198,10 @@ def find_species(pipelines) -> list[Species]:
     return [read_species(p) for p in sorted(Path(pipelines).glob("*/species.toml"))]
 
 
-def _text(value) -> str:
+def setting_text(value) -> str:
+    """A setting as make sees it: lists joined by commas, floats in their shortest round-trip form."""
     if isinstance(value, list):
-        return ",".join(_text(v) for v in value)
+        return ",".join(setting_text(v) for v in value)
     if isinstance(value, float):
         return repr(value)
     return str(value)
@@ -214,10 +215,10 @@ def make_variables(species: Species, quality: str, build: str = "$(B)") -> str:
         raise InputError(f"{species.path}: QUALITY must be {' or '.join(species.qualities)}, found {quality!r}")
     lines = [f"# from {species.path.name} [{quality}] (formats/species.md); written by pipelines/species.mk",
              f"SPECIES := {species.name}", f"TITLE := {species.title}"]
-    lines += [f"{k.upper()} := {_text(v)}" for k, v in {**species.common, **species.settings[quality]}.items()]
+    lines += [f"{k.upper()} := {setting_text(v)}" for k, v in {**species.common, **species.settings[quality]}.items()]
     lines.append("USD_PARTS := " + " ".join(f"{k}={build}/{v}" for k, v in species.usd_parts.items()))
     lines.append(f"USD_UNITS := {species.usd_units}")
-    lines.append("USD_TRANSLATE := " + " ".join(f"--translate {k}={','.join(_text(x) for x in v)}"
+    lines.append("USD_TRANSLATE := " + " ".join(f"--translate {k}={','.join(setting_text(x) for x in v)}"
                                                 for k, v in species.usd_translate.items()))
     return "\n".join(lines) + "\n"
 

@@ -71,9 +71,9 @@ def no_partial_files(folder) -> bool:
 def species_setting(species: str, quality: str, name: str) -> str:
     """A setting of ``pipelines/<species>/species.toml`` at ``quality`` (its ``[settings]`` or
     ``[draft]``/``[final]`` table), as the species Makefile sees it (``ALPHA`` -> ``"120"``)."""
-    from inflo.formats.species import _text, read_species
+    from inflo.formats.species import read_species, setting_text
 
-    return _text(read_species(REPO / "pipelines" / species / "species.toml").setting(quality, name))
+    return setting_text(read_species(REPO / "pipelines" / species / "species.toml").setting(quality, name))
 
 
 def species_module(species: str, name: str):
@@ -85,3 +85,27 @@ def species_module(species: str, name: str):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+def project_copy(root, goldens: bool = False):
+    """A project of its own at ``root``: tools, formats, the venv and pyproject.toml linked, the
+    pipelines copied (and the goldens, with ``goldens``); its make writes ``root/build``."""
+    import shutil
+
+    root = Path(root)
+    root.mkdir(parents=True)
+    for name in ("tools", "formats", ".venv", "pyproject.toml"):
+        (root / name).symlink_to(REPO / name)
+    shutil.copytree(REPO / "pipelines", root / "pipelines", ignore=shutil.ignore_patterns("__pycache__", "docs"))
+    if goldens:
+        shutil.copytree(REPO / "tests" / "golden", root / "tests" / "golden")
+    return root
+
+
+def file_digests(folder, skip=()) -> dict:
+    """``relative path -> md5`` of every file under ``folder`` but those named in ``skip``."""
+    import hashlib
+
+    folder = Path(folder)
+    return {p.relative_to(folder).as_posix(): hashlib.md5(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file() and p.name not in skip}

@@ -18,7 +18,6 @@ What is promised, and what is not, is in docs/architecture.md (Determinism).
 from __future__ import annotations
 
 import ast
-import hashlib
 import os
 import shutil
 import subprocess
@@ -26,6 +25,8 @@ import sys
 from pathlib import Path
 
 import pytest
+
+from conftest import file_digests, project_copy
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -119,13 +120,10 @@ polygonize, phyllotaxis, dimorph, fccompose (a crowded head that diverged on oth
 before, with its full-precision state file), petal-grow, thyrse and branch-gen"""
 
 
-def _tree(root: Path, env: dict) -> Path:
-    """A repository root of its own (tools, formats and the venv linked, the pipelines copied)
-    whose build/ is written by the species Makefiles under ``env``."""
-    root.mkdir(parents=True)
-    for name in ("tools", "formats", ".venv", "pyproject.toml"):
-        (root / name).symlink_to(ROOT / name)
-    shutil.copytree(ROOT / "pipelines", root / "pipelines", ignore=shutil.ignore_patterns("__pycache__"))
+def _build(root: Path, env: dict) -> Path:
+    """A project of its own (conftest.project_copy) whose build/ the species Makefiles write under
+    ``env``."""
+    project_copy(root)
     full = dict(os.environ, **env, QUALITY="draft", PYTHONHASHSEED="0")
     full.pop("MAKEFLAGS", None)
     for species, targets in STAGES:
@@ -136,23 +134,21 @@ def _tree(root: Path, env: dict) -> Path:
 
 
 def _digests(build: Path) -> dict[str, str]:
-    skip = ("log.csv", "run.json")  # timings
-    return {p.relative_to(build).as_posix(): hashlib.md5(p.read_bytes()).hexdigest()
-            for p in sorted(build.rglob("*")) if p.is_file() and p.name not in skip}
+    return file_digests(build, skip=("log.csv", "run.json"))  # timings
 
 
 @pytest.fixture(scope="module")
 def default_build(tmp_path_factory):
     if shutil.which("make") is None or not (ROOT / ".venv" / "bin" / "fccompose").exists():
         pytest.skip("needs make and the repository's .venv (make test sets both up)")
-    return _digests(_tree(tmp_path_factory.mktemp("default") / "root", {}))
+    return _digests(_build(tmp_path_factory.mktemp("default") / "root", {}))
 
 
 @pytest.mark.parametrize("env", _variants())
 def test_stage_outputs_are_byte_identical_under(env, default_build, tmp_path):
     if "NUMBA_CPU_NAME" in env:  # compile afresh for that target, away from the sources' cache
         env = dict(env, NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))
-    got = _digests(_tree(tmp_path / "root", env))
+    got = _digests(_build(tmp_path / "root", env))
     assert sorted(got) == sorted(default_build)
     differ = [k for k in default_build if got[k] != default_build[k]]
     assert not differ, f"{len(differ)} of {len(got)} files differ under {env}: {differ[:10]}"

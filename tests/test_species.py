@@ -12,7 +12,7 @@ import pytest
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.species import find_species, make_variables, read_species
 
-from conftest import REPO
+from conftest import REPO, file_digests, project_copy
 
 PIPELINES = REPO / "pipelines"
 SPECIES = [p.parent.name for p in sorted(PIPELINES.glob("*/Makefile")) if p.parent.name != "examples"]
@@ -125,29 +125,10 @@ def test_species_makefile_stops_on_a_bad_quality_or_file(tmp_path):
 # -- make new-species ------------------------------------------------------------------------------
 
 
-def _tree(root: Path) -> Path:
-    """A project of its own: tools, formats and the venv linked, pipelines and goldens copied."""
-    import shutil
-
-    root.mkdir(parents=True)
-    for name in ("tools", "formats", ".venv", "pyproject.toml"):
-        (root / name).symlink_to(REPO / name)
-    shutil.copytree(PIPELINES, root / "pipelines", ignore=shutil.ignore_patterns("__pycache__", "docs"))
-    shutil.copytree(REPO / "tests" / "golden", root / "tests" / "golden")
-    return root
-
-
-def _tree_digest(folder: Path) -> dict:
-    import hashlib
-
-    return {p.relative_to(folder).as_posix(): hashlib.md5(p.read_bytes()).hexdigest()
-            for p in sorted(folder.rglob("*")) if p.is_file()}
-
-
 def test_scaffold_refuses_bad_names(tmp_path):
     from inflo.tools.species.scaffold import scaffold
 
-    root = _tree(tmp_path / "repo")
+    root = project_copy(tmp_path / "repo", goldens=True)
     with pytest.raises(InputError, match="lower-case name"):
         scaffold(root, "Daisy2", "sunflower")
     with pytest.raises(InputError, match="exists already"):
@@ -162,12 +143,12 @@ def test_a_scaffolded_species_builds_and_checks(tmp_path):
     """make new-species NAME=aster FROM=daisy in a copy of the project: a folder of its own (and a
     golden manifest), the daisy untouched, and `make aster` at draft quality builds the canopy,
     passes the shared head check and writes its USD file."""
-    root = _tree(tmp_path / "repo")
-    before = _tree_digest(root / "pipelines" / "daisy")
+    root = project_copy(tmp_path / "repo", goldens=True)
+    before = file_digests(root / "pipelines" / "daisy")
     res = subprocess.run([sys.executable, "-m", "inflo.tools.species", "new", "aster", "--from", "daisy", "--title",
                           "New England aster", "--repo", str(root)], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
-    assert _tree_digest(root / "pipelines" / "daisy") == before
+    assert file_digests(root / "pipelines" / "daisy") == before
     sp = read_species(root / "pipelines" / "aster" / "species.toml")
     assert (sp.name, sp.title) == ("aster", "New England aster")
     assert (root / "pipelines" / "aster" / "aster.fcc").is_file() and not (root / "pipelines" / "aster" / "daisy.fcc").exists()

@@ -47,7 +47,7 @@ way every triangle is a sliver (inf and 1e-300 crashed the triangulation)."""
                    "[organ's, else 11].")
 @click.option("--aspect", default=None, callback=_aspect, metavar="auto|VALUE",
               help="Scale of u against v for the Delaunay triangulation [auto: the petal's "
-                   "width / length].")
+                   "width / length, to 6 decimals].")
 def main(frames_dir, output, lam, eta, aspect, quiet, debug):
     from .run import polygonize_files
 
