@@ -248,3 +248,107 @@ def test_min_distance_keeps_limbs_apart():
     bare = leaves[~spaced.node_tip[leaves]]
     step = np.linalg.norm(spaced.node_pos[bare] - spaced.node_pos[spaced.node_parent[bare]], axis=1)
     assert not np.any(np.isclose(step, 0.03))
+
+
+# --- facing the surface, room, individual florets (formats/thyrse.md) ---
+
+_DENSE = dict(length=1.0, nodes=8, first_node=0.3, lateral_length=0.2, order=0.0, density=20.0, angle=60.0,
+              pedicel_length=0.03, floret_size=0.12, outward=True, min_distance=0.45)
+
+
+def _hull_angles(lay):
+    """Degrees between each floret's axis and the outward normal of the nearest facet of the
+    convex hull of the florets' positions."""
+    from scipy.spatial import ConvexHull
+
+    hull = ConvexHull(lay.floret_pos)
+    n, c = hull.equations[:, :3], hull.equations[:, 3]
+    k = np.argmin(-(lay.floret_pos @ n.T + c), axis=1)
+    return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", lay.floret_up, n[k]), -1, 1)))
+
+
+def test_facing_the_surface_turns_florets_out_and_bends_their_pedicels():
+    stalk = grow_thyrse(_params(tropism=0.3, **_DENSE))
+    surface = grow_thyrse(_params(tropism=0.3, facing="surface", surface_weight=2.5, **_DENSE))
+    a_stalk, a_surface = np.median(_hull_angles(stalk)), np.median(_hull_angles(surface))
+    assert a_surface < 40.0 and a_surface < a_stalk - 8.0, (a_surface, a_stalk)
+    np.testing.assert_allclose(np.linalg.norm(surface.floret_up, axis=1), 1.0)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", surface.floret_up, surface.floret_right), 0.0, atol=1e-12)
+    # the last piece of every pedicel runs along its floret's axis (the tube continues it), and no
+    # floret faces back along its stalk
+    par = surface.node_parent[surface.floret_node]
+    step = surface.floret_pos - surface.node_pos[par]
+    step /= np.linalg.norm(step, axis=1)[:, None]
+    np.testing.assert_allclose(np.einsum("ij,ij->i", step, surface.floret_up), 1.0, atol=1e-9)
+
+
+def test_variation_is_seeded_bounded_and_moves_with_nothing_else():
+    p = _params(size_variation=0.1, seed=3, development={"frames": 30, "window": 10, "start_variation": 2}, **_DENSE)
+    a, b = thyrse_scene(grow_thyrse(p), p), thyrse_scene(grow_thyrse(p), p)
+    size = np.array([q.scale[0] for q in a.placements])
+    assert np.array_equal([q.scale for q in a.placements], [q.scale for q in b.placements])
+    assert np.all(np.abs(size / 0.12 - 1.0) <= 0.1 + 1e-12) and size.std() / size.mean() > 0.03
+    plain = _params(development={"frames": 30, "window": 10}, **_DENSE)
+    base = thyrse_scene(grow_thyrse(plain), plain)
+    shift = np.array([q.frame_start for q in a.placements]) - np.array([q.frame_start for q in base.placements])
+    assert np.abs(shift).max() <= 2 and np.any(shift != 0)
+    other = _params(size_variation=0.1, seed=4, **_DENSE)
+    assert not np.array_equal([q.scale for q in thyrse_scene(grow_thyrse(other), other).placements],
+                              [q.scale for q in a.placements])
+    # no variation: every floret its positional size exactly
+    assert {q.scale[0] for q in base.placements} == {0.12}
+
+
+def test_span_lets_the_last_windows_end_after_the_run():
+    p = _params(development={"frames": 20, "window": 8, "span": 19}, **_DENSE)
+    sc = thyrse_scene(grow_thyrse(p), p)
+    start = np.array([q.frame_start for q in sc.placements])
+    assert start.max() == 19 and max(q.frame_end for q in sc.placements) == 27
+    with pytest.raises(FormatError, match="span"):
+        params_from_toml({"development": {"frames": 20, "window": 8, "span": 20}})
+
+
+def _box(half):
+    """A box of half size ``half`` from y = 0 up, open at its foot (a stand-in floret model)."""
+    import trimesh
+
+    m = trimesh.creation.box(extents=[2 * half, 2 * half, 2 * half])
+    v = m.vertices + [0.0, half, 0.0]
+    f = m.faces[~np.all(np.isclose(v[m.faces][:, :, 1], 0.0), axis=1)]  # open at its foot, as a tube
+    return v, f
+
+
+def test_room_drops_florets_that_would_meet_branches_or_each_other():
+    from inflo.tools.collide import intersecting_pairs_between
+    from inflo.tools.thyrse.generate import room_conflicts
+
+    p = _params(tropism=0.3, facing="surface", surface_weight=2.5, **_DENSE)
+    bud, big = _box(0.1), _box(0.3)
+    free = thyrse(p)
+    roomy = thyrse(p, [bud, big])
+    assert 0 < len(roomy.scene) < len(free.scene)
+    # what is left: no floret's model meets the (remade) branches, no two first models meet
+    assert not room_conflicts(roomy.scene, [bud, big], roomy.branches.branches_mesh).any()
+    # the layout stays a tree of tips: every floret on a leaf, every leaf a floret or a bare axis tip
+    lay = roomy.layout
+    assert not np.isin(lay.floret_node, lay.node_parent).any()
+    assert np.all(lay.node_parent[1:] < np.arange(1, len(lay.node_parent)))
+    # the check itself: every floret whose big model, placed alone, meets a branch is flagged
+    mats = [q.matrix() for q in free.scene.placements]
+    v, f = big
+    hit = np.array([len(intersecting_pairs_between(v @ m[:3, :3].T + m[:3, 3], f.astype(np.int32),
+                                                   free.branches.branches_mesh.vertices,
+                                                   free.branches.branches_mesh.faces)) > 0 for m in mats])
+    flagged = room_conflicts(free.scene, [big], free.branches.branches_mesh)
+    assert hit.any() and np.all(flagged[hit])
+
+
+@pytest.mark.parametrize("data, expect", [
+    ({"thyrse": {"facing": "sky"}}, "'stalk', 'surface'"),
+    ({"thyrse": {"size_variation": 0.9}}, "size_variation"),
+    ({"thyrse": {"seed": -1}}, "seed"),
+    ({"development": {"start_variation": -1}}, "start_variation"),
+])
+def test_new_keys_reject_bad_values(data, expect):
+    with pytest.raises(FormatError, match=expect):
+        params_from_toml(data)

@@ -1,6 +1,6 @@
 """Command-line front end of ``thyrse`` (issue 20; thesis sec. 4.5, figs. 4.9, 4.10, ch. 7).
 
-    thyrse [PARAMS.toml] -o OUT_DIR [--base X Y Z]
+    thyrse [PARAMS.toml] -o OUT_DIR [--base X Y Z] [--room FLORET.obj ...]
 
 Branching first: lays out a thyrse (a main axis with decussate laterals whose length, branching
 order and floret density are functions of their position, ``.func`` files) and places the florets
@@ -15,6 +15,7 @@ import math
 import click
 
 from inflo.formats.errors import InputError
+from inflo.formats.obj import read_obj
 from inflo.tools.common.cli import inflo_command
 
 from .generate import thyrse, write_thyrse
@@ -26,13 +27,22 @@ from .params import read_params
 @click.argument("params", required=False, type=click.Path())
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output folder.")
 @click.option("--base", type=float, nargs=3, default=None, help="Inflorescence base point (default 0 0 0).")
-def main(params, output, base, quiet, debug):
+@click.option("--room", "rooms", multiple=True, type=click.Path(),
+              help="A floret model OBJ (floret units, local frame; repeatable: e.g. its bud and open pose): a "
+                   "floret whose model would meet the branches is not formed.")
+def main(params, output, base, rooms, quiet, debug):
     p = read_params(params)
     if base is not None:
         if not all(math.isfinite(b) and abs(b) < 1e12 for b in base):
             raise InputError(f"--base must be three finite numbers (|x| < 1e12), found {' '.join(map(str, base))}")
         p.base = list(base)
-    result = thyrse(p)
+    models = []
+    for path in rooms:
+        m = read_obj(path)
+        if m.n_faces == 0:
+            raise InputError(f"{path}: expected a floret model with triangles (--room), found none")
+        models.append((m.vertices, m.faces))
+    result = thyrse(p, models)
     write_thyrse(output, result, p)
     if not quiet:
         click.echo(f"thyrse: {len(result.scene)} florets, {len(result.branches.chain_list)} branches, "

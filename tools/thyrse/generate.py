@@ -47,7 +47,8 @@ from inflo.tools.common import linalg as la
 
 from .params import Params
 
-__all__ = ["ThyrseLayout", "grow_thyrse", "thyrse_scene", "thyrse", "write_thyrse", "node_directions"]
+__all__ = ["ThyrseLayout", "grow_thyrse", "thyrse_scene", "thyrse", "write_thyrse", "node_directions",
+           "SurfaceField", "variation"]
 
 Y = np.array([0.0, 1.0, 0.0])
 #: ``outward``: a child whose unit direction steps more than this towards the main axis is not formed
@@ -69,6 +70,8 @@ class ThyrseLayout:
     floret_right : (m, 3) float64, unit, orthogonal to ``floret_up``: towards the parent axis' tip
     floret_order : (m,) int64, the order of the axis carrying it (-1: a pedicel's floret)
     node_x : (n,) float64, the main-axis height (positional value) each node inherits
+    floret_factor : (m,) float64, the floret's seeded size factor (:func:`variation`)
+    floret_offset : (m,) int64, its seeded start offset in frames
     """
 
     node_pos: np.ndarray
@@ -80,6 +83,8 @@ class ThyrseLayout:
     floret_right: np.ndarray
     floret_order: np.ndarray
     node_x: np.ndarray
+    floret_factor: np.ndarray = None
+    floret_offset: np.ndarray = None
 
     @property
     def floret_pos(self) -> np.ndarray:
@@ -115,9 +120,11 @@ def node_directions(axis, angle_deg: float, azimuth_deg: float):
 class _Builder:
     """Collects nodes and florets in lists and turns them into arrays once (:meth:`finalize`)."""
 
-    def __init__(self, p: Params):
+    def __init__(self, p: Params, normals=None, spacing: bool = True):
         self.p = p
         self.f = p.functions
+        self.normals = normals  # facing = "surface": the outward normal at a point (SurfaceField)
+        self.spacing = spacing  # apply min_distance
         self.pos, self.parent, self.x = [], [], []
         self.fl_node, self.fl_up, self.fl_right, self.fl_order = [], [], [], []
         self.limb = []  # (limb point, size) of the florets placed (min_distance)
@@ -134,7 +141,7 @@ class _Builder:
         does not fit is not formed: its pedicel is not either; an axis' terminal floret leaves a
         bare tip.) Records the point when it fits."""
         tp = self.p.thyrse
-        if tp.min_distance <= 0:
+        if tp.min_distance <= 0 or not self.spacing:
             return True
         h = min(max(la.dot(np.asarray(pos, float) - np.asarray(self.p.base, float), Y) / tp.length, 0.0), 1.0)
         size = float(self.f["floret_size"](h))
@@ -170,9 +177,13 @@ class _Builder:
         r = r / la.norm(r)
         return [c for c in dirs if la.dot(c, r) > -INWARD]
 
-    def turn_up(self, d):
-        """A floret's axis: its stalk's direction turned towards +Y by ``tropism``."""
-        t = self.p.thyrse.tropism
+    def turn_up(self, d, pos):
+        """A floret's axis: its stalk's direction (with ``facing = "surface"``: turned towards the
+        panicle's outward normal at ``pos`` by ``surface_weight``) turned towards +Y by ``tropism``."""
+        tp = self.p.thyrse
+        t = tp.tropism
+        if self.normals is not None:
+            d = _unit(d + tp.surface_weight * self.normals(np.asarray(pos, float)[None, :])[0])
         return _unit(d + t * Y) if t > 0 else d
 
     def axis(self, start: int, d, length: float, order: int, x: float, phase: float, n_pairs: int,
@@ -201,16 +212,35 @@ class _Builder:
             # two pedicels (the tip of a branched lateral)
             if child_order < 0 or (not main and child_len < 2.0 * tp.pedicel_length):
                 for c in self.outward(node_directions(d, tp.pedicel_angle, az), k, main):
-                    end, u = self.pos[k] + c * tp.pedicel_length, self.turn_up(c)
+                    end = self.pos[k] + c * tp.pedicel_length
+                    u = self.turn_up(c, end)
+                    if self.normals is None:
+                        if self.fits(end, u):
+                            self.floret(self.node(end, k, xj), u, d, e1, -1)
+                        continue
+                    # facing the surface: the pedicel bends halfway from its direction to the
+                    # floret's axis (the tube continues it); one pointing into the panicle (its
+                    # floret would face away from its own stalk) is not formed
+                    if la.dot(c, u) <= 0.0:
+                        continue
+                    mid = self.pos[k] + c * (0.5 * tp.pedicel_length)
+                    end = mid + u * (0.5 * tp.pedicel_length)
                     if self.fits(end, u):
-                        self.floret(self.node(end, k, xj), u, d, e1, -1)
+                        self.floret(self.node(end, self.node(mid, k, xj), xj), u, d, e1, -1)
             else:
                 for c in self.outward(node_directions(d, ang, az), k, main):
                     dens = f["branch_density"] if child_order > 0 and "branch_density" in f else f["density"]
                     n = int(round(child_len * dens(xj)))
                     self.axis(k, c, child_len, child_order, xj, az + 90.0, n)
         tip = self.node(p0 + d * length, prev, x if not main else 1.0)
-        u = self.turn_up(d) if not main else d
+        if self.normals is not None:
+            # facing the surface: the floret on a half-pedicel along its axis, beyond the tip
+            u = self.turn_up(d, self.pos[tip])
+            end = self.pos[tip] + u * (0.5 * tp.pedicel_length)
+            if la.dot(d, u) > 0.0 and self.fits(end, u):
+                self.floret(self.node(end, tip, self.x[tip]), u, d, e1, order)
+            return
+        u = self.turn_up(d, self.pos[tip]) if not main else d
         if self.fits(self.pos[tip], u):
             self.floret(tip, u, d, e1, order)
 
@@ -235,13 +265,71 @@ def grow_thyrse(p: Params) -> ThyrseLayout:
 
     Node 0 is the base; the main axis' node pairs sit at relative heights
     ``first_node + (1 - first_node) j / nodes``, j = 0..nodes-1, its terminal floret at the apex.
+    With ``facing = "surface"`` the layout is made twice: first without ``min_distance``, every
+    floret position the architecture offers giving the panicle's surface (:class:`SurfaceField`),
+    then with each floret's axis its outward normal there (plus ``tropism`` * Y) and
+    ``min_distance`` applied to the limb points along those axes.
     """
     tp = p.thyrse
-    b = _Builder(p)
-    base = b.node(np.asarray(p.base, float), -1, 0.0)
+    normals = None
+    if tp.facing == "surface":
+        first = _layout(_Builder(p, spacing=False))
+        if len(first.floret_node) >= 4:
+            normals = SurfaceField(first.floret_pos, SURFACE_SIGMA * tp.length)
+    lay = _layout(_Builder(p, normals=normals))
+    lay.floret_factor, lay.floret_offset = variation(p, len(lay.floret_node))
+    return lay
+
+
+def _layout(b: "_Builder") -> ThyrseLayout:
+    tp = b.p.thyrse
+    base = b.node(np.asarray(b.p.base, float), -1, 0.0)
     ts = [tp.first_node + (1 - tp.first_node) * j / max(tp.nodes, 1) for j in range(tp.nodes)]
     b.axis(base, Y.copy(), tp.length, 99, 0.0, 0.0, tp.nodes, node_t=ts, main=True)
     return b.finalize()
+
+
+#: ``facing = "surface"``: the width of the smoothing of the hull's facet normals, in main-axis lengths
+SURFACE_SIGMA = 0.2
+
+
+class SurfaceField:
+    """The outward normal of a panicle's surface: the convex hull of ``points`` (every floret
+    position the architecture offers, ``scipy.spatial.ConvexHull``); the normal at a point q is
+    the mean of the hull's facet normals weighted by the facet's area and a Gaussian of the
+    distance from q to the facet's centroid (width ``sigma``): a smooth field over a polyhedral
+    hull, florets on one facet not all parallel, those at an edge between two facets in between.
+    Points in a plane or on a line (no hull) give +Y everywhere."""
+
+    def __init__(self, points, sigma: float):
+        from scipy.spatial import ConvexHull, QhullError
+
+        pts = np.ascontiguousarray(points, dtype=np.float64)
+        self.sigma = float(sigma)
+        try:
+            hull = ConvexHull(pts)
+        except (QhullError, ValueError):
+            self.normal = None
+            return
+        tri = pts[hull.simplices]
+        self.normal = np.ascontiguousarray(hull.equations[:, :3])
+        self.area = 0.5 * la.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        self.centre = tri.mean(axis=1)
+
+    def __call__(self, q) -> np.ndarray:
+        """(k, 3) unit normals at the (k, 3) points ``q``."""
+        q = np.asarray(q, dtype=np.float64).reshape(-1, 3)
+        out = np.tile(Y, (len(q), 1))
+        if self.normal is None:
+            return out
+        for i in range(len(q)):
+            d = self.centre - q[i]
+            w = self.area * np.exp(-la.rowdot(d, d) / (self.sigma * self.sigma))
+            n = la.matmul(w, self.normal)
+            ln = la.norm(n)
+            if ln > 1e-12:
+                out[i] = n / ln
+        return out
 
 
 def floret_heights(layout: ThyrseLayout, p: Params) -> np.ndarray:
@@ -250,11 +338,30 @@ def floret_heights(layout: ThyrseLayout, p: Params) -> np.ndarray:
     return np.clip(h, 0.0, 1.0)
 
 
-def development_windows(h, p: Params):
-    """(frameStart, frameEnd) per floret: ``start(h) * (frames - 1 - window)`` rounded, + window."""
+def variation(p: Params, n: int):
+    """The seeded per-floret variation, in floret order: (size factors, start offsets).
+
+    Size factors are uniform in ``[1 - size_variation, 1 + size_variation]``, start offsets
+    integers uniform in ``[-start_variation, start_variation]`` frames; both from one
+    ``numpy.random.Generator(PCG64(seed))`` (the same numbers on every machine), drawn in this
+    order whatever the amplitudes, so changing one leaves the other's draw as it was.
+    """
+    rng = np.random.Generator(np.random.PCG64(p.thyrse.seed))
+    u = rng.random(n)
+    k = rng.integers(-p.development.start_variation, p.development.start_variation, n, endpoint=True)
+    return 1.0 + p.thyrse.size_variation * (2.0 * u - 1.0), k.astype(np.int64)
+
+
+def development_windows(h, p: Params, offsets=None):
+    """(frameStart, frameEnd) per floret: ``start(h) * span`` rounded (``span`` = frames - 1 -
+    window unless given), plus the floret's offset (:func:`variation`), clipped to [0, span]; +
+    window. A span past frames - 1 - window lets the last windows end after the run (the florets
+    at the tip still in bud in the last frame)."""
     d = p.development
-    span = d.frames - 1 - d.window
+    span = d.span if d.span >= 0 else d.frames - 1 - d.window
     s = np.rint(np.asarray(p.functions["start"](np.asarray(h, float))) * span).astype(np.int64)
+    if offsets is not None:
+        s = s + np.asarray(offsets, np.int64)
     s = np.clip(s, 0, span)
     return s, s + d.window
 
@@ -263,8 +370,11 @@ def thyrse_scene(layout: ThyrseLayout, p: Params) -> Scene:
     """The florets as ``ca:`` placements in floret order, with ``#@ emergence`` (frameStart) and
     ``#@ type: floret``."""
     h = floret_heights(layout, p)
-    start, end = development_windows(h, p)
-    size = np.asarray(p.functions["floret_size"](h), float).reshape(-1)
+    factor, offset = layout.floret_factor, layout.floret_offset
+    if factor is None:
+        factor, offset = variation(p, len(h))
+    start, end = development_windows(h, p, offset)
+    size = np.asarray(p.functions["floret_size"](h), float).reshape(-1) * factor
     out = []
     for k in range(len(layout.floret_node)):
         s = float(size[k])
@@ -281,12 +391,91 @@ class ThyrseResult:
     branches: BranchResult
 
 
-def thyrse(p: Params) -> ThyrseResult:
-    """Layout, scene and branch geometry (branch-gen's pipe model and generalized cylinders)."""
+#: rounds of :func:`thyrse`'s room test (each drops the florets whose model meets the branches)
+ROOM_ROUNDS = 4
+
+
+def room_conflicts(scene: Scene, rooms, branches) -> np.ndarray:
+    """(m,) bool: the florets whose model (any of ``rooms``: (vertices, faces) in floret units, the
+    floret's local frame, e.g. its bud and its open pose) placed as the scene places it
+    intersects the branch mesh ``branches`` (exact static test,
+    :func:`inflo.tools.collide.intersecting_pairs_between`), and of two florets whose first model
+    (the first pose) intersect, the later one."""
+    from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
+
+    m = len(scene.placements)
+    bad = np.zeros(m, bool)
+    if m == 0 or branches.n_faces == 0:
+        return bad
+    mats = [pl.matrix() for pl in scene.placements]
+    for r, (v, f) in enumerate(rooms):
+        v = np.asarray(v, np.float64)
+        f = np.asarray(f, np.int64)
+        xs = np.concatenate([la.matmul(v, mk[:3, :3].T) + mk[:3, 3] for mk in mats])
+        fs = (f[None, :, :] + (np.arange(m) * len(v))[:, None, None]).reshape(-1, 3).astype(np.int32)
+        pairs = intersecting_pairs_between(xs, fs, branches.vertices, branches.faces)
+        bad[np.unique(pairs[:, 0] // len(f))] = True
+        if r == 0:
+            # the first model is the floret's first pose: two florets whose first poses meet could
+            # not start (fccompose wants a collision-free first frame): the later one goes
+            part = np.repeat(np.arange(m), len(f))
+            own = intersecting_pairs(xs, fs, tri_part=part)
+            a, b = part[own[:, 0]], part[own[:, 1]]
+            bad[np.maximum(a, b)[a != b]] = True
+    return bad
+
+
+def drop_florets(lay: ThyrseLayout, drop: np.ndarray) -> ThyrseLayout:
+    """The layout without the florets of the (m,) bool ``drop``: each one's node goes, and the
+    nodes above it that carried nothing else (its pedicel; an axis tip left bare), up to the first
+    node with other children or a floret."""
+    n = len(lay.node_pos)
+    keep = np.ones(n, bool)
+    children = np.bincount(lay.node_parent[lay.node_parent >= 0], minlength=n)
+    for k in np.nonzero(drop)[0]:
+        node = int(lay.floret_node[k])
+        while node > 0 and children[node] == 0 and keep[node]:
+            keep[node] = False
+            parent = int(lay.node_parent[node])
+            children[parent] -= 1
+            if lay.node_floret[parent] >= 0 and not drop[lay.node_floret[parent]]:
+                break
+            node = parent
+    new = np.full(n, -1, np.int64)
+    new[keep] = np.arange(int(keep.sum()))
+    parent = lay.node_parent[keep]
+    parent = np.where(parent >= 0, new[np.maximum(parent, 0)], -1)
+    fk = ~drop
+    fl_node = new[lay.floret_node[fk]]
+    node_floret = np.full(int(keep.sum()), -1, np.int64)
+    node_floret[fl_node] = np.arange(len(fl_node))
+    return ThyrseLayout(node_pos=lay.node_pos[keep], node_parent=parent, node_tip=node_floret >= 0,
+                        node_floret=node_floret, floret_node=fl_node, floret_up=lay.floret_up[fk],
+                        floret_right=lay.floret_right[fk], floret_order=lay.floret_order[fk],
+                        node_x=lay.node_x[keep], floret_factor=lay.floret_factor[fk],
+                        floret_offset=lay.floret_offset[fk])
+
+
+def thyrse(p: Params, rooms=()) -> ThyrseResult:
+    """Layout, scene and branch geometry (branch-gen's pipe model and generalized cylinders).
+
+    ``rooms``: floret models ((vertices, faces) in floret units, e.g. the bud and the open pose);
+    with them, a floret whose model, placed as the scene places it, would meet the branch mesh
+    has no room and is not formed (:func:`room_conflicts`, :func:`drop_florets`), and the branches
+    are made again without it (their pipe-model widths change), up to ``ROOM_ROUNDS`` times: no
+    floret starts inside a branch or grows into one undisturbed.
+    """
     lay = grow_thyrse(p)
-    scene = thyrse_scene(lay, p)
     bp = p.branches
+    scene = thyrse_scene(lay, p)
     radius, chain_list, skel, mesh = skeleton_geometry(lay.node_pos, lay.node_parent, lay.node_tip, bp)
+    for _ in range(ROOM_ROUNDS if rooms else 0):
+        bad = room_conflicts(scene, rooms, mesh)
+        if not bad.any():
+            break
+        lay = drop_florets(lay, bad)
+        scene = thyrse_scene(lay, p)
+        radius, chain_list, skel, mesh = skeleton_geometry(lay.node_pos, lay.node_parent, lay.node_tip, bp)
     n = len(lay.node_pos)
     sk = Skeleton(node_pos=lay.node_pos, node_parent=lay.node_parent, node_tip=lay.node_tip,
                   node_floret=lay.node_floret, node_frame=np.zeros(n), node_link_frame=np.zeros(n),

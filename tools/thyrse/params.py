@@ -28,6 +28,8 @@ from inflo.tools.branch_gen.params import _num, _vec, _Where, load_toml, params_
 __all__ = ["ThyrseParams", "DevelopmentParams", "Params", "read_params", "params_from_toml", "POSITIONAL"]
 
 #: the positional keys of [thyrse] and [development]: a number or a .func of x in [0, 1]
+#: ``facing``: a floret's axis from its stalk, or the outward normal of the panicle's surface
+FACING = ("stalk", "surface")
 POSITIONAL = ("lateral_length", "order", "density", "branch_density", "angle", "sub_angle", "floret_size", "start")
 
 
@@ -53,6 +55,10 @@ class ThyrseParams:
     floret_id: int = 0  # the .fcc animation id of the florets
     min_distance: float = 0.0  # floret sizes between limb points; a floret with less room is not formed (0: off)
     reach: float = 0.7  # the limb point: pos + reach * size * up (floret units: where the open limb sits)
+    facing: str = "stalk"  # a floret's axis: "stalk" (its stalk's direction) or "surface" (turned to the outward normal)
+    surface_weight: float = 1.0  # facing = "surface": axis = stalk + surface_weight * normal (+ tropism * Y)
+    size_variation: float = 0.0  # each floret's size times a seeded factor in [1 - v, 1 + v]
+    seed: int = 0  # of the per-floret variation (size, start)
 
 
 @dataclass
@@ -61,7 +67,9 @@ class DevelopmentParams:
 
     frames: int = 40  # canopy frames 0..frames-1
     window: int = 20  # frameEnd - frameStart of every floret
-    start: object = "linear"  # frameStart / (frames - 1 - window), of the floret's height
+    start: object = "linear"  # frameStart / span, of the floret's height
+    span: int = -1  # frames the starts spread over (-1: frames - 1 - window, every window ends in the run)
+    start_variation: int = 0  # frames added to each frameStart: a seeded integer in [-k, k]
 
 
 @dataclass
@@ -74,6 +82,9 @@ class Params:
     folder: Path = field(default_factory=Path)
     functions: dict = field(default_factory=dict)  # key -> Function (constants included)
 
+
+#: the longest development a thyrse lays out (frames)
+MAX_FRAMES = 100000
 
 _OWN = {"thyrse": ThyrseParams, "development": DevelopmentParams}
 _BRANCH = ("pipe", "cylinder")
@@ -125,6 +136,10 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
                 default = getattr(obj, k)
                 if k in POSITIONAL:
                     setattr(obj, k, val)
+                elif isinstance(default, str):
+                    if val not in FACING:
+                        raise w.error(key, k, "one of " + ", ".join(repr(f) for f in FACING), repr(val))
+                    setattr(obj, k, val)
                 elif isinstance(default, bool):
                     if not isinstance(val, bool):
                         raise w.error(key, k, "true or false", repr(val))
@@ -153,8 +168,14 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
     need(t.floret_id >= 0, "thyrse", "floret_id", "an id >= 0", t.floret_id)
     need(t.min_distance >= 0, "thyrse", "min_distance", "a distance >= 0", t.min_distance)
     need(t.reach >= 0, "thyrse", "reach", "a reach >= 0", t.reach)
-    need(d.frames >= 1, "development", "frames", "an integer >= 1", d.frames)
+    need(0 <= t.surface_weight <= 1e6, "thyrse", "surface_weight", "a weight in [0, 1e6]", t.surface_weight)
+    need(0 <= t.size_variation <= 0.5, "thyrse", "size_variation", "a fraction in [0, 0.5]", t.size_variation)
+    need(0 <= t.seed < 2**63, "thyrse", "seed", "an integer in [0, 2**63)", t.seed)
+    need(1 <= d.frames <= MAX_FRAMES, "development", "frames", f"an integer in [1, {MAX_FRAMES}]", d.frames)
     need(0 <= d.window <= d.frames - 1, "development", "window", "0 <= window <= frames - 1", d.window)
+    need(d.span == -1 or 0 <= d.span <= d.frames - 1, "development", "span", "-1 or 0 <= span <= frames - 1", d.span)
+    need(0 <= d.start_variation <= d.frames - 1, "development", "start_variation", "0 <= start_variation <= frames - 1",
+         d.start_variation)
     ranges = {"lateral_length": (0.0, 10.0), "order": (0.0, 6.0), "density": (0.0, 1e6), "branch_density": (0.0, 1e6),
               "angle": (0.0, 180.0), "sub_angle": (0.0, 180.0), "floret_size": (1e-9, 1e6), "start": (0.0, 1.0)}
     for k, (lo, hi) in ranges.items():
