@@ -171,3 +171,22 @@ def test_facing_angles_of_florets_on_a_ball():
                                                  up=t, right=d) for d, t in zip(dirs, turned)])
     a_out, a_side = _check.facing_angles(mesh, out, 1.0), _check.facing_angles(mesh, side, 1.0)
     assert len(a_out) == 200 and np.median(a_out) < 10.0 and np.median(a_side) > 80.0
+
+
+_closeup = species_module("lilac", "closeup")
+
+
+def test_closeup_takes_the_front_of_the_panicle_and_whole_florets():
+    # florets on a vertical cylinder: the one picked faces the camera at the asked height
+    ang = np.radians(np.arange(0, 360, 30))
+    pos = np.array([[np.sin(a), y, np.cos(a)] for y in np.linspace(0.0, 1.0, 11) for a in ang])
+    view = _closeup.view_direction(0.0, 0.0)
+    np.testing.assert_allclose(view, [0, 0, 1], atol=1e-12)
+    c = _closeup.centre(pos, view, height=0.6)
+    np.testing.assert_allclose(c, [0.0, 0.6, 1.0], atol=1e-9)
+    # two one-triangle florets, one near the centre, one far: only the near one is kept, whole
+    v = np.array([[0, 0.6, 1], [0.5, 0.6, 1], [0, 1.1, 1], [0, 0, -1], [0.1, 0, -1], [0, 0.1, -1]], float)
+    mesh = ObjMesh(vertices=v, faces=np.array([[0, 1, 2], [3, 4, 5]]), groups=["floret_0", "floret_1"],
+                   face_group=np.array([0, 1], np.int32), materials=["mtl0"], face_material=np.zeros(2, np.int32))
+    sub = _closeup.cut(mesh, c, 0.2, pos=np.array([[0, 0.6, 1.0], [0, 0, -1.0]]))
+    assert len(sub.faces) == 1 and len(sub.vertices) == 3 and sub.vertices[:, 0].max() == 0.5
