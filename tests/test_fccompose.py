@@ -774,3 +774,55 @@ def test_written_frames_get_the_digits_that_keep_them_collision_free():
         assert written_format(x, faces) == expected
     crossing = np.vstack([low, [[0.5, -0.5, 0.5], [0.6, 0.5, 0.5], [0.4, 0.5, 0.45]]])
     assert written_format(crossing, faces) == "%.6f"
+
+
+def _post(x: float, z: float, half: float = 0.05, y0: float = -0.3, y1: float = 1.5):
+    """A closed square post (a stand-in pedicel) standing at (x, z) from y0 to y1."""
+    import trimesh
+
+    m = trimesh.creation.box(extents=[2 * half, y1 - y0, 2 * half])
+    return ObjMesh(vertices=m.vertices + [x, 0.5 * (y0 + y1), z], faces=m.faces.astype(np.int32))
+
+
+@pytest.mark.parametrize("obstacle", [True, False])
+def test_an_obstacle_deflects_the_petals_and_is_not_written(inputs, tmp_path, obstacle):
+    """A placement typed ``obstacle`` collides with the florets but is fixed and not written
+    (formats/fcc.md "Obstacles"): an opening floret whose petal would sweep through a post beside
+    it is stopped by it; the same post as a plain floret placement would be written (and, with no
+    weight file, pushed); with no post the petal sweeps through where it stands."""
+    from inflo.formats.scn import read_scn
+    from inflo.tools.collide import intersecting_pairs_between
+    from inflo.tools.fccompose.model import build_model
+
+    # the post where a petal of the open floret reaches (its farthest tip's azimuth, at 0.75)
+    alone = inputs["frames"][-1]
+    tip = alone[np.argmax(np.hypot(alone[:, 0], alone[:, 2]))]
+    d = tip[[0, 2]] / np.hypot(tip[0], tip[2])
+    post = _post(0.75 * d[0], 0.75 * d[1])
+    write_obj_sequence(tmp_path / "post", [post])
+    shutil.copytree(inputs["dir"] / "anim", tmp_path / "anim")
+    shutil.copy(inputs["dir"] / "petal_base.txt", tmp_path / "petal_base.txt")
+    floret = inputs["placements"][0]
+    holder = Placement("o", 1, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0], material=floret.material,
+                       type="obstacle" if obstacle else None)
+    write_scene(tmp_path / "scene.scn", [floret, holder])
+    write_fcc_text(tmp_path / "o.fcc", extra="animation: 1 1 1 1 post\n")
+    out = tmp_path / "out"
+    res = run_cli("fccompose", tmp_path / "o.fcc", "-o", out, "-q")
+    assert res.returncode == 0, res.stderr
+    paths, meshes = read_obj_sequence(out)
+    nv = len(inputs["frames"][0])
+    if obstacle:
+        assert read_scn(tmp_path / "scene.scn").placements[1].type == "obstacle"
+        model = build_model(read_fcc(tmp_path / "o.fcc"))
+        assert model.obstacle_vertices.sum() == len(post.vertices)
+        assert np.all(model.vertex_inv_mass[model.obstacle_vertices] == 0.0)
+        for mesh in meshes:  # the floret alone is written, and never crosses the post
+            assert len(mesh.vertices) == nv and mesh.faces.max() < nv
+            assert len(intersecting_pairs_between(mesh.vertices, mesh.faces, post.vertices, post.faces)) == 0
+        assert "obstacles (not written)" in (out / "frame_0000.obj").read_text().splitlines()[0] + \
+            (out / "frame_0000.obj").read_text().splitlines()[1]
+    else:
+        assert len(meshes[-1].vertices) == nv + len(post.vertices)
+    # without the post, the open floret's petal sweeps through where the post stands
+    assert len(intersecting_pairs_between(alone, inputs["faces"], post.vertices, post.faces)) > 0

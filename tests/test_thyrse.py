@@ -352,3 +352,46 @@ def test_room_drops_florets_that_would_meet_branches_or_each_other():
 def test_new_keys_reject_bad_values(data, expect):
     with pytest.raises(FormatError, match=expect):
         params_from_toml(data)
+
+
+def test_obstacle_tubes_hold_the_branches_and_keep_clear_of_each_other(tmp_path):
+    from inflo.tools.collide import intersecting_pairs
+    from inflo.tools.thyrse.obstacle import _tubes
+
+    data = {"thyrse": dict(_DENSE, tropism=0.3, facing="surface", surface_weight=2.5),
+            "obstacle": {"id": 1, "gap": 0.003, "margin": 0.0003}}
+    p = params_from_toml(data)
+    res = thyrse(p)
+    ob = res.obstacle
+    assert ob is not None and len(ob.groups) > 0.9 * len(res.branches.chain_list)
+    # the last placement places it: o:, id 1, at the origin, typed obstacle; the florets as before
+    last = res.scene.placements[-1]
+    assert last.kind == "o" and last.id == 1 and last.type == "obstacle" and np.allclose(last.pos, 0.0)
+    plain = thyrse(params_from_toml({"thyrse": data["thyrse"]}))
+    assert plain.obstacle is None and len(plain.scene.placements) == len(res.scene.placements) - 1
+    # no two tubes meet (nor any tube itself, beyond its neighbouring triangles): one part for fccompose
+    tube = ob.face_group
+    assert len(intersecting_pairs(ob.vertices, ob.faces)) == 0
+    # and each keeps the gap from the others: its vertices at least gap/2 from any other tube's
+    from scipy.spatial import cKDTree
+
+    owner = np.full(len(ob.vertices), -1)
+    owner[ob.faces.reshape(-1)] = np.repeat(tube, 3)
+    d, k = cKDTree(ob.vertices).query(ob.vertices, k=8)
+    other = owner[k] != owner[:, None]
+    assert d[other].min() >= 0.5 * 0.003
+    # a tube is a closed ring of the given radius about its polyline
+    v, f, which = _tubes([np.array([[0, 0, 0], [0, 1, 0.0]])], [np.full(2, 0.01)], 6)
+    ring = v[np.abs(np.hypot(v[:, 0], v[:, 2])) > 1e-9]
+    assert np.allclose(np.hypot(ring[:, 0], ring[:, 2]), 0.01) and len(np.unique(which)) == 1
+    # the files
+    write_thyrse(tmp_path, res, p)
+    assert (tmp_path / "obstacle" / "frame_0000.obj").is_file()
+    assert read_scn(tmp_path / "scene.scn").placements[-1].type == "obstacle"
+
+
+def test_obstacle_params_are_checked():
+    with pytest.raises(FormatError, match="gap"):
+        params_from_toml({"obstacle": {"id": 1, "gap": 0.0}})
+    with pytest.raises(FormatError, match="other than the florets"):
+        params_from_toml({"obstacle": {"id": 0}})

@@ -124,8 +124,12 @@ def main(build: Path) -> int:
     canopy = head.canopy
     a = scene.arrays()
     height = a["pos"][:, 1]
-    print(f"thyrse: {len(scene)} florets, heights {height.min():.3f}-{height.max():.3f}; development windows "
-          f"{min(p.frame_start for p in scene.placements)}-{max(p.frame_end for p in scene.placements)}")
+    # the florets: the scene's placements less the branches' obstacle (simulated, not written)
+    fl = np.array([p.type != "obstacle" for p in scene.placements])
+    placed = [p for p in scene.placements if p.type != "obstacle"]
+    print(f"thyrse: {fl.sum()} florets, heights {height[fl].min():.3f}-{height[fl].max():.3f}; development windows "
+          f"{min(p.frame_start for p in placed)}-{max(p.frame_end for p in placed)}; "
+          f"{len(scene) - fl.sum()} obstacle placements")
     worst_frame = int(np.argmax(with_branches))
     print(f"florets x branches: {max(with_branches)} intersecting pairs at most (frame {worst_frame}), "
           f"{sum(1 for k in with_branches if k)} frames with any, {with_branches[-1]} in the last frame")
@@ -170,10 +174,10 @@ def main(build: Path) -> int:
         failures.append(f"the panicle is open: coverage {min(cover.values()):.3f} < {CHECK['coverage']}")
 
     # individual florets: size and start vary
-    size = a["scale"][:, 0]
+    size = a["scale"][fl, 0]
     cv = float(size.std() / size.mean())
-    start = np.array([p.frame_start for p in scene.placements], float)
-    order = np.argsort(height)
+    start = np.array([p.frame_start for p in placed], float)
+    order = np.argsort(height[fl])
     jitter = float(np.abs(np.diff(start[order])).mean())
     print(f"individual florets: size CV {cv:.3f}; mean start difference of florets next in height {jitter:.2f} frames")
     if cv < CHECK["size_cv"]:
@@ -185,8 +189,8 @@ def main(build: Path) -> int:
     ids = sorted(s_mid)
     rho = float(spearmanr([height[k] for k in ids], [s_mid[k] for k in ids])[0])
     s_end = spreads(last, scene)
-    lower = [k for k in s_end if height[k] <= np.median(height)]
-    top = [k for k in s_end if height[k] >= np.quantile(height, 0.9)]
+    lower = [k for k in s_end if height[k] <= np.median(height[fl])]
+    top = [k for k in s_end if height[k] >= np.quantile(height[fl], 0.9)]
     buds = sum(s_end[k] < CHECK["bud"] for k in top)
     print(f"development at frame {len(canopy) // 2}: rank correlation of the florets' spread with their height "
           f"{rho:.2f}; last frame: lower half spread {min(s_end[k] for k in lower):.2f}-"

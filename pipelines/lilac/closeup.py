@@ -71,7 +71,8 @@ def main(build: Path, size: str, out: Path) -> int:
     branches = read_obj(build / "thyrse" / "branches.obj")
     view = view_direction()
     pos = scene.arrays()["pos"]
-    c = centre(pos, view)
+    florets = np.array([p.type != "obstacle" for p in scene.placements])
+    c = centre(pos[florets], view)
     length = float(np.ptp(branches.vertices[:, 1]))
     with tempfile.TemporaryDirectory() as tmp:
         a, b = Path(tmp) / "florets.obj", Path(tmp) / "branches.obj"

@@ -90,7 +90,7 @@ from inflo.tools.pbd.solver import (
 )
 
 from .log import FrameLog, read_log, write_log
-from .model import Model, Schedule, State, build_model, carry
+from .model import OBSTACLE, Model, Schedule, State, build_model, carry
 
 __all__ = ["ComposeResult", "CollisionError", "InitialIntersectionError", "SimulationDiverged", "compose_canopy",
            "Simulation"]
@@ -768,14 +768,24 @@ def written_text(x: np.ndarray, faces: np.ndarray, formats=WRITE_FORMATS,
 def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndarray | None = None,
                  exact: bool = True) -> Path:
     """The canopy at frame ``k``: every vertex (stable numbering), the faces of the florets
-    present (``tri_on``: a mask over the model's triangles; None: all). ``exact``: the coordinates
-    with as many digits as keep the written frame collision-free (:func:`written_format`)."""
+    present (``tri_on``: a mask over the model's triangles; None: all); the obstacles' vertices
+    and faces left out. ``exact``: the coordinates with as many digits as keep the written frame
+    collision-free (:func:`written_format`)."""
     mats, face_material = model.face_materials
     faces, face_group = model.tri_indices, model.tri_floret.copy()
     if tri_on is not None:
         faces, face_group = faces[tri_on], face_group[tri_on]
         if face_material is not None:
             face_material = face_material[tri_on]
+    hidden = model.obstacle_vertices
+    if hidden is not None:
+        # obstacles collide but are not written: their faces and vertices go, the rest renumbered
+        keep = ~hidden[faces[:, 0]]
+        faces, face_group = faces[keep], face_group[keep]
+        if face_material is not None:
+            face_material = face_material[keep]
+        renumber = np.cumsum(~hidden) - 1
+        x, faces = x[~hidden], renumber[faces].astype(faces.dtype)
     fmt, text = written_text(x, faces, tri_part=face_group) if exact else (WRITE_FORMATS[0], None)
     present = len(np.unique(face_group))
     mesh = ObjMesh(
@@ -789,6 +799,9 @@ def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndar
     path = out / frame_name(k, "frame_", ".obj", 4)
     florets = (f"{len(model.florets)} florets" if tri_on is None
                else f"{present} of {len(model.florets)} florets emerged")
+    if hidden is not None:
+        n_obstacles = sum(1 for fl in model.florets if getattr(fl.placement, "type", None) == OBSTACLE)
+        florets = f"{len(model.florets) - n_obstacles} florets and {n_obstacles} obstacles (not written)"
     write_obj(path, mesh, header=f"fccompose canopy, frame {k}: {florets}, {len(faces)} triangles", fmt=fmt,
               vertex_text=text)
     return path

@@ -76,6 +76,10 @@ __all__ = ["Template", "Floret", "Model", "Schedule", "State", "RbaSequence", "I
            "load_inputs", "assemble_model", "read_weight_file"]
 
 
+#: the SCN ``#@ type:`` of an obstacle placement: simulated (it collides with the florets), not written
+OBSTACLE = "obstacle"
+
+
 @dataclass
 class Template:
     """One ``animation``/``obj`` entry: the floret's OBJ frames in its local frame.
@@ -328,6 +332,16 @@ class Model:
     @property
     def n_triangles(self) -> int:
         return len(self.tri_indices)
+
+    @functools.cached_property
+    def obstacle_vertices(self) -> np.ndarray | None:
+        """(n,) bool: the vertices of the obstacle placements (``#@ type: obstacle``, formats/fcc.md
+        "Obstacles"), which take part in collisions and are not written; None when there are none."""
+        mask = np.zeros(self.n_vertices, bool)
+        for k, fl in enumerate(self.florets):
+            if getattr(fl.placement, "type", None) == OBSTACLE:
+                mask[self.floret_vertex_offset[k]:self.floret_vertex_offset[k + 1]] = True
+        return mask if mask.any() else None
 
     @functools.cached_property
     def floret_birth(self) -> np.ndarray:
@@ -826,8 +840,11 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
         t = fl.template
         fl.vertex_offset, fl.tri_offset = v_off, t_off
         vertex_floret[v_off:v_off + t.n_vertices] = k
-        inv_mass[v_off + t.fixed] = 0.0
-        fixed.append(t.fixed + v_off)
+        # an obstacle placement (formats/fcc.md "Obstacles") is fixed whole, whatever its weight file
+        own = (np.arange(t.n_vertices, dtype=np.int32) if getattr(fl.placement, "type", None) == OBSTACLE
+               else t.fixed)
+        inv_mass[v_off + own] = 0.0
+        fixed.append(own + v_off)
         tris.append(t.tri_indices + v_off)
         tri_fl.append(np.full(len(t.tri_indices), k, np.int32))
         edges.append(t.edge_indices + v_off)

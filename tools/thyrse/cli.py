@@ -45,7 +45,7 @@ def main(params, output, base, rooms, quiet, debug):
     result = thyrse(p, models)
     write_thyrse(output, result, p)
     if not quiet:
-        click.echo(f"thyrse: {len(result.scene)} florets, {len(result.branches.chain_list)} branches, "
+        click.echo(f"thyrse: {len(result.layout.floret_node)} florets, {len(result.branches.chain_list)} branches, "
                    f"{result.branches.branches_mesh.n_faces} triangles -> {output}", err=True)
 
 

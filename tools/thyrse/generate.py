@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.formats.obj import ObjMesh, write_obj
 from inflo.formats.scn import Placement, Scene, write_scn
 from inflo.tools.branch_gen.generate import BranchResult, skeleton_geometry, write_branch_gen
 from inflo.tools.branch_gen.skeleton import Skeleton
@@ -389,6 +390,7 @@ class ThyrseResult:
     layout: ThyrseLayout
     scene: Scene
     branches: BranchResult
+    obstacle: ObjMesh | None = None
 
 
 #: rounds of :func:`thyrse`'s room test (each drops the florets whose model meets the branches)
@@ -456,6 +458,18 @@ def drop_florets(lay: ThyrseLayout, drop: np.ndarray) -> ThyrseLayout:
                         floret_offset=lay.floret_offset[fk])
 
 
+def _with_obstacle(lay: ThyrseLayout, radius, p: Params, mesh: ObjMesh):
+    """The obstacle of the branches (:func:`.obstacle.obstacle_mesh`) and the mesh the room test
+    uses: the branches and the obstacle together (the obstacle's tubes may be a little wider)."""
+    from .obstacle import obstacle_mesh
+
+    ob = obstacle_mesh(lay.node_pos, lay.node_parent, lay.node_tip, radius, sides=p.branches.cylinder.sides,
+                       gap=p.obstacle.gap, margin=p.obstacle.margin)
+    both = ObjMesh(vertices=np.concatenate([mesh.vertices, ob.vertices]),
+                   faces=np.concatenate([mesh.faces, ob.faces + len(mesh.vertices)]).astype(np.int32))
+    return ob, both
+
+
 def thyrse(p: Params, rooms=()) -> ThyrseResult:
     """Layout, scene and branch geometry (branch-gen's pipe model and generalized cylinders).
 
@@ -464,28 +478,42 @@ def thyrse(p: Params, rooms=()) -> ThyrseResult:
     has no room and is not formed (:func:`room_conflicts`, :func:`drop_florets`), and the branches
     are made again without it (their pipe-model widths change), up to ``ROOM_ROUNDS`` times: no
     floret starts inside a branch or grows into one undisturbed.
+
+    With ``[obstacle] id`` >= 0 the branches are also an obstacle for fccompose
+    (:mod:`.obstacle`): ``result.obstacle``, placed by the scene's last placement (``o:``, that id,
+    at the origin, ``#@ type: obstacle``); the room test then takes the obstacle with the branches.
     """
     lay = grow_thyrse(p)
     bp = p.branches
-    scene = thyrse_scene(lay, p)
-    radius, chain_list, skel, mesh = skeleton_geometry(lay.node_pos, lay.node_parent, lay.node_tip, bp)
+    obstacle = p.obstacle.id >= 0
+
+    def geometry(lay):
+        scene = thyrse_scene(lay, p)
+        radius, chain_list, skel, mesh = skeleton_geometry(lay.node_pos, lay.node_parent, lay.node_tip, bp)
+        ob, test = _with_obstacle(lay, radius, p, mesh) if obstacle else (None, mesh)
+        return scene, radius, chain_list, skel, mesh, ob, test
+
+    scene, radius, chain_list, skel, mesh, ob, test = geometry(lay)
     for _ in range(ROOM_ROUNDS if rooms else 0):
-        bad = room_conflicts(scene, rooms, mesh)
+        bad = room_conflicts(scene, rooms, test)
         if not bad.any():
             break
         lay = drop_florets(lay, bad)
-        scene = thyrse_scene(lay, p)
-        radius, chain_list, skel, mesh = skeleton_geometry(lay.node_pos, lay.node_parent, lay.node_tip, bp)
+        scene, radius, chain_list, skel, mesh, ob, test = geometry(lay)
+    if ob is not None:
+        scene.placements.append(Placement(kind="o", id=p.obstacle.id, pos=np.zeros(3), scale=(1.0, 1.0, 1.0),
+                                          up=Y.copy(), right=np.array([1.0, 0.0, 0.0]), type="obstacle"))
     n = len(lay.node_pos)
     sk = Skeleton(node_pos=lay.node_pos, node_parent=lay.node_parent, node_tip=lay.node_tip,
                   node_floret=lay.node_floret, node_frame=np.zeros(n), node_link_frame=np.zeros(n),
                   node_branch=np.full(n, -1, np.int64), base=np.asarray(p.base, float))
     tp = p.thyrse
+    nf = len(lay.floret_node)
     head = (f"thyrse: length {tp.length:g}, {tp.nodes} decussate node pairs, divergence {tp.divergence:g}; "
-            f"{len(scene)} florets, {n} nodes")
+            f"{nf} florets, {n} nodes")
     br = BranchResult(skeleton=sk, node_pos=lay.node_pos, node_parent=lay.node_parent, node_tip=lay.node_tip,
                       node_radius=radius, chain_list=chain_list, skeleton_mesh=skel, branches_mesh=mesh, header=head)
-    return ThyrseResult(layout=lay, scene=scene, branches=br)
+    return ThyrseResult(layout=lay, scene=scene, branches=br, obstacle=ob)
 
 
 def write_thyrse(out_dir, result: ThyrseResult, p: Params) -> list:
@@ -496,4 +524,12 @@ def write_thyrse(out_dir, result: ThyrseResult, p: Params) -> list:
     head = (f"{result.branches.header}\nca: placements, frameStart..frameEnd = development window "
             f"({d.window} frames of {d.frames}), lower florets first; written by thyrse")
     write_scn(out / "scene.scn", result.scene, header=head)
-    return [out / "scene.scn"] + write_branch_gen(out, result.branches, p.branches)
+    written = [out / "scene.scn"] + write_branch_gen(out, result.branches, p.branches)
+    if result.obstacle is not None:
+        path = out / "obstacle" / "frame_0000.obj"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_obj(path, result.obstacle, header=f"{result.branches.header}\nthe branches as an fccompose obstacle: "
+                  f"{len(result.obstacle.groups)} tubes clear of each other (gap {p.obstacle.gap:g}, margin "
+                  f"{p.obstacle.margin:g}); written by thyrse")
+        written.append(path)
+    return written

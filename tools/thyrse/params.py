@@ -8,6 +8,7 @@ Two sections of their own, validated here, and branch-gen's mesh sections, valid
   laterals' length, branching order and floret density are functions of their position along the
   main axis);
 - ``[development]``: each floret's development window from its position (lower florets first);
+- ``[obstacle]``: the branches as an obstacle placement for fccompose (optional);
 - ``[pipe]``, ``[cylinder]``: branch widths (pipe model) and the generalized cylinders, as in
   ``formats/branch_gen.md``.
 
@@ -73,9 +74,19 @@ class DevelopmentParams:
 
 
 @dataclass
+class ObstacleParams:
+    """The branches as an fccompose obstacle (formats/thyrse.md "Obstacle"; :mod:`.obstacle`)."""
+
+    id: int = -1  # the .fcc animation id of the obstacle placement (-1: no obstacle)
+    gap: float = 0.002  # clearance between the obstacle's tubes and at its ends (length)
+    margin: float = 0.0  # the tubes' radius over the branches' (length)
+
+
+@dataclass
 class Params:
     thyrse: ThyrseParams = field(default_factory=ThyrseParams)
     development: DevelopmentParams = field(default_factory=DevelopmentParams)
+    obstacle: ObstacleParams = field(default_factory=ObstacleParams)
     branches: BranchParams = field(default_factory=BranchParams)
     base: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
     source: str | None = None
@@ -86,7 +97,7 @@ class Params:
 #: the longest development a thyrse lays out (frames)
 MAX_FRAMES = 100000
 
-_OWN = {"thyrse": ThyrseParams, "development": DevelopmentParams}
+_OWN = {"thyrse": ThyrseParams, "development": DevelopmentParams, "obstacle": ObstacleParams}
 _BRANCH = ("pipe", "cylinder")
 _TOP = ("base",)
 
@@ -171,6 +182,11 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
     need(0 <= t.surface_weight <= 1e6, "thyrse", "surface_weight", "a weight in [0, 1e6]", t.surface_weight)
     need(0 <= t.size_variation <= 0.5, "thyrse", "size_variation", "a fraction in [0, 0.5]", t.size_variation)
     need(0 <= t.seed < 2**63, "thyrse", "seed", "an integer in [0, 2**63)", t.seed)
+    o = p.obstacle
+    need(o.id >= -1, "obstacle", "id", "an id >= 0 (or -1: none)", o.id)
+    need(o.id != t.floret_id, "obstacle", "id", f"an id other than the florets' ({t.floret_id})", o.id)
+    need(0 < o.gap <= 1e6, "obstacle", "gap", "a length in (0, 1e6]", o.gap)
+    need(0 <= o.margin <= 1e6, "obstacle", "margin", "a length in [0, 1e6]", o.margin)
     need(1 <= d.frames <= MAX_FRAMES, "development", "frames", f"an integer in [1, {MAX_FRAMES}]", d.frames)
     need(0 <= d.window <= d.frames - 1, "development", "window", "0 <= window <= frames - 1", d.window)
     need(d.span == -1 or 0 <= d.span <= d.frames - 1, "development", "span", "-1 or 0 <= span <= frames - 1", d.span)
