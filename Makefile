@@ -12,7 +12,7 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: all venv bytecode test test-blender bench golden golden-check species new-species $(SPECIES_DIRS) clean distclean
+.PHONY: test-fast all venv bytecode test test-blender bench golden golden-check species new-species $(SPECIES_DIRS) clean distclean
 
 all: lily
 
@@ -48,6 +48,12 @@ ifeq ($(strip $(PYTEST_ARGS)),)
 else
 	$(PY) -m pytest -q $(PYTEST_ARGS)
 endif
+
+# the fast door while working: every test but the species builds (and the tests that read them),
+# the ones marked slow (the portability builds, a scaffolded species, the longest canopies) and
+# Blender's; about 3 minutes on 2 cores. `make test` stays the full suite (CI runs it).
+test-fast: $(STAMP) bytecode
+	$(PY) -m pytest -q -p no:cacheprovider -m "not slow and not blender" $(foreach f,$(BUILD_TESTS),--ignore=$(f)) $(PYTEST_ARGS)
 
 # tests/test_blender.py in real Blender: bpy 4.5 LTS (a 370 MB wheel) in its own venv, not in CI's make test
 test-blender: $(STAMP) bytecode

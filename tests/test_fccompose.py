@@ -520,6 +520,7 @@ def test_florets_with_no_room_are_made_smaller_not_torn(inputs, tmp_path):
     assert any(float(r["min_edge_stretch"]) < 0.5 or float(r["max_edge_stretch"]) > 1.5 for r in never)
 
 
+@pytest.mark.slow
 def test_florets_squeezed_hard_stay_whole(inputs, tmp_path):
     """The same head with florets 1.2 x their primordia and a thickness h of a tenth of a floret
     (before issue 13 the per-vertex revert tore such florets and the solve diverged, to 1e11 units,
@@ -635,6 +636,7 @@ def test_phase_effect_each_floret_at_the_stage_its_age_gives(inputs, tmp_path):
     assert opened[0] == N_FRAMES - 1 and opened[-1] < opened[0]
 
 
+@pytest.mark.slow
 def test_dense_growing_head_stays_in_shape_collision_free_and_whole(tmp_path):
     """The growing_head example made small for CI (issue 13): the disk floret of
     pipelines/examples (polygonized as the example does), a centripetal dense head from

@@ -144,6 +144,7 @@ def default_build(tmp_path_factory):
     return _digests(_build(tmp_path_factory.mktemp("default") / "root", {}))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("env", _variants())
 def test_stage_outputs_are_byte_identical_under(env, default_build, tmp_path):
     if "NUMBA_CPU_NAME" in env:  # compile afresh for that target, away from the sources' cache

@@ -138,6 +138,7 @@ def test_scaffold_refuses_bad_names(tmp_path):
     assert not list((root / "pipelines").glob(".*.tmp"))
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (REPO / ".venv" / "bin" / "fccompose").exists(), reason="needs the .venv (make test)")
 def test_a_scaffolded_species_builds_and_checks(tmp_path):
     """make new-species NAME=aster FROM=daisy in a copy of the project: a folder of its own (and a

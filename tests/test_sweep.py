@@ -184,6 +184,7 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+@pytest.mark.slow
 def test_scheduler_address(tmp_path):
     try:
         port = _free_port()
