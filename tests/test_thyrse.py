@@ -395,3 +395,12 @@ def test_obstacle_params_are_checked():
         params_from_toml({"obstacle": {"id": 1, "gap": 0.0}})
     with pytest.raises(FormatError, match="other than the florets"):
         params_from_toml({"obstacle": {"id": 0}})
+
+
+def test_room_refuses_models_too_big_to_place_at_once(monkeypatch):
+    from inflo.formats.errors import InputError
+    from inflo.tools.thyrse import generate
+
+    monkeypatch.setattr(generate, "ROOM_MAX_TRIANGLES", 100)
+    with pytest.raises(InputError, match="at most 100 placed model triangles"):
+        thyrse(_params(**_DENSE), [_box(0.1)])

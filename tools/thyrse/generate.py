@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.formats.errors import InputError
 from inflo.formats.obj import ObjMesh, write_obj
 from inflo.formats.scn import Placement, Scene, write_scn
 from inflo.tools.branch_gen.generate import BranchResult, skeleton_geometry, write_branch_gen
@@ -395,6 +396,8 @@ class ThyrseResult:
 
 #: rounds of :func:`thyrse`'s room test (each drops the florets whose model meets the branches)
 ROOM_ROUNDS = 4
+#: the room test places every floret's models at once: at most this many triangles (memory)
+ROOM_MAX_TRIANGLES = 20_000_000
 
 
 def room_conflicts(scene: Scene, rooms, branches) -> np.ndarray:
@@ -494,6 +497,10 @@ def thyrse(p: Params, rooms=()) -> ThyrseResult:
         return scene, radius, chain_list, skel, mesh, ob, test
 
     scene, radius, chain_list, skel, mesh, ob, test = geometry(lay)
+    work = len(lay.floret_node) * sum(len(f) for _, f in rooms)
+    if work > ROOM_MAX_TRIANGLES:
+        raise InputError(f"--room: expected at most {ROOM_MAX_TRIANGLES:,} placed model triangles, found {work:,} "
+                         f"({len(lay.floret_node)} florets x {sum(len(f) for _, f in rooms):,} triangles of the models)")
     for _ in range(ROOM_ROUNDS if rooms else 0):
         bad = room_conflicts(scene, rooms, test)
         if not bad.any():
