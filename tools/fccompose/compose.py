@@ -90,7 +90,7 @@ from inflo.tools.pbd.solver import (
 )
 
 from .log import FrameLog, read_log, write_log
-from .model import OBSTACLE, Model, Schedule, State, build_model, carry
+from .model import Model, Schedule, State, build_model, carry
 
 __all__ = ["ComposeResult", "CollisionError", "InitialIntersectionError", "SimulationDiverged", "compose_canopy",
            "Simulation"]
@@ -800,7 +800,7 @@ def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndar
     florets = (f"{len(model.florets)} florets" if tri_on is None
                else f"{present} of {len(model.florets)} florets emerged")
     if hidden is not None:
-        n_obstacles = sum(1 for fl in model.florets if getattr(fl.placement, "type", None) == OBSTACLE)
+        n_obstacles = len(model.obstacles)
         florets = f"{len(model.florets) - n_obstacles} florets and {n_obstacles} obstacles (not written)"
     write_obj(path, mesh, header=f"fccompose canopy, frame {k}: {florets}, {len(faces)} triangles", fmt=fmt,
               vertex_text=text)

@@ -334,14 +334,20 @@ class Model:
         return len(self.tri_indices)
 
     @functools.cached_property
+    def obstacles(self) -> list:
+        """Indices of the obstacle placements (``#@ type: obstacle``, formats/fcc.md "Obstacles"),
+        which take part in collisions and are not written."""
+        return [k for k, fl in enumerate(self.florets) if fl.placement.type == OBSTACLE]
+
+    @functools.cached_property
     def obstacle_vertices(self) -> np.ndarray | None:
-        """(n,) bool: the vertices of the obstacle placements (``#@ type: obstacle``, formats/fcc.md
-        "Obstacles"), which take part in collisions and are not written; None when there are none."""
+        """(n,) bool: the vertices of the :attr:`obstacles`; None when there are none."""
+        if not self.obstacles:
+            return None
         mask = np.zeros(self.n_vertices, bool)
-        for k, fl in enumerate(self.florets):
-            if getattr(fl.placement, "type", None) == OBSTACLE:
-                mask[self.floret_vertex_offset[k]:self.floret_vertex_offset[k + 1]] = True
-        return mask if mask.any() else None
+        for k in self.obstacles:
+            mask[self.floret_vertex_offset[k]:self.floret_vertex_offset[k + 1]] = True
+        return mask
 
     @functools.cached_property
     def floret_birth(self) -> np.ndarray:
@@ -841,8 +847,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
         fl.vertex_offset, fl.tri_offset = v_off, t_off
         vertex_floret[v_off:v_off + t.n_vertices] = k
         # an obstacle placement (formats/fcc.md "Obstacles") is fixed whole, whatever its weight file
-        own = (np.arange(t.n_vertices, dtype=np.int32) if getattr(fl.placement, "type", None) == OBSTACLE
-               else t.fixed)
+        own = np.arange(t.n_vertices, dtype=np.int32) if fl.placement.type == OBSTACLE else t.fixed
         inv_mass[v_off + own] = 0.0
         fixed.append(own + v_off)
         tris.append(t.tri_indices + v_off)

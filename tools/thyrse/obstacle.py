@@ -79,53 +79,52 @@ def _tubes(paths, radii, sides: int):
     return v, f, np.repeat(np.arange(len(chain_list)), per)
 
 
+def _clashes(paths, radii, gap: float, sides: int) -> list:
+    """Indices (into ``paths``) of the later tube of every pair that comes within ``gap``: the tubes
+    grown by ``gap / 2`` intersect (exact static test)."""
+    from inflo.tools.collide import intersecting_pairs
+
+    v, f, tube = _tubes(paths, [r + 0.5 * gap for r in radii], sides)
+    if not len(f):
+        return []
+    pairs = intersecting_pairs(v, f, tri_part=tube)
+    a, b = tube[pairs[:, 0]], tube[pairs[:, 1]]
+    return [int(t) for t in np.unique(np.maximum(a, b)[a != b])]
+
+
 def obstacle_mesh(node_pos, node_parent, node_tip, radius, *, sides: int, gap: float, margin: float) -> ObjMesh:
     """The tubes of the module docstring: an ObjMesh (one group ``obstacle_<c>`` per tube) whose
     tubes neither intersect nor come within ``gap`` of each other."""
-    from inflo.tools.collide import intersecting_pairs
-
     node_pos = np.asarray(node_pos, float)
+    radius = np.asarray(radius, float)
     joint = _joint_radius(node_parent, radius)
     chain_list = chains(node_parent, node_tip)
-    start = []
-    for c in chain_list:
-        start.append(joint[c[0]] + gap)
-    start = np.array(start)
+    start = np.array([joint[c[0]] + gap for c in chain_list])
 
-    def build(start):
+    def build():
         paths, radii, which = [], [], []
         for i, c in enumerate(chain_list):
             end = gap if node_tip[c[-1]] else joint[c[-1]] + gap
             pts = _cut(node_pos[c], start[i], end)
             if pts is None or la.norm(pts[-1] - pts[0]) < gap:
                 continue
-            r = float(np.max(np.asarray(radius)[c[1:]])) + margin
             paths.append(pts)
-            radii.append(np.full(len(pts), r))
+            radii.append(np.full(len(pts), float(radius[c[1:]].max()) + margin))
             which.append(i)
         return paths, radii, which
 
     for _ in range(ROUNDS):
-        paths, radii, which = build(start)
-        grown = [r + 0.5 * gap for r in radii]
-        v, f, tube = _tubes(paths, grown, sides)
-        pairs = intersecting_pairs(v, f, tri_part=tube) if len(f) else np.zeros((0, 2), np.int64)
-        a, b = tube[pairs[:, 0]], tube[pairs[:, 1]]
-        clash = np.unique(np.maximum(a, b)[a != b])
-        if len(clash) == 0:
+        paths, radii, which = build()
+        clash = _clashes(paths, radii, gap, sides)
+        if not clash:
             break
         for t in clash:
-            i = which[int(t)]
-            start[i] += radii[int(t)][0] + gap
+            start[which[t]] += radii[t][0] + gap
     else:
-        paths, radii, which = build(start)
-        grown = [r + 0.5 * gap for r in radii]
-        v, f, tube = _tubes(paths, grown, sides)
-        pairs = intersecting_pairs(v, f, tri_part=tube) if len(f) else np.zeros((0, 2), np.int64)
-        a, b = tube[pairs[:, 0]], tube[pairs[:, 1]]
-        drop = set(np.unique(np.maximum(a, b)[a != b]).tolist())
+        paths, radii, which = build()
+        drop = set(_clashes(paths, radii, gap, sides))
         keep = [k for k in range(len(paths)) if k not in drop]
         paths, radii, which = [paths[k] for k in keep], [radii[k] for k in keep], [which[k] for k in keep]
     v, f, tube = _tubes(paths, radii, sides)
-    groups = [f"obstacle_{which[k]}" for k in range(len(paths))]
+    groups = [f"obstacle_{c}" for c in which]
     return ObjMesh(vertices=v, faces=f, groups=groups, face_group=tube.astype(np.int32) if len(groups) else None)
