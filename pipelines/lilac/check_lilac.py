@@ -34,14 +34,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw
-from scipy.spatial import ConvexHull, QhullError
+from scipy.spatial import ConvexHull
 from scipy.stats import spearmanr
 
 from inflo.formats.obj import read_obj
 from inflo.formats.species import species_of
 from inflo.tools.collide import intersecting_pairs_between
-from inflo.tools.species.checks import check_head, floret_faces, frames_with_contacts
+from inflo.tools.species.checks import check_head, floret_faces, frames_with_contacts, view_coverage
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 CHECK = species_of(__file__).check
@@ -80,31 +79,6 @@ def facing_angles(mesh, scene, surface: float) -> np.ndarray:
         up = p.up / np.linalg.norm(p.up)
         out.append(math.degrees(math.acos(min(1.0, max(-1.0, float(up @ n[k]))))))
     return np.asarray(out)
-
-
-def view_coverage(mesh, axis: int, pixels: int = 800) -> float:
-    """Share of the convex hull of the mesh's silhouette, seen along coordinate ``axis``
-    (orthographic), that its triangles cover: both rasterized on a grid of ``pixels`` across the
-    larger side (Pillow polygons); 0 for a silhouette with no area."""
-    keep = [d for d in range(3) if d != axis]
-    used = np.unique(mesh.faces)
-    q = mesh.vertices[:, keep]
-    lo, hi = q[used].min(axis=0), q[used].max(axis=0)
-    s = (pixels - 1) / float((hi - lo).max())
-    px = (q - lo) * s
-    w, h = int(math.ceil((hi - lo)[0] * s)) + 1, int(math.ceil((hi - lo)[1] * s)) + 1
-    cover = Image.new("1", (w, h), 0)
-    draw = ImageDraw.Draw(cover)
-    for f in mesh.faces:
-        draw.polygon([tuple(px[i]) for i in f], fill=1)
-    try:
-        hull = ConvexHull(px[used])
-    except QhullError:  # a silhouette with no area (a flat mesh seen edge-on)
-        return 0.0
-    region = Image.new("1", (w, h), 0)
-    ImageDraw.Draw(region).polygon([tuple(px[used][i]) for i in hull.vertices], fill=1)
-    a, b = np.asarray(cover, bool), np.asarray(region, bool)
-    return float((a & b).sum()) / float(b.sum())
 
 
 def main(build: Path) -> int:

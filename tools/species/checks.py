@@ -10,9 +10,12 @@ check_head``.
 from __future__ import annotations
 
 import csv
+import math
 from pathlib import Path
 
 import numpy as np
+from PIL import Image, ImageDraw
+from scipy.spatial import ConvexHull, QhullError
 from scipy.stats import spearmanr
 
 from inflo.formats.obj import list_obj_sequence, read_obj
@@ -22,6 +25,45 @@ from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
 from inflo.tools.common import linalg as la
 
 BOUNDS = (0.5, 1.5)
+
+
+def _raster(points: np.ndarray, faces: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """Boolean image of ``size`` (w, h) with every triangle of ``faces`` over pixel ``points``."""
+    img = Image.new("1", size, 0)
+    draw = ImageDraw.Draw(img)
+    for f in faces:
+        draw.polygon([tuple(points[i]) for i in f], fill=1)
+    return np.asarray(img, bool)
+
+
+def view_coverage(mesh, axis: int, pixels: int = 800, region=None) -> float:
+    """Share of a region, seen along coordinate ``axis`` (orthographic), that the mesh's triangles
+    cover: the region is the convex hull of the mesh's silhouette, or the silhouette of the mesh
+    ``region`` (a receptacle, say: then one minus this is the share of it left in view). Both are
+    rasterized on a grid of ``pixels`` across the larger side (Pillow polygons); 0 for a region
+    with no area."""
+    keep = [d for d in range(3) if d != axis]
+    used = np.unique(mesh.faces)
+    q = mesh.vertices[:, keep]
+    pts = q[used] if region is None else np.vstack([q[used], region.vertices[np.unique(region.faces)][:, keep]])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    s = (pixels - 1) / float((hi - lo).max())
+    size = (int(math.ceil((hi - lo)[0] * s)) + 1, int(math.ceil((hi - lo)[1] * s)) + 1)
+    cover = _raster((q - lo) * s, mesh.faces, size)
+    if region is not None:
+        area = _raster((region.vertices[:, keep] - lo) * s, region.faces, size)
+    else:
+        px = (q - lo) * s
+        try:
+            hull = ConvexHull(px[used])
+        except QhullError:  # a silhouette with no area (a flat mesh seen edge-on)
+            return 0.0
+        img = Image.new("1", size, 0)
+        ImageDraw.Draw(img).polygon([tuple(px[used][i]) for i in hull.vertices], fill=1)
+        area = np.asarray(img, bool)
+    if not area.any():
+        return 0.0
+    return float((cover & area).sum()) / float(area.sum())
 
 
 def floret_faces(mesh) -> dict:
