@@ -43,6 +43,9 @@ from .sweep import write_sweep
               help="Ray and small ray florets: frameEnd = frameStart + N (applied before --ray-lead).")
 @click.option("--disk-development-frames", type=int, default=None, metavar="N",
               help="Disk florets: frameEnd = frameStart + N.")
+@click.option("--bract-development-frames", type=int, default=None, metavar="N",
+              help="Involucral bracts: frameEnd = frameStart + N (they open with the head, not round a naked "
+                   "meristem).")
 @click.option("--bracts", type=int, default=0, show_default=True, metavar="N",
               help="The N outermost placements of each head are involucral bracts (type 'bract', "
                    "--bract-id), left out of the other florets' cone tests.")
@@ -60,7 +63,7 @@ from .sweep import write_sweep
                    "petal) points away from its group's or top-level group's centre.")
 def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, small_ray_scale, disk_scale, centre,
         half_angle, ray_lead, ray_development_frames, disk_development_frames, bracts, bract_id, bract_scale,
-        petal_size, orient_rays, marginal, quiet, debug):
+        petal_size, orient_rays, marginal, bract_development_frames, quiet, debug):
     from inflo.formats.errors import InputError
 
     if len(thresholds) > 2:
@@ -77,7 +80,8 @@ def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_sca
             raise InputError(f"{name} must be in [1e-06, 1e+06], found {v:g}")
     opts = DimorphOptions(alpha, tuple(thresholds), ray_id, disk_id, small_ray_id, ray_scale, disk_scale,
                           centre, half_angle, ray_lead, ray_development_frames, disk_development_frames,
-                          bracts, bract_id, bract_scale, petal_size, orient_rays, small_ray_scale, marginal)
+                          bracts, bract_id, bract_scale, petal_size, orient_rays, small_ray_scale, marginal,
+                          bract_development_frames)
     check_window_options(opts)
     sc = read_scn(scene)
     out, counts = dimorph_scene(sc, opts)

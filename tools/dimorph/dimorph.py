@@ -37,9 +37,14 @@ class DimorphOptions:
         whole frames, ``frameStart`` kept >= 0 and ``frameEnd`` >= ``frameStart + 1``
     ray_development_frames, disk_development_frames : None, or N > 0: ``frameEnd = frameStart + N``
         for ray and small ray (resp. disk) florets, before the lead is applied
+    bract_development_frames : None, or N > 0: ``frameEnd = frameStart + N`` for the involucral
+        bracts (no lead). A head's bracts and rays are its first primordia; with windows longer
+        than the disk florets' they open with the head, round florets to surround, instead of
+        standing open round a naked meristem (thesis fig. 9.6: the involucre and the rays unfold
+        as the outer disk florets reach anthesis)
     bracts : the ``bracts`` outermost placements of each head (by distance from its centre O; ties by
         placement order) are involucral bracts: type ``bract``, id ``bract_id``, scale factor
-        ``bract_scale``, their windows left as they are. They are leaves, not florets: the cone
+        ``bract_scale``, their windows set by ``bract_development_frames`` only. They are leaves, not florets: the cone
         test (eq. 6.1) of the other placements ignores them, so the florets just inside the
         involucre are the ones whose cones can be empty (the bracts of a capitulum are its first,
         outermost primordia, formed in the same phyllotactic sequence as the florets)
@@ -81,6 +86,7 @@ class DimorphOptions:
     orient_rays: str = "none"
     small_ray_scale: float | None = None
     marginal: int = 0
+    bract_development_frames: int | None = None
 
 
 def orient_outward(p, centre) -> bool:
@@ -165,7 +171,8 @@ def check_window_options(opts: DimorphOptions) -> None:
     if not math.isfinite(opts.ray_lead):
         raise InputError(f"--ray-lead must be a finite number of frames, found {opts.ray_lead}")
     for name, v in (("--ray-development-frames", opts.ray_development_frames),
-                    ("--disk-development-frames", opts.disk_development_frames)):
+                    ("--disk-development-frames", opts.disk_development_frames),
+                    ("--bract-development-frames", opts.bract_development_frames)):
         if v is not None and (isinstance(v, bool) or int(v) != v or v <= 0):
             raise InputError(f"{name} must be an integer > 0, found {v}")
 
@@ -221,6 +228,8 @@ def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
         if f == FATE_BRACT:
             p.id, p.type = opts.bract_id, "bract"
             p.scale = p.scale * opts.bract_scale
+            if opts.bract_development_frames is not None and shift_window(p, opts.bract_development_frames, 0.0):
+                windows += 1
             continue
         if f == FATE_RAY:
             p.id, factor = opts.ray_id, opts.ray_scale
