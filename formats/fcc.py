@@ -21,6 +21,7 @@ from typing import Mapping
 
 from .atomic import write_text_atomic
 from .errors import FormatError, InputError, did_you_mean, parse_float, parse_int, read_lines, shorten
+from .variation import Variation, parse_variation
 
 __all__ = [
     "AnimationEntry",
@@ -289,6 +290,10 @@ class CanopyParams:
         floret; thesis fig. 6.4c). Empty.
     bending_stiffness, distance_stiffness : mapping of int to float
         Per-id stiffness in [0, 1] replacing ``k_bend`` / ``k_stretch``. Empty.
+    variations : mapping of int to Variation
+        ``variation`` lines: id of an animation/obj entry -> the spreads of its florets' seeded
+        individual differences (formats/variation.py; fccompose gives each such floret its own
+        deformed copy of the template). Empty.
     animation_output_folder : FilePath or None
         ``animation output folder location``; the CLI's ``-o`` wins. None.
     obj_output_file : FilePath or None
@@ -331,6 +336,7 @@ class CanopyParams:
     petal_weights: Mapping[int, FilePath] = field(default_factory=dict)
     bending_stiffness: Mapping[int, float] = field(default_factory=dict)
     distance_stiffness: Mapping[int, float] = field(default_factory=dict)
+    variations: Mapping[int, Variation] = field(default_factory=dict)
     animation_output_folder: FilePath | None = None
     obj_output_file: FilePath | None = None
     camera: CameraParams = field(default_factory=CameraParams)
@@ -340,7 +346,7 @@ class CanopyParams:
     def __post_init__(self):
         for name in ("scene_files", "animations", "rigid_body_animations"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
-        for name in ("weights", "petal_weights", "bending_stiffness", "distance_stiffness", "lines"):
+        for name in ("weights", "petal_weights", "bending_stiffness", "distance_stiffness", "variations", "lines"):
             object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
         object.__setattr__(self, "scene_scale", tuple(float(v) for v in self.scene_scale))
         object.__setattr__(self, "stretch_bounds", tuple(float(v) for v in self.stretch_bounds))
@@ -444,6 +450,7 @@ _SYNTAX = {
     "rba": "`id x y z rba-folder scene-file`",
     "weight": "`id path`",
     "id stiffness": "`id stiffness`",
+    "variation": "`id field value …`",
 }
 
 _COUNT0, _COUNT1 = KeySpec("int", low=0), KeySpec("int", low=1)
@@ -491,6 +498,7 @@ KEYS: Mapping[str, KeySpec] = MappingProxyType({
     "petal weight": KeySpec("weight", repeatable=True),
     "bending stiffness": KeySpec("id stiffness", repeatable=True),
     "distance stiffness": KeySpec("id stiffness", repeatable=True),
+    "variation": KeySpec("variation", repeatable=True),
     "animation output folder location": KeySpec("path", field="animation_output_folder"),
     "obj output file path": KeySpec("path", field="obj_output_file"),
     "camera position": KeySpec("float", 3, field="camera.position"),
@@ -563,6 +571,7 @@ class _Reader:
         self.petal_weights: dict[int, FilePath] = {}
         self.bending: dict[int, float] = {}
         self.distance: dict[int, float] = {}
+        self.variations: dict[int, Variation] = {}
         self.per_id_lines: dict[tuple[str, int], int] = {}
 
     # -- value helpers -------------------------------------------------------------------------
@@ -774,6 +783,18 @@ class _Reader:
         self.per_id(key, id_, toks[0], n)
         (self.bending if key == "bending stiffness" else self.distance)[id_] = s
 
+    def read_variation(self, key, spec, value, n):
+        toks = self.tokens(value)
+        if not toks:
+            raise self.err(n, f"'{key}: id field value …'", "nothing")
+        id_ = self.ident(key, toks[0], n)
+        try:
+            var = parse_variation(toks[1:])
+        except ValueError as e:
+            raise self.err(n, f"'{key}': {e.args[0]}", shorten(e.args[1])) from None
+        self.per_id(key, id_, toks[0], n)
+        self.variations[id_] = var
+
     def per_id(self, key, id_, tok, line):
         prev = self.per_id_lines.get((key, id_))
         if prev is not None:
@@ -792,6 +813,7 @@ class _Reader:
             ("petal weight", self.petal_weights),
             ("bending stiffness", self.bending),
             ("distance stiffness", self.distance),
+            ("variation", self.variations),
         ):
             for id_ in table:
                 if id_ not in geometry_ids:
@@ -828,6 +850,7 @@ class _Reader:
             petal_weights=self.petal_weights,
             bending_stiffness=self.bending,
             distance_stiffness=self.distance,
+            variations=self.variations,
             camera=CameraParams(**cam),
             source=Path(os.path.abspath(self.path)),
             lines=self.last_line,
@@ -846,6 +869,7 @@ _READ = {
     "rba": _Reader.read_rba,
     "weight": _Reader.read_weight,
     "id stiffness": _Reader.read_id_stiffness,
+    "variation": _Reader.read_variation,
 }
 
 
@@ -1015,6 +1039,8 @@ def format_fcc(params: CanopyParams) -> str:
         add(f"bending stiffness: {int(id_)} {_num(p.bending_stiffness[id_])}")
     for id_ in sorted(p.distance_stiffness):
         add(f"distance stiffness: {int(id_)} {_num(p.distance_stiffness[id_])}")
+    for id_ in sorted(p.variations):
+        add(f"variation: {int(id_)} {p.variations[id_].text()}")
     opt("animation output folder location",
         None if p.animation_output_folder is None
         else _check_raw(p.animation_output_folder.raw, "animation output folder location"),

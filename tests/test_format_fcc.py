@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats import fcc as fcc_module
+from inflo.formats.variation import Variation
 from inflo.formats.fcc import (
     ALIASES,
     KEYS,
@@ -121,6 +122,7 @@ weight: 0 disk.weights
 petal weight: 1 ray.petals
 bending stiffness: 1 0.3
 distance stiffness: 0 0.9
+variation: 0 size 0.1 droop 8 seed 3
 animation output folder location: out/
 obj output file path: out/frame.obj
 camera position: 0, 1, 5
@@ -203,6 +205,7 @@ def test_every_key_of_the_list(write, tmp_path):
         petal_weights={1: FilePath("ray.petals")},
         bending_stiffness={1: 0.3},
         distance_stiffness={0: 0.9},
+        variations={0: Variation(size=0.1, droop=8.0, seed=3)},
         animation_output_folder=FilePath("out/"),
         obj_output_file=FilePath("out/frame.obj"),
         camera=CameraParams(

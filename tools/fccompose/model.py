@@ -72,6 +72,8 @@ from inflo.tools.common import linalg as la
 from inflo.tools.pbd.constraints import signed_dihedral_angle, wrap_angle
 from inflo.tools.pbd.solver import mesh_edges, mesh_hinges
 
+from .variation import varied
+
 __all__ = ["Template", "Floret", "Model", "Schedule", "State", "RbaSequence", "Inputs", "build_model",
            "load_inputs", "assemble_model", "read_weight_file"]
 
@@ -188,6 +190,9 @@ class Floret:
     shift: float = 0.0
     """the time its own placement's clock runs behind the canopy's: the sum of the outer levels'
     shifts (their placements' ``frameStart``)"""
+    delay: float = 0.0
+    """frames its developmental window runs late (a ``variation`` line's ``timing`` draw; negative:
+    early); its motion keeps its placement's clock"""
 
 
 @dataclass
@@ -387,7 +392,7 @@ class Model:
         """u in [0, 1] of ``floret`` at (fractional) ``frame`` (see the module docstring); a
         floret of a nested scene reads its window on its scene's clock (``frame - shift``)."""
         p = floret.placement
-        frame = frame - floret.shift
+        frame = frame - floret.shift - floret.delay
         if p.kind == "i":
             return float(min(max(p.interpolation, 0.0), 1.0))
         if p.kind == "o":
@@ -768,6 +773,8 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
 
     florets: list[Floret] = []
     placed: dict = {}
+    own: list = []  # the florets' own templates (``variation`` lines), in floret order
+    variations = getattr(params, "variations", {}) or {}
 
     def moved_by_rba(target, sp, k):
         if sp not in rbas:
@@ -798,6 +805,13 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
                     base = placed.setdefault((p.id, 1.0), templates[p.id])
                     placed[key] = base.with_petals(key[1])
                 fl = Floret(len(florets), p, placed[key], sp, k, p.material, outer=tuple(outer), shift=shift)
+                if p.id in variations and p.type != OBSTACLE:
+                    var = variations[p.id]
+                    if var.petal and templates[p.id].petal_weight is None:
+                        raise InputError(f"{params.source}: expected a 'petal weight' line for id {p.id} (its "
+                                         f"'variation' varies 'petal'), found none")
+                    fl.template, fl.delay = varied(templates[p.id], var, fl.index, key[1])
+                    own.append(fl.template)
                 if p.kind == "rba":
                     moved_by_rba(fl, sp, k)
                 fl.birth_frame = int(math.ceil(max(born, fl.birth_frame + shift) - 1e-9))
@@ -830,6 +844,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
         if t.key not in seen and id(t) in in_use:
             seen.add(t.key)
             used.append(t)
+    used.extend(own)
     template_offset, rows = {}, 0
     for t in used:
         template_offset[t.key] = rows
