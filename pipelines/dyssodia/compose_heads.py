@@ -1,17 +1,21 @@
 """Place six copies of one head as the Dyssodia inflorescence (the `head` stage's last step).
 
-Usage: python compose_heads.py HEAD.scn RECEPTACLE.obj RING TILT OUT.scn OUT_RECEPTACLES.obj
+Usage: python compose_heads.py HEAD.scn RECEPTACLE.obj RING TILT DROP OUT.scn OUT_RECEPTACLES.obj OUT_OBSTACLES.scn
 
 *Dyssodia decipiens* (thesis ch. 9, fig. 9.7): "a central head surrounded by 5 other heads". The
 central copy stands at the origin; five copies stand on a ring of radius RING (scene units) at
 72-degree steps, each tilted outward by TILT degrees about the tangent of the ring (the heads of
-a corymb-like cluster lean away from its centre) and turned about its own axis so that the
+a corymb-like cluster lean away from its centre), DROP scene units below the central one (the
+terminal head stands highest, so the outer heads crowd in under its rim), and turned about its own axis so that the
 pattern faces the same way relative to the inflorescence's centre (Hofmeister's rule: the first,
 outermost floret away from the centre). The output is one flat scene (so that `dimorph --centre
 top` decides the ray florets at the level of the whole inflorescence, fig. 6.4b): group 0 the
 inflorescence (its centre the origin), group k + 1 head k (its centre where its apex is), every
 placement keeping its window; and the head's receptacle (phyllotaxis ``[receptacle]``) placed the
-same way under each head, as one OBJ. Both written atomically.
+same way under each head, as one OBJ; and the six receptacles as fccompose obstacles (formats/fcc.md
+"Obstacles": `o` placements of the head's receptacle, id OBSTACLE_ID, `#@ type: obstacle`, one per
+head, in a scene of their own that spread_rays.py appends after the florets), so that the crowded
+florets of one head are pushed off its neighbours' receptacles. All written atomically.
 """
 from __future__ import annotations
 
@@ -22,9 +26,11 @@ from pathlib import Path
 import numpy as np
 
 from inflo.formats.obj import ObjMesh, read_obj, write_obj
-from inflo.formats.scn import Group, Scene, read_scn, write_scn
+from inflo.formats.scn import Group, Placement, Scene, read_scn, write_scn
 
 HEADS = 6
+# the receptacle's id in dyssodia.fcc (an `obj:` entry)
+OBSTACLE_ID = 2
 
 
 def _rot(axis, angle):
@@ -36,7 +42,7 @@ def _rot(axis, angle):
                      [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)]])
 
 
-def heads(ring: float, tilt: float):
+def heads(ring: float, tilt: float, drop: float):
     """(centre (3,), rotation (3, 3)) of each head: the central one, then five round it."""
     out = [(np.zeros(3), np.eye(3))]
     for k in range(HEADS - 1):
@@ -45,18 +51,22 @@ def heads(ring: float, tilt: float):
         tangent = np.array([np.cos(phi), 0.0, -np.sin(phi)])
         spin = _rot([0, 1, 0], phi)  # the pattern faces the same way relative to the centre
         lean = _rot(tangent, np.radians(tilt))
-        centre = ring * radial - np.array([0.0, ring * np.sin(np.radians(tilt)) * 0.5, 0.0])
+        centre = ring * radial - np.array([0.0, drop, 0.0])
         out.append((centre, lean @ spin))
     return out
 
 
-def main(src: Path, receptacle: Path, ring: float, tilt: float, dst: Path, dst_receptacles: Path) -> int:
+def main(src: Path, receptacle: Path, ring: float, tilt: float, drop: float, dst: Path, dst_receptacles: Path,
+         dst_obstacles: Path) -> int:
     head = read_scn(src)
     rec = read_obj(receptacle)
     scene = Scene()
     scene.groups[0] = Group(0, np.zeros(3), -1)
+    obstacles = Scene()
     verts, faces = [], []
-    for k, (centre, rot) in enumerate(heads(ring, tilt)):
+    for k, (centre, rot) in enumerate(heads(ring, tilt, drop)):
+        obstacles.placements.append(Placement("o", OBSTACLE_ID, centre.copy(), np.ones(3), rot[:, 1].copy(),
+                                              rot[:, 0].copy(), type="obstacle"))
         scene.groups[k + 1] = Group(k + 1, centre.copy(), 0)
         for p in head.placements:
             q = copy.deepcopy(p)
@@ -67,7 +77,9 @@ def main(src: Path, receptacle: Path, ring: float, tilt: float, dst: Path, dst_r
             scene.placements.append(q)
         faces.append(rec.faces + k * len(rec.vertices))
         verts.append(rec.vertices @ rot.T + centre)
-    write_scn(dst, scene, header=f"{HEADS} copies of {src.name} (compose_heads.py, ring {ring:g}, tilt {tilt:g})")
+    what = f"compose_heads.py, ring {ring:g}, tilt {tilt:g}, drop {drop:g}"
+    write_scn(dst, scene, header=f"{HEADS} copies of {src.name} ({what})")
+    write_scn(dst_obstacles, obstacles, header=f"the {HEADS} receptacles as obstacles ({what})")
     n = len(rec.faces)
     mesh = ObjMesh(np.concatenate(verts), np.concatenate(faces), groups=[f"receptacle_{k}" for k in range(HEADS)],
                    face_group=np.repeat(np.arange(HEADS), n), materials=rec.materials,
@@ -77,8 +89,8 @@ def main(src: Path, receptacle: Path, ring: float, tilt: float, dst: Path, dst_r
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 7:
+    if len(sys.argv) != 9:
         print(__doc__.strip().splitlines()[2], file=sys.stderr)
         sys.exit(2)
     a = sys.argv
-    sys.exit(main(Path(a[1]), Path(a[2]), float(a[3]), float(a[4]), Path(a[5]), Path(a[6])))
+    sys.exit(main(Path(a[1]), Path(a[2]), float(a[3]), float(a[4]), float(a[5]), Path(a[6]), Path(a[7]), Path(a[8])))
