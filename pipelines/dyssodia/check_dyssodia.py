@@ -16,7 +16,13 @@ Prints, and fails (exit 1) on any of:
   neighbours (collisions found between florets of one head, in at least half the frames after
   the first third); the phase effect in every head: at two thirds of the run, its disk florets'
   heights above their bases (floret units) fall from its rim to its centre (Spearman rank
-  correlation with the distance from the head's centre > 0.5).
+  correlation with the distance from the head's centre > 0.5);
+- **the look** (issue 44), with the thresholds of species.toml [check]: the group crowds (the last
+  frame from above covers at least ``coverage_min`` of its silhouette's convex hull,
+  view_coverage along Y); the disk florets are reshaped by their neighbours (fig. 9.8: at least
+  ``reshaped_min`` of them deviate from their template by more than ``reshaped_by``, see
+  :func:`deviations`); the rays spread outward (their mean angle below the horizontal, base to
+  ligule tip, at most ``ray_droop_max`` degrees).
 """
 from __future__ import annotations
 
@@ -26,9 +32,10 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-from inflo.formats.obj import read_obj
+from inflo.formats.obj import list_obj_sequence, read_obj
+from inflo.formats.placement import placement_matrix
 from inflo.formats.species import species_of
-from inflo.tools.species.checks import check_head, floret_faces, frames_with_contacts
+from inflo.tools.species.checks import check_head, floret_faces, frames_with_contacts, view_coverage
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 CHECK = species_of(__file__).check
@@ -43,6 +50,53 @@ def heights(mesh, scene) -> dict:
         v = mesh.vertices[np.unique(mesh.faces[faces])]
         up = p.up / np.linalg.norm(p.up)
         out[pid] = float(((v - p.pos) @ up).max()) / float(p.scale[1])
+    return out
+
+
+def _ramp(frame: float, start, end) -> float:
+    """A ``ca`` placement's developmental time u in [0, 1] at ``frame`` (as fccompose's model)."""
+    if end <= start:
+        return 1.0 if frame >= start else 0.0
+    return min(max((frame - start) / (end - start), 0.0), 1.0)
+
+
+def deviations(build: Path, mesh, frame: int, scene) -> dict:
+    """Per disk floret of ``mesh`` (canopy frame ``frame``): how far it is reshaped by its
+    neighbours. Its vertices are mapped back into its placement's frame (the inverse of its
+    local-to-scene map: position, orientation, scale) and compared with its template (the OBJ
+    frames under disk_obj/, interpolated at its developmental time, as fccompose does): the largest
+    vertex displacement over the template's bounding-box diagonal at that time. 0 for a floret
+    that is exactly its template (its base rows are fixed, so any displacement is a bend)."""
+    tpl = [read_obj(f).vertices for f in list_obj_sequence(Path(build) / "disk_obj")]
+    out = {}
+    for pid, faces in floret_faces(mesh).items():
+        p = scene.placements[pid]
+        if p.type != "disk":
+            continue
+        v = mesh.vertices[np.unique(mesh.faces[faces])]
+        m = placement_matrix(p.pos, p.scale, p.up, p.right)
+        local = (v - m[:3, 3]) @ np.linalg.inv(m[:3, :3]).T
+        u = _ramp(frame, p.frame_start, p.frame_end) * (len(tpl) - 1)
+        a = int(np.floor(u))
+        b = min(a + 1, len(tpl) - 1)
+        t = tpl[a] * (1.0 - (u - a)) + tpl[b] * (u - a)
+        if len(t) != len(local):
+            continue
+        out[pid] = float(np.linalg.norm(local - t, axis=1).max() / np.linalg.norm(t.max(axis=0) - t.min(axis=0)))
+    return out
+
+
+def ray_droop(mesh, scene) -> list:
+    """Per ray floret of ``mesh``: the angle (degrees) below the horizontal of the line from its
+    base to its farthest vertex (the ligule's tip); negative above it."""
+    out = []
+    for pid, faces in floret_faces(mesh).items():
+        p = scene.placements[pid]
+        if p.type != "ray":
+            continue
+        v = mesh.vertices[np.unique(mesh.faces[faces])] - p.pos
+        d = v[np.argmax(np.linalg.norm(v, axis=1))]
+        out.append(float(np.degrees(np.arcsin(-d[1] / np.linalg.norm(d)))))
     return out
 
 
@@ -97,6 +151,27 @@ def main(build: Path) -> int:
               f"with the distance from its centre {rho:.2f}")
         if not rho > 0.5:
             failures.append(f"no phase effect in head {g} at frame {k}: rank correlation {rho:.2f}")
+
+    # the look: crowded heads, disk florets reshaped by their neighbours, rays spreading outward
+    last = read_obj(head.canopy[-1])
+    cover = view_coverage(last, axis=1)
+    print(f"group from above (last frame): covers {cover:.3f} of its silhouette's convex hull "
+          f"(at least {CHECK['coverage_min']:g})")
+    if not cover >= CHECK["coverage_min"]:
+        failures.append(f"the group covers {cover:.3f} of its hull from above, under {CHECK['coverage_min']:g}")
+    dev = np.array(list(deviations(build, last, len(head.canopy) - 1, scene).values()))
+    share = float((dev > CHECK["reshaped_by"]).mean()) if len(dev) else 0.0
+    print(f"disk florets reshaped by their neighbours (last frame): {share:.3f} of {len(dev)} deviate more than "
+          f"{CHECK['reshaped_by']:g} of their size from their template (at least {CHECK['reshaped_min']:g}); "
+          f"median {np.median(dev):.3f}, largest {dev.max():.3f}")
+    if not share >= CHECK["reshaped_min"]:
+        failures.append(f"only {share:.3f} of the disk florets reshaped, under {CHECK['reshaped_min']:g}")
+    droop = ray_droop(last, scene)
+    mean = float(np.mean(droop)) if droop else float("nan")
+    print(f"rays (last frame): {mean:.1f} degrees below the horizontal on average ({min(droop):.1f}-{max(droop):.1f}; "
+          f"at most {CHECK['ray_droop_max']:g})")
+    if not mean <= CHECK["ray_droop_max"]:
+        failures.append(f"the rays hang {mean:.1f} degrees below the horizontal, over {CHECK['ray_droop_max']:g}")
 
     print("OK" if not failures else "FAILED: " + "; ".join(failures))
     return 0 if not failures else 1
