@@ -59,9 +59,9 @@ HERE = Path(__file__).resolve().parent
 # about as far apart as the columns
 RES = {
     "draft": {"corolla": ("0.34", "../lobe_eta.func"), "anthers": ("0.5", "3"), "pistil": ("1.0", "3"),
-              "tube": ("0.1", "7"), "limb": ("0.34", "9"), "bract": ("0.34", "../bract_eta_draft.func")},
+              "tube": ("0.1", "9"), "limb": ("0.34", "9"), "bract": ("0.34", "../bract_eta_draft.func")},
     "final": {"corolla": ("0.34", "../lobe_eta.func"), "anthers": ("0.34", "3"), "pistil": ("0.5", "3"),
-              "tube": ("0.07", "9"), "limb": ("0.25", "13"), "bract": ("0.2", "../bract_eta_final.func")},
+              "tube": ("0.07", "9"), "limb": ("0.25", "9"), "bract": ("0.2", "../bract_eta_final.func")},
 }
 
 # ---- disk floret (the sunflower's) ----------------------------------------------------------------
@@ -70,20 +70,20 @@ DISK = {
     # corolla: radius, height and half angle (degrees; 36 = the symmetry plane) per row;
     # anthers / pistil: (radius, bottom, top) of the cylinder
     "bud": dict(time=0.0,
-                r=[0.16, 0.24, 0.31, 0.33, 0.30, 0.20, 0.05],
+                r=[0.14, 0.26, 0.35, 0.39, 0.37, 0.26, 0.06],
                 y=[0.00, 0.14, 0.30, 0.46, 0.60, 0.72, 0.78],
                 half=[36, 36, 36, 36, 36, 34, 12],
-                anthers=(0.10, 0.0, 0.40), pistil=(0.035, 0.0, 0.34)),
+                anthers=(0.115, 0.0, 0.40), pistil=(0.05, 0.0, 0.34)),
     "open": dict(time=0.55,
-                 r=[0.15, 0.20, 0.28, 0.36, 0.42, 0.46, 0.56],
+                 r=[0.13, 0.22, 0.30, 0.38, 0.45, 0.51, 0.63],
                  y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.86, 0.90],
-                 half=[36, 36, 36, 36, 36, 34, 8],
-                 anthers=(0.10, 0.0, 1.12), pistil=(0.035, 0.0, 0.96)),
+                 half=[36, 36, 36, 36, 36, 34, 12],
+                 anthers=(0.115, 0.0, 1.08), pistil=(0.05, 0.0, 0.96)),
     "late": dict(time=1.0,
-                 r=[0.15, 0.20, 0.28, 0.36, 0.42, 0.47, 0.58],
+                 r=[0.13, 0.22, 0.30, 0.38, 0.45, 0.52, 0.65],
                  y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.85, 0.86],
-                 half=[36, 36, 36, 36, 36, 34, 8],
-                 anthers=(0.10, 0.0, 1.16), pistil=(0.035, 0.0, 1.50)),
+                 half=[36, 36, 36, 36, 36, 34, 12],
+                 anthers=(0.115, 0.0, 1.12), pistil=(0.05, 0.0, 1.32)),
 }
 
 # ---- ray floret: a tube of 300 degrees round a centre line, and its flared, three-lobed mouth -------
@@ -91,15 +91,28 @@ ARC_HALF = 150.0  # degrees from the bottom midline to the edge of the slit, eac
 RAY_NU = 7  # half cross-section columns, ARC_HALF / 6 = 25 degrees apart
 TUBE_NV, LIMB_NV = 8, 4
 THETA = np.radians(np.linspace(0.0, ARC_HALF, RAY_NU))
-# the gap between the tube's end and the limb's base, along the centre line (floret units: about
-# 2 % of the open floret's length; a ray floret of the head is 0.09-0.24 scene units per floret
-# unit, so 0.005-0.014 scene units: 10-28 x fccompose's spacing)
-GAP = 0.06
+# the limb's base ring is tucked INSET inside the tube's wall, TUCK back from the tube's rim along the
+# centre line (floret units): the yellow mouth continues the orange tube from inside it, so no
+# background shows between them from any side, and the two never touch (fccompose's exact test
+# counts touching as intersecting); a ray floret of the head is 0.1-0.25 scene units per floret
+# unit, so INSET is 0.003-0.008 scene units: 6-15 x fccompose's spacing
+INSET = 0.03
+# the tube's base ring is this many times wider sideways (+-Z) than along the head's radius
+FOOT = 1.4
+TUCK = 0.08
 # the mouth's three shallow lobes: how far each column of the limb's last row falls short of the
 # lobes' tips, as a fraction of the limb's length: the middle lobe at the bottom (0 degrees), a
 # notch (50), a lateral lobe (100) and the edge of the slit (150)
 LOBE_RECESS = np.array([0.0, 0.08, 0.30, 0.14, 0.0, 0.12, 0.36])
-RAY_POSES = {"bud": 0.0, "early": 0.25, "mid": 0.5, "late": 0.75, "open": 1.0}
+# the development stage s of each key pose; its key time is sqrt(s) (ray_time): the ray grows
+# slowly while the head is young and opens fast as the outer disk florets reach anthesis
+RAY_POSES = {"bud": 0.0, "s125": 0.125, "early": 0.25, "s375": 0.375, "mid": 0.5, "s625": 0.625, "late": 0.75,
+             "s875": 0.875, "open": 1.0}
+
+
+def ray_time(s: float) -> float:
+    """The key time (0-1 of the ray's development window) of development stage s."""
+    return round(float(np.sqrt(s)), 4)
 
 
 def _lerp(a, b, s):
@@ -115,19 +128,19 @@ def ray_pose(s: float) -> dict:
     grow = s  # lengths grow linearly with the stage
     bend = 64.0 * min(1.0, s / 0.9) ** 1.2  # the tube lies outward, rising 26 degrees, when open
     return dict(length=_lerp(0.45, 1.90, grow), bend=bend,
-                r_base=_lerp(0.09, 0.14, s), r_end=_lerp(0.09, 0.21, s),
-                limb=_lerp(0.16, 0.60, grow), r_mouth=_lerp(0.085, 0.50, s ** 1.3),
+                r_base=_lerp(0.10, 0.15, s), r_end=_lerp(0.12, 0.36, s),
+                limb=_lerp(0.16, 0.60, grow), r_mouth=_lerp(0.13, 0.56, s ** 1.3),
                 lobe=_lerp(0.25, 1.0, s))
 
 
 def centre_line(length: float, bend: float, nv: int, extra=()):
     """Rows of the tube's centre line, evenly spaced in arc length: (nv, 2) points (x, y) and their
     headings (radians from +Y toward +X). The tube rises straight from the base, bends outward by
-    ``bend`` degrees between 2 % and 60 % of its length, and runs straight on. ``extra`` arc
+    ``bend`` degrees between 2 % and 45 % of its length, and runs straight on. ``extra`` arc
     lengths beyond ``length`` (the limb's rows) are returned as a second pair."""
     sig_all = np.concatenate([np.linspace(0.0, length, nv), np.asarray(extra, float)])
     fine = np.linspace(0.0, sig_all.max(), 4001)
-    a, b = 0.02 * length, 0.60 * length
+    a, b = 0.02 * length, 0.45 * length
     w = np.clip((fine - a) / (b - a), 0.0, 1.0)
     psi = np.radians(bend) * w * w * (3.0 - 2.0 * w)
     dx = np.concatenate([[0.0], np.cumsum(0.5 * (np.sin(psi[1:]) + np.sin(psi[:-1])) * np.diff(fine))])
@@ -137,10 +150,10 @@ def centre_line(length: float, bend: float, nv: int, extra=()):
     return pts[:nv], heading[:nv], pts[nv:], heading[nv:]
 
 
-def ring_rows(centre, heading, radius, back=None):
+def ring_rows(centre, heading, radius, back=None, zscale=None):
     """Half cross-sections: row j an arc of radius[j] round centre[j], perpendicular to the heading,
     column i at THETA[i] from the bottom midline toward +Z; ``back[j, i]`` moves a point back along
-    the centre line (the lobes)."""
+    the centre line (the lobes); ``zscale[j]`` widens row j sideways (+-Z: an elliptic foot)."""
     nv = len(centre)
     pts = np.zeros((nv, RAY_NU, 3))
     for j in range(nv):
@@ -150,20 +163,30 @@ def ring_rows(centre, heading, radius, back=None):
             xy = centre[j] + radius[j] * np.cos(th) * bottom
             if back is not None:
                 xy = xy - back[j, i] * t
-            pts[j, i] = (xy[0], xy[1], radius[j] * np.sin(th))
+            pts[j, i] = (xy[0], xy[1], radius[j] * np.sin(th) * (1.0 if zscale is None else zscale[j]))
     return pts
 
 
 def ray_nets(s: float):
     """(tube, limb) half control nets of the ray floret at stage s."""
     p = ray_pose(s)
-    f = np.linspace(0.0, 1.0, LIMB_NV)
-    limb_sig = p["length"] + GAP + p["limb"] * f
-    c, h, lc, lh = centre_line(p["length"], p["bend"], TUBE_NV, limb_sig)
-    # the tube widens a little toward its mouth (a trumpet)
-    rt = p["r_base"] + (p["r_end"] - p["r_base"]) * np.linspace(0.0, 1.0, TUBE_NV) ** 1.5
-    tube = ring_rows(c, h, rt)
-    rl = p["r_end"] + (p["r_mouth"] - p["r_end"]) * f ** 1.6
+    length = p["length"]
+
+    def tube_r(sig):  # the trumpet: the tube widens toward its mouth
+        return p["r_base"] + (p["r_end"] - p["r_base"]) * (np.asarray(sig) / length) ** 0.5
+
+    # the limb's rows: its base ring TUCK inside the tube's rim, INSET inside its wall; the next
+    # row just past the rim at the rim's radius (the control polygon, and so the limb's surface,
+    # clears the rim by about 2/3 INSET), then the flare to the lobed mouth
+    limb_sig = length + p["limb"] * np.array([0.0, 0.3, 0.67, 1.0])
+    limb_sig[0] = length - TUCK
+    c, h, lc, lh = centre_line(length, p["bend"], TUBE_NV, limb_sig)
+    # the foot: the tube's lowest rows widened sideways (FOOT x at the base ring), so the ring of
+    # rays hides the receptacle between them (the nearest ray is 0.47 floret units away)
+    foot = 1.0 + (FOOT - 1.0) * np.clip(1.0 - np.linspace(0.0, 1.0, TUBE_NV) / 0.4, 0.0, 1.0) ** 2
+    tube = ring_rows(c, h, tube_r(np.linspace(0.0, length, TUBE_NV)), zscale=foot)
+    rl = np.array([tube_r(length - TUCK) - INSET, p["r_end"],
+                   p["r_end"] + 0.45 * (p["r_mouth"] - p["r_end"]), p["r_mouth"]])
     back = np.zeros((LIMB_NV, RAY_NU))
     back[-1] = LOBE_RECESS * p["lobe"] * p["limb"]
     limb = ring_rows(lc, lh, rl, back)
@@ -179,11 +202,19 @@ BRACT = {
     # florets; lanceolate, narrower than the sunflower's ovate bracts
     "bud": dict(time=0.0,
                 mid=[(0.00, 0.00), (0.02, 0.26), (-0.02, 0.52), (-0.09, 0.76), (-0.19, 0.98), (-0.31, 1.16)],
-                half=[0.08, 0.16, 0.19, 0.16, 0.09, 0.02],
+                half=[0.17, 0.22, 0.22, 0.18, 0.10, 0.02],
                 cup=0.6),
+    # the bud pose held to 0.4 of the bract's window: the bracts enclose the young head and spread
+    # as it opens
+    "closed": dict(time=0.4,
+                   mid=[(0.00, 0.00), (0.02, 0.26), (-0.02, 0.52), (-0.09, 0.76), (-0.19, 0.98), (-0.31, 1.16)],
+                   half=[0.17, 0.22, 0.22, 0.18, 0.10, 0.02],
+                   cup=0.6),
+    # broad-based (ovate-lanceolate): the two series of bracts hide the receptacle's rim between
+    # the ray florets' feet (a bract's nearest neighbour is 0.48 floret units away)
     "open": dict(time=1.0,
                  mid=[(0.00, 0.00), (0.16, 0.16), (0.44, 0.26), (0.76, 0.24), (1.04, 0.14), (1.28, 0.00)],
-                 half=[0.09, 0.19, 0.22, 0.18, 0.10, 0.02],
+                 half=[0.20, 0.27, 0.27, 0.21, 0.12, 0.02],
                  cup=0.25),
 }
 
@@ -205,7 +236,7 @@ def write(out: Path, quality: str) -> None:
         (out / f"disk_{key}.floret").write_text(text)
     for key, s in RAY_POSES.items():
         tube, limb = ray_nets(s)
-        text = head.format(what="tubular ray floret", key=key, q=quality, name="ray", t=s)
+        text = head.format(what="tubular ray floret", key=key, q=quality, name="ray", t=ray_time(s))
         text += organ("tube", M_TUBE, "3 3", f"{RAY_NU} {TUBE_NV}", "1 0", 0, res["tube"], tube) + "\n"
         text += organ("limb", M_LIMB, "3 3", f"{RAY_NU} {LIMB_NV}", "1 0", 0, res["limb"], limb)
         (out / f"ray_{key}.floret").write_text(text)
