@@ -8,25 +8,31 @@ What is checked (Owens thesis ch. 9, figs. 9.3, 9.4; ch. 6, figs. 6.2, 6.3; fig.
 - the ray floret of 'Oranges and Lemons' is tubular: one bilateral organ of symmetry 1 per colour,
   ``tube`` (orange-red) and ``limb`` (the flared mouth, yellow), each row's cross-section an arc
   of more than 270 degrees with a slit on the upper side whose edges stay well apart; lying
-  outward (+X) and rising a little when open, short and erect in bud; the limb never touches the
-  tube in any template frame and only the tube's base ring is on the receptacle (the vertices
-  ``python -m inflo.tools.species.weights base`` fixes);
+  outward (+X) and rising a little when open, short and erect in bud; the tube widens toward its
+  mouth (a trumpet); the limb's base ring is tucked into the tube's mouth (inside its wall, behind
+  its rim, close to it: no gap shows) and never touches the tube in any template frame; only the
+  tube's base ring is on the receptacle (the vertices ``python -m inflo.tools.species.weights
+  base`` fixes);
 - the disk floret is five-fold with its corolla fused almost to the tips, the anther tube and then
   the pistil rising above it (the sunflower's design);
 - the head at both qualities, typed as the Makefile types it (its ALPHA and BRACTS): exactly 21
   ray florets (emergent from the cone model), on the margin just inside the involucral bracts;
   the same 21 for ALPHA - 10 and ALPHA + 10 (numerical canalization, fig. 6.3); ray florets
-  develop ahead of the disk florets;
+  develop ahead of the disk florets; rays and bracts open with the head (not before the outer disk
+  florets are half through their development), every ray open at the hero frame;
 - the phase effect by age: disk florets emerge centripetally, each over the same window;
 - the receptacle changes size and shape (fig. 9.4): it grows at least three times in diameter
   and flattens from a high dome to a lower one;
 - the final canopy's size is that of the thesis's model (table 4.1: about 25k triangles);
-- if the draft build exists (the golden test builds it): check_gaillardia.py's report says OK.
+- if the draft build exists (the golden test builds it): check_gaillardia.py's report says OK, and
+  its figures (the receptacle left in view from above, the limb's attachment to the tube, when the
+  rays and bracts open, the rays open at the hero frame) are within species.toml [check].
 """
 from __future__ import annotations
 
 import importlib.util
 import re
+import tomllib
 import subprocess
 import sys
 
@@ -42,8 +48,11 @@ from conftest import REPO, run_cli, species_setting
 
 GAI = REPO / "pipelines" / "gaillardia"
 BUILD = REPO / "build" / "gaillardia"
-KEYS = {"disk": ("bud", "open", "late"), "ray": ("bud", "early", "mid", "late", "open"), "bract": ("bud", "open")}
+KEYS = {"disk": ("bud", "open", "late"),
+        "ray": ("bud", "s125", "early", "s375", "mid", "s625", "late", "s875", "open"),
+        "bract": ("bud", "closed", "open")}
 RAYS = 21
+CHECK = tomllib.loads((GAI / "species.toml").read_text())["check"]
 
 
 def _make_keys():
@@ -72,7 +81,9 @@ def head(request, tmp_path_factory):
     r = run_cli("phyllotaxis", "-q", GAI / q / "head.toml", "-o", out)
     assert r.returncode == 0, r.stderr
     alpha, bracts = _make_var(q, "ALPHA"), _make_var(q, "BRACTS")
-    _dimorph(out, alpha, bracts, "--ray-lead", _make_var(q, "RAY_LEAD"))
+    _dimorph(out, alpha, bracts, "--ray-lead", _make_var(q, "RAY_LEAD"),
+             "--ray-development-frames", _make_var(q, "RAY_DEVELOPMENT_FRAMES"),
+             "--bract-development-frames", _make_var(q, "BRACT_DEVELOPMENT_FRAMES"))
     return q, out, float(alpha), int(bracts)
 
 
@@ -81,7 +92,8 @@ def ray_frames(tmp_path_factory):
     """The draft ray floret's template OBJs (floret-animate + polygonize, as the Makefile does)."""
     tmp = tmp_path_factory.mktemp("ray")
     keys = [GAI / "draft" / f"ray_{p}.floret" for p in KEYS["ray"]]
-    assert run_cli("floret-animate", "-q", *keys, "--frames", 30, "-o", tmp / "frames").returncode == 0
+    assert run_cli("floret-animate", "-q", *keys, "--frames", int(_make_var("draft", "TEMPLATE_FRAMES")),
+                   "-o", tmp / "frames").returncode == 0
     r = run_cli("polygonize", "-q", tmp / "frames", "-o", tmp / "obj")
     assert r.returncode == 0, r.stderr
     paths = list_obj_sequence(tmp / "obj")
@@ -174,12 +186,38 @@ def test_ray_floret_is_a_tube_open_in_a_slit_on_its_upper_side():
     lo = open_.organ("limb").control_points
     r_end = np.linalg.norm(to[-1, 0] - to[-1, -1]) / 2
     r_mouth = np.linalg.norm(lo[-1, 0] - lo[-1, -1]) / 2
-    assert r_mouth > 1.8 * r_end
+    assert r_mouth > 1.4 * r_end
+    # a trumpet: the tube widens toward its mouth (its depth from the bottom midline to the slit;
+    # the base ring is also widened sideways, a foot)
+    rows = full_petal(open_.organ("tube"))
+    depth = [np.linalg.norm(r[len(r) // 2] - r[[0, -1]].mean(axis=0)) for r in (rows[0], rows[-1])]
+    assert depth[1] > 1.8 * depth[0], depth
     # three shallow lobes at the mouth: its last row recessed between the middle lobe (column 0)
     # and the lateral one
     rec = mk.LOBE_RECESS
     assert rec[0] == 0 and rec[np.argmin(rec[1:]) + 1] == 0 and rec[1:].max() < 0.5
     assert (bud.organ("tube").material, bud.organ("limb").material) == (mk.M_TUBE, mk.M_LIMB)
+
+
+def test_limb_tucked_into_the_tube_key_poses():
+    """The limb's base ring lies inside the tube's mouth: in every key pose it is smaller than the
+    tube's top ring, behind it along the centre line, and the largest distance between the two
+    rings (control points, column by column) is below 0.12 floret units (TUCK 0.08 along the
+    centre line, INSET 0.03 and the trumpet's widening across): no background between them."""
+    mk = _make_keys()
+    assert 0 < mk.INSET < 0.05 and 0 < mk.TUCK < 0.1
+    for q in ("draft", "final"):
+        for p in KEYS["ray"]:
+            ray = read_floret(GAI / q / f"ray_{p}.floret")
+            top = full_petal(ray.organ("tube"))[-1]
+            base = full_petal(ray.organ("limb"))[0]
+            assert np.linalg.norm(base - top, axis=1).max() < 0.12, (q, p)
+            r_top = np.linalg.norm(_circle(top)[1], axis=1).mean()
+            r_base = np.linalg.norm(_circle(base)[1], axis=1).mean()
+            assert r_base < r_top - 0.5 * mk.INSET, (q, p, r_base, r_top)
+            # behind the rim: the limb's base ring is on the tube's side of its top ring's plane
+            axis = _arc_centre(top) - _arc_centre(full_petal(ray.organ("tube"))[-2])
+            assert np.dot(_arc_centre(base) - _arc_centre(top), axis) < 0, (q, p)
 
 
 def test_limb_never_touches_the_tube_and_only_the_tube_base_is_fixed(ray_frames):
@@ -188,12 +226,16 @@ def test_limb_never_touches_the_tube_and_only_the_tube_base_is_fixed(ray_frames)
     first = meshes[0]
     groups = {n: np.unique(first.faces[first.face_group == g]) for g, n in enumerate(first.groups)}
     tube, limb = groups["tube_0"], groups["limb_0"]
+    ring = limb[:int(mk.RES["draft"]["limb"][1])]  # the polygonized limb's first row
     from inflo.tools.species import weights
     for k, mesh in enumerate(meshes):
         x = mesh.vertices
         assert len(intersecting_pairs(x, mesh.faces)) == 0, f"frame {k}: the floret intersects itself"
-        gap = np.min(np.linalg.norm(x[limb][:, None] - x[tube][None], axis=2))
-        assert 0.5 * mk.GAP < gap < 1.5 * mk.GAP, (k, gap)
+        d = np.min(np.linalg.norm(x[limb][:, None] - x[tube][None], axis=2), axis=1)
+        # clear of the tube, yet its base ring close to it (the check's limb_gap)
+        assert d.min() > CHECK["limb_gap"][0], (k, d.min())
+        base = np.min(np.linalg.norm(x[ring][:, None] - x[tube][None], axis=2), axis=1)
+        assert base.max() < 0.75 * CHECK["limb_gap"][1], (k, base.max())
         y = x[:, 1]
         base = np.nonzero(y <= y.min() + 1e-9)[0]
         assert set(base) <= set(tube) and len(base) >= 5
@@ -252,6 +294,22 @@ def test_phase_effect_by_age_and_rays_ahead(head):
             assert b.frame_start == max(0, int(np.floor(a.frame_start - lead + 0.5)))
 
 
+def test_rays_and_bracts_open_with_the_head(head):
+    """Rays and bracts open (reach the end of their windows) only once the outer disk florets are
+    half through theirs (anthesis at 0.55), and every ray is open at the hero frame."""
+    q, out, _, _ = head
+    typed = read_scn(out / "typed.scn")
+    disk = [p for p in typed.placements if p.type == "disk"]
+    half = min(p.frame_start + 0.5 * (p.frame_end - p.frame_start) for p in disk)
+    hero = int(_make_var(q, "HERO"))
+    for kind, name in (("ray", "RAY_DEVELOPMENT_FRAMES"), ("bract", "BRACT_DEVELOPMENT_FRAMES")):
+        mine = [p for p in typed.placements if p.type == kind]
+        # frameEnd = frameStart + N, before a start before frame 0 is clamped to it
+        assert max(p.frame_end - p.frame_start for p in mine) == int(_make_var(q, name))
+        assert min(p.frame_end for p in mine) >= half, (q, kind, half)
+    assert max(p.frame_end for p in typed.placements if p.type == "ray") <= hero, q
+
+
 def test_receptacle_grows_several_times_and_flattens(head):
     """Fig. 9.4: 'the dramatic, yet stable change in size due to the dynamic phyllotaxis', the
     receptacle changing size and shape: its top's rim radius and height above the rim."""
@@ -296,3 +354,15 @@ def test_draft_build_checks_pass_if_built():
     text = check.read_text()
     assert text.strip().endswith("OK"), text
     assert f"ray florets: {RAYS} (expected {RAYS})" in text
+    # the figures, against species.toml [check]: the receptacle left in view from above
+    seen = float(re.search(r"receptacle in view from above at the last frame: ([\d.]+) %", text).group(1))
+    assert seen <= 100 * CHECK["receptacle_visible"], seen
+    # the limb: clear of its tube, its base ring in the tube's mouth
+    m = re.search(r"limb to tube .*: closest ([\d.]+) .*, base ring at most ([\d.]+) from", text)
+    assert float(m.group(1)) >= CHECK["limb_gap"][0] and float(m.group(2)) <= CHECK["limb_gap"][1], m.group(0)
+    # rays and bracts open with the head; every ray open at the hero frame
+    for kind in ("ray", "bract"):
+        m = re.search(rf"first {kind} open \(development >= [\d.]+\) at frame \d+: (\d+) % of the disk", text)
+        assert int(m.group(1)) >= 100 * CHECK["open_after"], m.group(0)
+    assert re.search(rf"hero frame \d+: {RAYS} of {RAYS} ray florets open", text)
+    assert "0 intersecting pairs, 0 with the receptacle" in text
