@@ -18,22 +18,28 @@ points away from the head centre along the receptacle's meridian.
   either is an arc of 2 x ARC_HALF = 300 degrees round the tube's centre line: the half petal's
   columns go from the midline at the bottom of the tube (column 0) round the +Z side to the edge
   of the slit, and the bilateral mirror gives the -Z half. The tube's base row is a ring on the
-  receptacle (y = 0, the only vertices there: tools/species/weights.py fixes the lowest ones);
-  the limb starts GAP beyond the tube's end along its centre line, so the two organs never touch
-  (fccompose's exact test counts touching as intersecting) and the limb is not fixed: it moves
-  with the tube's animation. Five key poses (``bud``, ``early``, ``mid``, ``late``, ``open``) of
-  one development ``ray_pose(s)``: short and erect in bud, the tube lengthening and bending
-  outward until it lies outward (+X), rising a little, the mouth flaring. floret-animate blends a
-  limb's base points linearly but the tube's end along its intrinsic (arc-length keeping) path;
-  five poses keep the two within a small fraction of the gap between them (the tests check it).
+  receptacle (y = 0, the only vertices there: tools/species/weights.py fixes the lowest ones),
+  widened sideways (FOOT); the tube widens toward its mouth (a trumpet). The limb's base ring is
+  tucked into the tube's mouth, INSET inside its wall and TUCK behind its rim, and flares beyond
+  it: no gap shows between the colours from any side, yet the two organs never touch (fccompose's
+  exact test counts touching as intersecting); the limb is not fixed: it moves with the tube's
+  animation. Nine key poses (``bud``, ``s125``, ``early``, ``s375``, ``mid``, ``s625``,
+  ``late``, ``s875``, ``open``) of one development ``ray_pose(s)`` at key times sqrt(s)
+  (ray_time: slow while the head is young): short and erect in bud, the tube lengthening and
+  bending outward until it lies outward (+X), rising a little, the mouth flaring. floret-animate
+  blends a limb's base points linearly but the tube's end along its intrinsic (arc-length
+  keeping) path; nine poses keep the limb clear of the tube between them (five did not; the
+  tests check every template frame).
 - **Disk floret** (the sunflower's design, pipelines/sunflower/make_keys.py): organ ``corolla``
   (five-fold, bilateral half petal 3 columns x 7 rows, fused to the last row), ``anthers`` (the
-  anther tube, a five-fold closed cylinder) and ``pistil``; ``bud`` (a closed barrel), ``open``
+  anther tube, a five-fold closed cylinder) and ``pistil``, plumper than the sunflower's so the
+  corollas close over the receptacle; ``bud`` (a closed barrel), ``open``
   (a tube with five short spreading lobes, the anthers risen above them), ``late`` (the pistil
   risen above the anthers).
 - **Involucral bract** (phyllary; ch. 9: "specialized leaves that surround the head and protect
-  it in its early development"; the sunflower's design, narrower): organ ``bract``, a lanceolate
-  blade with an acuminate tip; ``bud`` erect and incurved over the young head; ``open`` spreading
+  it in its early development"; the sunflower's design, narrower): organ ``bract``, a broad-based
+  lanceolate blade with an acuminate tip; ``bud`` erect and incurved over the young head, held
+  (``closed``) to 0.4 of the bract's window; ``open`` spreading
   outward over the rim (on the domed receptacle that points it down), under the ray florets.
 """
 from __future__ import annotations
