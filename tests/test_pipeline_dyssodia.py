@@ -2,12 +2,18 @@
 over the whole inflorescence, and the draft build's check.
 
 - compose_heads.py: a central head and five on a ring at 72-degree steps, each a rigid copy of
-  the head (distances between its florets kept), leaning outward, with its receptacle under it;
-  groups 0 (the inflorescence) and 1-6 (the heads);
+  the head (distances between its florets kept), leaning outward, DROP below the central one,
+  with its receptacle under it (and as an obstacle placement); groups 0 (the inflorescence) and
+  1-6 (the heads);
+- spread_rays.py: the rays turned to spread outward at their droop, ligules scaled, the
+  obstacles appended after the florets;
 - at both qualities (phyllotaxis + compose_heads.py + dimorph as the Makefile runs them): the ray
   florets on the outer margin of the group (none on the central head, every one on the outer side
   of its head), the windows of each head centripetal (its rim first);
-- if the draft build exists (the golden test builds it): check_dyssodia.py's report says OK.
+- if the draft build exists (the golden test builds it): check_dyssodia.py's report says OK, and
+  its figures of the look (issue 44) meet species.toml [check]: the group crowds (top-view
+  coverage), most disk florets are reshaped by their neighbours, the rays spread outward, and
+  no ray stands open before its head's rim florets have begun.
 """
 from __future__ import annotations
 
@@ -20,7 +26,7 @@ import pytest
 from inflo.formats.obj import read_obj
 from inflo.formats.scn import read_scn
 
-from conftest import REPO, run_cli, species_setting
+from conftest import REPO, run_cli, species_module, species_setting
 
 DYS = REPO / "pipelines" / "dyssodia"
 BUILD = REPO / "build" / "dyssodia"
@@ -37,10 +43,11 @@ def group(request, tmp_path_factory):
     out = tmp_path_factory.mktemp(f"dyssodia_{q}")
     r = run_cli("phyllotaxis", "-q", DYS / q / "head.toml", "-o", out / "head")
     assert r.returncode == 0, r.stderr
-    ring, tilt = _make_var(q, "RING"), _make_var(q, "TILT")
+    ring, tilt, drop = _make_var(q, "RING"), _make_var(q, "TILT"), _make_var(q, "DROP")
     r = subprocess.run([sys.executable, str(DYS / "compose_heads.py"), str(out / "head" / "scene.scn"),
-                        str(out / "head" / "receptacle.obj"), ring, tilt, str(out / "group.scn"),
-                        str(out / "receptacles.obj")], capture_output=True, text=True, timeout=120)
+                        str(out / "head" / "receptacle.obj"), ring, tilt, drop, str(out / "group.scn"),
+                        str(out / "receptacles.obj"), str(out / "obstacles.scn")],
+                       capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     r = run_cli("dimorph", "-q", out / "group.scn", "--alpha", _make_var(q, "ALPHA"), "--centre", "top",
                 "--ray-id", "1", "--disk-id", "0", "-o", out / "typed.scn")
@@ -77,6 +84,33 @@ def test_six_rigid_copies_of_the_head_with_their_receptacles(group):
         assert np.degrees(np.arccos(up[1] / np.linalg.norm(up))) == pytest.approx(tilt, abs=8)
     rec, recs = read_obj(out / "head" / "receptacle.obj"), read_obj(out / "receptacles.obj")
     assert len(recs.faces) == 6 * len(rec.faces) and len(recs.vertices) == 6 * len(rec.vertices)
+    # the outer heads stand DROP below the central one; the receptacles are obstacles placed as the heads
+    np.testing.assert_allclose(centres[1:, 1], -float(_make_var(q, "DROP")), atol=1e-5)
+    obs = read_scn(out / "obstacles.scn")
+    assert [p.type for p in obs.placements] == ["obstacle"] * 6 and {p.kind for p in obs.placements} == {"o"}
+    np.testing.assert_allclose(obs.arrays()["pos"], centres, atol=1e-5)
+
+
+def test_rays_spread_outward_and_obstacles_follow_the_florets(group, tmp_path):
+    q, out, *_ = group
+    droop, length, width = (float(_make_var(q, k)) for k in ("RAY_DROOP", "RAY_LENGTH", "RAY_WIDTH"))
+    r = subprocess.run([sys.executable, str(DYS / "spread_rays.py"), str(out / "typed.scn"), str(droop), str(length),
+                        str(width), _make_var(q, "RAY_LIFT"), str(out / "obstacles.scn"), str(tmp_path / "spread.scn")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    before, after = read_scn(out / "typed.scn"), read_scn(tmp_path / "spread.scn")
+    n = len(before)
+    assert len(after) == n + 6 and all(p.type == "obstacle" for p in after.placements[n:])
+    centre = after.groups[0].centre
+    for p, o in zip(before.placements, after.placements[:n]):
+        assert p.type == o.type and p.group == o.group
+        if p.type != "ray":
+            np.testing.assert_allclose(o.pos, p.pos)
+            continue
+        up = o.up / np.linalg.norm(o.up)
+        assert np.degrees(np.arccos(up[1])) == pytest.approx(droop, abs=0.1)  # the axis leans DROOP
+        assert np.dot(up[[0, 2]], (o.pos - centre)[[0, 2]]) > 0  # outward
+        np.testing.assert_allclose(o.scale, p.scale * [length, 1.0, width], rtol=1e-5)
 
 
 def test_rays_on_the_outer_margin_of_the_group_and_heads_develop_from_their_rims(group):
@@ -105,3 +139,45 @@ def test_draft_build_check_says_ok():
         pytest.skip("no draft dyssodia build (make dyssodia, or the golden test, makes one)")
     text = report.read_text()
     assert text.rstrip().endswith("OK"), text[-2000:]
+
+
+@pytest.fixture(scope="module")
+def draft_last():
+    """The draft build's typed scene and last canopy frame (skips without a draft build)."""
+    if not (BUILD / "check.txt").is_file() or (BUILD / "quality.txt").read_text().strip() != "draft":
+        pytest.skip("no draft dyssodia build (make dyssodia, or the golden test, makes one)")
+    from inflo.formats.obj import list_obj_sequence
+
+    frames = list_obj_sequence(BUILD / "canopy")
+    return read_scn(BUILD / "head" / "typed.scn"), read_obj(frames[-1]), len(frames) - 1
+
+
+def test_draft_build_looks_crowded_reshaped_and_spreading(draft_last):
+    from inflo.formats.species import read_species
+    from inflo.tools.species.checks import view_coverage
+
+    check = read_species(DYS / "species.toml").check
+    chk = species_module("dyssodia", "check_dyssodia")
+    scene, last, k = draft_last
+    # the heads press together: the group from above covers most of its hull (0.51 before issue 44)
+    assert view_coverage(last, axis=1) >= check["coverage_min"] >= 0.8
+    # the disk florets reshaped by their neighbours (fig. 9.8; 0.2 before issue 44)
+    dev = np.array(list(chk.deviations(BUILD, last, k, scene).values()))
+    assert len(dev) == sum(p.type == "disk" for p in scene.placements)
+    assert (dev > check["reshaped_by"]).mean() >= check["reshaped_min"]
+    # the rays spread outward, none hanging (51 degrees below the horizontal before issue 44)
+    droop = chk.ray_droop(last, scene)
+    assert len(droop) == sum(p.type == "ray" for p in scene.placements)
+    assert np.mean(droop) <= check["ray_droop_max"] and max(droop) < 45
+
+
+def test_draft_rays_open_with_their_heads(draft_last):
+    scene, *_ = draft_last
+    for g in range(2, 7):
+        ps = [p for p in scene.placements if p.group == g]
+        first = min(p.frame_start for p in ps if p.type == "disk")
+        for p in ps:
+            if p.type == "ray":
+                # not before the head's first disk florets, and opening over most of its development
+                assert p.frame_start >= first
+                assert p.frame_end - p.frame_start == int(_make_var("draft", "RAY_DEVELOPMENT_FRAMES"))
