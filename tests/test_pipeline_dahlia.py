@@ -10,7 +10,11 @@ sizes along the ball, the collisions-off run, and the draft build's check.
   spherical cap well beyond the equator (a ball), bracts the lowest, every other floret a ray
   floret, developing from the base to the top;
 - size_along.py: the later florets larger by 1 + gain f^power, the bracts untouched;
-- if the draft build exists (the golden test builds it): check_dahlia.py's report says OK.
+- the ray floret's rounded, blunt tip (its rows' arcs drawn back to TIP_END, no point);
+- if the draft build exists (the golden test builds it): check_dahlia.py's report says OK, and
+  its figures of issue 44 (coverage from above, the receptacle in view, the florets' largest
+  angle between adjacent faces) meet species.toml [check]; the rays and bracts develop over the
+  windows the Makefile gives them (dimorph), the bracts over the whole run.
 """
 from __future__ import annotations
 
@@ -23,6 +27,7 @@ import numpy as np
 import pytest
 
 from inflo.formats.floret import check_compatible, read_floret
+from inflo.formats.species import read_species
 from inflo.formats.scn import read_scn
 
 from conftest import REPO, run_cli, species_setting
@@ -92,7 +97,7 @@ def test_ray_floret_is_a_rolled_incurved_tube_growing_from_a_fixed_base():
         assert 90.0 < p["arc"] < 180.0  # rolled past a half tube, a slit left open
         net = mk.ray_net(s)
         c, h = mk.centre_line(p["length"], p["lean"], p["incurve"], mk.RAY_NV)
-        # every row but the rim's is an arc round the centre line's point (the rim is cut obliquely)
+        # every row is an arc round the centre line's point (the tip's arcs drawn back: tip_arc)
         for j in range(mk.RAY_NV - 2):
             d = np.linalg.norm(net[j, :, :2] - c[j], axis=1) ** 2 + net[j, :, 2] ** 2
             np.testing.assert_allclose(np.sqrt(d), d[0] ** 0.5, rtol=1e-9)
@@ -149,3 +154,50 @@ def test_draft_build_check_says_ok():
         pytest.skip("no draft dahlia build (make dahlia, or the golden test, makes one)")
     text = report.read_text()
     assert text.rstrip().endswith("OK"), text[-2000:]
+
+
+def test_ray_floret_tip_is_rounded_and_blunt():
+    mk = _make_keys()
+    for s in (0.0, 0.5, 1.0):
+        p = mk.ray_pose(s)
+        radius = p["r_mouth"]
+        sig = np.linspace(0.0, p["length"], 200)
+        half = mk.tip_arc(sig, p["length"], radius, p["arc"], p["tip_end"])
+        # the roll's arc below the tip, 90 degrees where the rounded lip begins, drawn back to a
+        # blunt end (never a point), never widening toward the tip
+        assert half[0] == pytest.approx(p["arc"])
+        assert np.all(np.diff(half) <= 1e-9)
+        assert half[-1] == pytest.approx(mk.TIP_END) and mk.TIP_END > 20.0
+        assert mk.tip_arc(np.array([p["length"] - mk.TIP_DEPTH * radius]), p["length"], radius, p["arc"])[0] \
+            == pytest.approx(90.0)
+
+
+def _draft_report() -> str:
+    report = BUILD / "check.txt"
+    if not report.is_file() or (BUILD / "quality.txt").read_text().strip() != "draft":
+        pytest.skip("no draft dahlia build (make dahlia, or the golden test, makes one)")
+    return report.read_text()
+
+
+def test_draft_build_closed_from_above_and_smooth():
+    """Issue 44's figures in the draft build's check report, against species.toml [check]."""
+    text = _draft_report()
+    check = read_species(DAH / "species.toml").check
+    m = re.search(r"^from above: (\S+) of the silhouette's hull covered, (\S+) of the receptacle in view; "
+                  r"florets' largest angle between adjacent faces, median (\S+) degrees", text, re.M)
+    assert m, text[-2000:]
+    cover, apex, smooth = (float(g) for g in m.groups())
+    assert cover >= check["top_cover"]
+    assert apex <= check["apex"]
+    assert smooth <= check["smooth"] < 100.0  # the faceted cones of before: about 130
+
+
+def test_draft_build_windows_rays_and_bracts_open_with_their_age():
+    _draft_report()
+    scene = read_scn(BUILD / "head" / "typed.scn")
+    rays = int(_make_var("draft", "RAY_DEVELOPMENT_FRAMES"))
+    bracts = int(_make_var("draft", "BRACT_DEVELOPMENT_FRAMES"))
+    frames = int(re.search(r"^frames = (\d+)", (DAH / "draft" / "head.toml").read_text(), re.M).group(1))
+    assert bracts >= frames  # the bracts spread over the whole run, not round a naked receptacle
+    for p in scene.placements:
+        assert p.frame_end - p.frame_start == (rays if p.type == "ray" else bracts)

@@ -15,6 +15,11 @@ ball; ``packed/``, the tightly packed variant of fig. 9.1):
 and, of the species (thesis ch. 9, figs. 9.1, 9.2):
 
 - **almost only ray florets**: every placement but the involucral bracts a ray floret;
+- **closed from above**: the last frame seen from above (Y) covers at least TOP_COVER of its
+  silhouette's convex hull (inflo.tools.species.checks.view_coverage) and leaves at most APEX of
+  the receptacle's silhouette in view;
+- **smooth florets**: the median over the last frame's florets of each floret's largest angle
+  between two adjacent faces (degrees) at most SMOOTH (the old faceted cones: about 130);
 - **a ball**: the open head at least BALL (0.75) times as high (from the lowest bract's base to
   the top) as it is wide, not a flat head;
 - **opening from the base to the top** (the phase effect): at two thirds of the run, the ray
@@ -37,13 +42,36 @@ from scipy.stats import spearmanr
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.species import species_of
 from inflo.tools.collide import intersecting_pairs
-from inflo.tools.species.checks import check_head, floret_heights
+from inflo.tools.species.checks import check_head, floret_faces, floret_heights, view_coverage
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 CHECK = species_of(__file__).check
 BALL = CHECK["ball"]
 LAG = CHECK["lag"]
 PRESS = CHECK["press"]
+TOP_COVER = CHECK["top_cover"]
+APEX = CHECK["apex"]
+SMOOTH = CHECK["smooth"]
+
+
+def crease(mesh) -> float:
+    """The median over the mesh's florets of each floret's largest angle (degrees) between the
+    normals of two faces sharing an edge."""
+    v, f = mesh.vertices, mesh.faces
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    worst = []
+    for faces in floret_faces(mesh).values():
+        tri = f[faces]
+        edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+        owner = np.tile(faces, 3)
+        order = np.lexsort((edges[:, 1], edges[:, 0]))
+        e, o = edges[order], owner[order]
+        same = np.all(e[1:] == e[:-1], axis=1)  # an interior edge: two consecutive rows
+        if same.any():
+            cos = np.einsum("ij,ij->i", n[o[:-1][same]], n[o[1:][same]])
+            worst.append(float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).max()))
+    return float(np.median(worst)) if worst else 0.0
 
 
 def collisions(folder: Path) -> int:
@@ -72,6 +100,19 @@ def main(build: Path) -> int:
     print(f"the open ball: {width:.3f} wide, {height:.3f} high ({height / width:.2f})")
     if height < BALL * width:
         failures.append(f"not a ball: {height:.3f} high, {width:.3f} wide (expected >= {BALL} x)")
+
+    receptacle = read_obj(head.receptacle[-1])
+    cover = view_coverage(last, 1)
+    apex = 1.0 - view_coverage(last, 1, region=receptacle)
+    smooth = crease(last)
+    print(f"from above: {cover:.3f} of the silhouette's hull covered, {apex:.3f} of the receptacle in view; "
+          f"florets' largest angle between adjacent faces, median {smooth:.1f} degrees")
+    if cover < TOP_COVER:
+        failures.append(f"the ball is open from above: {cover:.3f} covered (expected >= {TOP_COVER})")
+    if apex > APEX:
+        failures.append(f"the receptacle shows from above: {apex:.3f} in view (expected <= {APEX})")
+    if smooth > SMOOTH:
+        failures.append(f"faceted florets: {smooth:.1f} degrees between adjacent faces (expected <= {SMOOTH})")
 
     k = (2 * len(head.canopy)) // 3
     heights = floret_heights(read_obj(head.canopy[k]), head.rba_frame(k), head.scene)

@@ -39,16 +39,21 @@ HERE = Path(__file__).resolve().parent
 # polygonization per quality: (lambda, eta) of each organ; the ligule keeps a constant eta round
 # its arc (it does not narrow to a point), the bract's eta falls to 1 vertex at its tip
 RES = {
-    "draft": {"ligule": ("0.1", "6"), "bract": ("0.34", "../bract_eta_draft.func")},
-    "final": {"ligule": ("0.09", "7"), "bract": ("0.2", "../bract_eta_final.func")},
+    "draft": {"ligule": ("../ray_lambda_draft.func", "9"), "bract": ("0.34", "../bract_eta_draft.func")},
+    "final": {"ligule": ("../ray_lambda_final.func", "11"), "bract": ("0.2", "../bract_eta_final.func")},
 }
 
-# ---- ray floret: a rolled, incurved ligule -----------------------------------------------------------
-RAY_NU, RAY_NV = 6, 8
+# ---- ray floret: a rolled, incurved ligule with a rounded tip ---------------------------------------
+RAY_NU, RAY_NV = 6, 10
 RAY_POSES = {"bud": 0.0, "early": 0.25, "mid": 0.5, "late": 0.75, "open": 1.0}
-# how far each column of the last row falls short of the outer midline's tip, as a fraction of the
-# cup's radius: the oblique, rounded rim of the cup (0 on the outer midline, most at the roll's edge)
-RIM_RECESS = np.array([0.0, 0.10, 0.35, 0.70, 1.05, 1.30])
+# the ligule's rounded tip: seen from its outer side the blade ends in half an ellipse, TIP_DEPTH
+# times the cup's radius high (its rows' arcs shrink from the roll's to 90 degrees over the radius
+# below it, then as arccos toward the tip), blunt: the tip row keeps TIP_END degrees of the roll.
+# So the rolled margins draw back into a rounded lip, no point on an oblique rim
+TIP_DEPTH, TIP_END = 0.7, 35.0
+# control rows bunch toward the tip (the rounded lip needs them): spacing 1 + ROW_BUNCH at the
+# base, 1 - ROW_BUNCH at the tip, times the mean
+ROW_BUNCH = 0.5
 
 
 def _lerp(a, b, s):
@@ -58,17 +63,21 @@ def _lerp(a, b, s):
 def ray_pose(s: float) -> dict:
     """The ray floret's development at stage s in [0, 1] (0 bud, 1 open): its length, lean and
     incurve (degrees), the tube's radius at the base and the cup's at the mouth, and the half
-    arc of the roll (degrees; 180 would close the tube)."""
-    return dict(length=_lerp(0.70, 2.20, s), lean=_lerp(0.0, 8.0, s), incurve=_lerp(4.0, 24.0, s),
-                r_base=_lerp(0.22, 0.30, s), r_mouth=_lerp(0.16, 0.80, s ** 1.2),
-                arc=_lerp(160.0, 140.0, s), rim=_lerp(0.3, 1.0, s))
+    arc of the roll (degrees; 180 would close the tube), the half arc left at the tip (tip_arc).
+    The open ligule leans out and curls back over its own mouth (incurve 55 degrees): seen from
+    outside the ball its rounded back, overlapping the next like a scale."""
+    return dict(length=_lerp(0.70, 2.00, s), lean=_lerp(0.0, 15.0, s), incurve=_lerp(10.0, 55.0, s),
+                r_base=_lerp(0.15, 0.32, s), r_mouth=_lerp(0.15, 0.86, s ** 1.2),
+                arc=_lerp(165.0, 150.0, s), tip_end=TIP_END)
 
 
 def centre_line(length: float, lean: float, incurve: float, nv: int):
-    """Rows of the ligule's centre line, evenly spaced in arc length: (nv, 2) points (x, y) and their
-    headings (radians from +Y toward +X). The heading rises to ``lean`` by 40 % of the length and
-    falls back by ``incurve`` over the last half."""
-    sig = np.linspace(0.0, length, nv)
+    """Rows of the ligule's centre line, spaced in arc length: (nv, 2) points (x, y) and their
+    headings (radians from +Y toward +X), closer together toward the tip (ROW_BUNCH). The
+    heading rises to ``lean`` by 40 % of the length and falls back by ``incurve`` over the last
+    half."""
+    x = np.linspace(0.0, 1.0, nv)
+    sig = length * (x + ROW_BUNCH * x * (1.0 - x))  # as _row_sig
     fine = np.linspace(0.0, length, 4001)
     w1 = np.clip(fine / (0.4 * length), 0.0, 1.0)
     w2 = np.clip((fine - 0.5 * length) / (0.5 * length), 0.0, 1.0)
@@ -79,23 +88,38 @@ def centre_line(length: float, lean: float, incurve: float, nv: int):
     return pts, np.interp(sig, fine, psi)
 
 
+def _row_sig(length: float) -> np.ndarray:
+    x = np.linspace(0.0, 1.0, RAY_NV)
+    return length * (x + ROW_BUNCH * x * (1.0 - x))
+
+
+def tip_arc(sig: np.ndarray, length: float, radius: float, arc: float, tip_end: float = TIP_END) -> np.ndarray:
+    """Half arc (degrees) of the rows at arc lengths ``sig`` along a ligule of this length whose
+    cup has this radius: ``arc`` up to a radius below the rounded tip, 90 where it begins
+    (smoothstep between), then arccos of the way across its depth (TIP_DEPTH radii), at least
+    ``tip_end`` (TIP_END; 0 closes the tip: a bud's)."""
+    depth = TIP_DEPTH * radius
+    u = (sig - (length - depth)) / depth
+    w = np.clip(-u * depth / radius, 0.0, 1.0)
+    below = 90.0 + (arc - 90.0) * w * w * (3.0 - 2.0 * w)
+    return np.where(u < 0.0, below, np.maximum(tip_end, np.degrees(np.arccos(np.clip(u, 0.0, 1.0)))))
+
+
 def ray_net(s: float) -> np.ndarray:
-    """Half control net of the ligule at stage s: (RAY_NV, RAY_NU, 3)."""
+    """Half control net of the ligule at stage s: (RAY_NV, RAY_NU, 3). Row j is an arc round the
+    centre line's point, its angle the roll's, drawn back at the tip (tip_arc)."""
     p = ray_pose(s)
     c, h = centre_line(p["length"], p["lean"], p["incurve"], RAY_NV)
     f = np.linspace(0.0, 1.0, RAY_NV)
     radius = p["r_base"] + (p["r_mouth"] - p["r_base"]) * f ** 1.4
-    theta = np.radians(np.linspace(0.0, p["arc"], RAY_NU))
+    half = tip_arc(_row_sig(p["length"]), p["length"], radius[-1], p["arc"], p["tip_end"])
     pts = np.zeros((RAY_NV, RAY_NU, 3))
     for j in range(RAY_NV):
         t = np.array([np.sin(h[j]), np.cos(h[j])])
         outer = np.array([t[1], -t[0]])  # the abaxial side: +X for an erect ligule
+        theta = np.radians(np.linspace(0.0, half[j], RAY_NU))
         for i, th in enumerate(theta):
             xy = c[j] + radius[j] * np.cos(th) * outer
-            if j == RAY_NV - 1:
-                xy = xy - RIM_RECESS[i] * p["rim"] * radius[j] * t
-            elif j == RAY_NV - 2:
-                xy = xy - 0.35 * RIM_RECESS[i] * p["rim"] * radius[j] * t
             pts[j, i] = (xy[0], xy[1], radius[j] * np.sin(th))
     return pts
 
