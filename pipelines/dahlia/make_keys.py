@@ -40,7 +40,7 @@ HERE = Path(__file__).resolve().parent
 # its arc (it does not narrow to a point), the bract's eta falls to 1 vertex at its tip
 RES = {
     "draft": {"ligule": ("../ray_lambda_draft.func", "9"), "bract": ("0.34", "../bract_eta_draft.func")},
-    "final": {"ligule": ("../ray_lambda_final.func", "11"), "bract": ("0.2", "../bract_eta_final.func")},
+    "final": {"ligule": ("../ray_lambda_final.func", "9"), "bract": ("0.2", "../bract_eta_final.func")},
 }
 
 # ---- ray floret: a rolled, incurved ligule with a rounded tip ---------------------------------------
