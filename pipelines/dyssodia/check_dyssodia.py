@@ -35,7 +35,7 @@ from scipy.stats import spearmanr
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.placement import placement_matrix
 from inflo.formats.species import species_of
-from inflo.tools.species.checks import check_head, floret_faces, frames_with_contacts, view_coverage
+from inflo.tools.species.checks import check_head, check_individuals, floret_faces, frames_with_contacts, view_coverage
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 CHECK = species_of(__file__).check
@@ -104,6 +104,7 @@ def main(build: Path) -> int:
     build = Path(build)
     failures: list = []
     head = check_head(build, rays=None, failures=failures, scene="typed.scn", receptacle="receptacles.obj")
+    check_individuals(head, failures=failures)  # no clones (dyssodia.fcc's variation line)
     scene = head.scene
     groups = np.array([p.group for p in scene.placements])
     types = np.array(head.types)

@@ -41,7 +41,7 @@ from scipy.spatial import cKDTree
 
 from inflo.formats.species import species_of
 from inflo.formats.obj import read_obj
-from inflo.tools.species.checks import check_head, check_phase, floret_faces, view_coverage
+from inflo.tools.species.checks import check_head, check_individuals, check_phase, floret_faces, view_coverage
 from make_keys import INSET, M_LIMB, M_TUBE, RES, TUCK
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
@@ -99,6 +99,7 @@ def main(build: Path) -> int:
             gaps.append(g)
 
     head = check_head(build, rays=RAYS, failures=failures, per_frame=limbs_on_tubes)
+    check_individuals(head, failures=failures)  # no clones (gaillardia.fcc's variation lines)
     g = np.concatenate(gaps) if gaps else np.zeros((0, 2))
     if len(g):
         print(f"limb to tube (floret units; the limb's base ring {INSET} inside the tube's wall, {TUCK} inside its "

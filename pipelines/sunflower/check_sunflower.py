@@ -15,7 +15,11 @@ Prints, and fails (exit 1) on any of:
   the outermost tenth of the disk florets); no phase effect: at two thirds of the run, the disk
   florets' height above the receptacle (in floret units: bud 0.8, open with the anthers up 1.1,
   late with the pistil up 1.5) must fall from the rim to the centre (Spearman rank correlation
-  with the distance from the centre > 0.5), and some inner florets must still be in bud.
+  with the distance from the centre > 0.5), and some inner florets must still be in bud;
+- **development the right way round**: the first ray or bract half open before ``emerged`` of the
+  disk florets have emerged (checks.check_development);
+- **clones**: a floret type whose extents in the last frame vary (CV) less than ``individual_cv``
+  (the .fcc's ``variation`` lines; checks.check_individuals).
 """
 from __future__ import annotations
 
@@ -23,7 +27,7 @@ import sys
 from pathlib import Path
 
 from inflo.formats.species import species_of
-from inflo.tools.species.checks import check_head, check_phase
+from inflo.tools.species.checks import check_development, check_head, check_individuals, check_phase
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 CHECK = species_of(__file__).check
@@ -35,6 +39,8 @@ def main(build: Path) -> int:
     failures = []
     head = check_head(build, rays=RAYS, failures=failures)
     check_phase(head, bud=BUD, failures=failures)
+    check_development(head, failures=failures, emerged=CHECK["emerged"])
+    check_individuals(head, failures=failures, least=CHECK["individual_cv"])
     print("OK" if not failures else "FAILED: " + "; ".join(failures))
     return 0 if not failures else 1
 

@@ -212,6 +212,59 @@ def check_phase(head: Head, *, bud: float, failures: list) -> None:
         failures.append(f"no disk floret in bud at frame {k}")
 
 
+def check_development(head: Head, *, failures: list, emerged: float = 0.8) -> float:
+    """Development the right way round: the frame at which the first ray or bract reaches half its
+    developmental window (half open) and the share of the disk florets that have emerged by then
+    (first RBA frame listing them); fails below ``emerged`` (rays and bracts open round florets to
+    surround, not round a naked meristem). Returns the share (1 for a head without disk florets)."""
+    outer = [p for p in head.scene.placements if p.type in ("ray", "bract") and p.frame_start is not None]
+    disk = [k for k, p in enumerate(head.scene.placements) if p.type == "disk"]
+    if not outer or not disk:
+        return 1.0
+    half = min(p.frame_start + 0.5 * (p.frame_end - p.frame_start) for p in outer)
+    born = np.full(len(head.scene), np.inf)
+    for i, path in enumerate(head.rba):
+        ids = read_rba(path).ids
+        fresh = [int(j) for j in ids if born[int(j)] == np.inf]
+        born[fresh] = i
+    share = float((born[disk] <= half).mean())
+    print(f"development: the first ray or bract half open at frame {half:g}, with {share:.2f} of the disk florets "
+          f"emerged (at least {emerged})")
+    if share < emerged:
+        failures.append(f"rays or bracts open round a bare head: {share:.2f} of the disk florets emerged "
+                        f"at frame {half:g} < {emerged}")
+    return share
+
+
+def check_individuals(head: Head, *, failures: list, least: float = 0.02) -> dict:
+    """No clones: per floret type of the last frame, the coefficient of variation of the florets'
+    extents (the largest distance of a vertex from the floret's base, over its placement scale), a
+    floret's own size, shape and development telling it from its neighbours; fails where a type
+    of more than 3 florets varies less than ``least``. Returns type -> CV."""
+    k = len(head.canopy) - 1
+    mesh = read_obj(head.canopy[k])
+    frame = head.rba_frame(k) if head.rba else None
+    rows = {int(i): r for r, i in enumerate(frame.ids)} if frame is not None else {}
+    ext: dict = {}
+    for pid, faces in floret_faces(mesh).items():
+        p = head.scene.placements[pid]
+        if p.kind == "rba":
+            if pid not in rows:
+                continue
+            pos, scale = frame.pos[rows[pid]], float(frame.scale[rows[pid], 1]) * float(p.scale[1])
+        else:  # a placement that does not move (the dyssodia's): its own position and scale
+            pos, scale = np.asarray(p.pos, float), float(p.scale[1])
+        v = mesh.vertices[np.unique(mesh.faces[faces])] - pos
+        ext.setdefault(head.types[pid], []).append(float(la.norm(v, axis=1).max()) / scale)
+    cv = {t: float(np.std(e) / np.mean(e)) for t, e in ext.items() if len(e) > 3}
+    print("individual florets (CV of their extents in the last frame): "
+          + ", ".join(f"{t} {c:.3f}" for t, c in sorted(cv.items())))
+    for t, c in cv.items():
+        if c < least:
+            failures.append(f"{t} florets are clones: CV of their extents {c:.3f} < {least}")
+    return cv
+
+
 def main(argv=None) -> int:
     """``python -m inflo.tools.species.checks PIPELINE_DIR BUILD_DIR``: the shared report of a head
     whose facts are all in the [check] table of its species.toml (``rays``, ``bud``: the
