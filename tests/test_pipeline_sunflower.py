@@ -22,6 +22,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+import tomllib
 
 import numpy as np
 import pytest
@@ -34,6 +35,8 @@ from conftest import REPO, run_cli, species_setting
 SUN = REPO / "pipelines" / "sunflower"
 BUILD = REPO / "build" / "sunflower"
 KEYS = {"disk": ("bud", "open", "late"), "ray": ("bud", "mid", "open"), "bract": ("bud", "open")}
+
+
 
 
 def _make_var(quality: str, name: str) -> str:
@@ -49,9 +52,36 @@ def head(request, tmp_path_factory):
     assert r.returncode == 0, r.stderr
     alpha, bracts = _make_var(q, "ALPHA"), _make_var(q, "BRACTS")
     r = run_cli("dimorph", "-q", out / "scene.scn", "--alpha", alpha, "--bracts", bracts, "--bract-id", "2",
-                "--ray-lead", _make_var(q, "RAY_LEAD"), "-o", out / "typed.scn")
+                "--ray-lead", _make_var(q, "RAY_LEAD"),
+                "--ray-development-frames", _make_var(q, "RAY_DEVELOPMENT_FRAMES"),
+                "--bract-development-frames", _make_var(q, "BRACT_DEVELOPMENT_FRAMES"), "-o", out / "typed.scn")
     assert r.returncode == 0, r.stderr
     return q, out, float(alpha), int(bracts)
+
+
+def test_rays_and_bracts_open_with_the_head(head):
+    """Development the right way round (thesis fig. 9.6): the head's first primordia, its bracts and
+    rays, are half open only once most disk florets have emerged (species.toml [check] emerged),
+    every ray open (0.9 of its window) by the last frame and every bract past half open."""
+    from inflo.tools.species.checks import Head, check_development
+    q, out, _, _ = head
+    failures = []
+    h = Head.__new__(Head)
+    h.scene, h.rba = read_scn(out / "typed.scn"), sorted((out / "rba").glob("*.rba"))
+    emerged = tomllib.loads((SUN / "species.toml").read_text())["check"]["emerged"]
+    share = check_development(h, failures=failures, emerged=emerged)
+    assert not failures and share >= emerged
+    last = len(h.rba) - 1
+    rays = [p for p in h.scene.placements if p.type == "ray"]
+    assert all((last - p.frame_start) / (p.frame_end - p.frame_start) >= 0.9 for p in rays)  # open at the end
+    assert all(p.frame_start + 0.5 * (p.frame_end - p.frame_start) <= last  # every bract past half open
+               for p in h.scene.placements if p.type == "bract")
+    # the plain ray lead of the windows alone (no development frames) opens them round a bare head
+    plain = read_scn(out / "scene.scn")
+    half = min(p.frame_start + 0.5 * (p.frame_end - p.frame_start) for p, t in zip(plain.placements, h.scene.placements)
+               if t.type in ("ray", "bract"))
+    assert half < min(p.frame_start + 0.5 * (p.frame_end - p.frame_start) for p in h.scene.placements
+                      if p.type in ("ray", "bract"))
 
 
 def test_inputs_are_what_make_keys_writes(tmp_path):
