@@ -40,6 +40,21 @@ def test_dimorph_ray_lead_moves_only_ray_windows():
     assert all((p.frame_start, p.frame_end) == (0, 1) for p in out.placements if p.type == "ray")
 
 
+def test_dimorph_bract_development_frames_set_only_the_bracts_windows():
+    """The involucre opens with the head: --bract-development-frames N gives the bracts (the
+    outermost primordia) frameEnd = frameStart + N, no lead; the florets' windows are unchanged."""
+    scene = _head()
+    plain, _ = dimorph_scene(scene, DimorphOptions(75.0, bracts=8))
+    out, counts = dimorph_scene(scene, DimorphOptions(75.0, bracts=8, bract_development_frames=50))
+    assert counts["bract"] == 8 and counts["windows"] == 8
+    for a, b, c in zip(scene.placements, out.placements, plain.placements):
+        if b.type == "bract":
+            assert (b.frame_start, b.frame_end) == (a.frame_start, a.frame_start + 50)
+            assert (c.frame_start, c.frame_end) == (a.frame_start, a.frame_end)  # as they were without it
+        else:
+            assert (b.frame_start, b.frame_end) == (a.frame_start, a.frame_end)
+
+
 def test_dimorph_development_frames_per_type_then_lead():
     scene = _head()
     out, counts = dimorph_scene(scene, DimorphOptions(75.0, ray_development_frames=8, disk_development_frames=20,
@@ -80,6 +95,7 @@ def test_dimorph_cli_on_a_dynamic_head_sets_rba_scale_to_the_factor_and_ray_wind
     (["--ray-development-frames", 0], "--ray-development-frames must be an integer > 0"),
     (["--disk-development-frames", -3], "--disk-development-frames must be an integer > 0"),
     (["--ray-lead", "nan"], "--ray-lead must be a finite number"),
+    (["--bract-development-frames", 0], "--bract-development-frames must be an integer > 0"),
 ])
 def test_dimorph_bad_window_flags_exit_2(tmp_path, args, needle):
     write_scn(tmp_path / "in.scn", _head())
