@@ -789,7 +789,7 @@ class _Reader:
             raise self.err(n, f"'{key}: id field value …'", "nothing")
         id_ = self.ident(key, toks[0], n)
         try:
-            var = parse_variation(toks[1:])
+            var = parse_variation(toks[1:], lambda t: self.number(t, n, f"a number for '{key}'"))
         except ValueError as e:
             raise self.err(n, f"'{key}': {e.args[0]}", shorten(e.args[1])) from None
         self.per_id(key, id_, toks[0], n)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 #: field -> (largest spread, unit, what it varies): the order of the draws too (a floret's draws
 #: are taken for every field in this order, so one field's spread never changes another's values).
@@ -51,8 +52,9 @@ class Variation:
         return " ".join(parts + [f"seed {int(self.seed)}"])
 
 
-def parse_variation(tokens: list[str]) -> Variation:
-    """A :class:`Variation` from the tokens after the id (``field value`` pairs).
+def parse_variation(tokens: list[str], number: Callable[[str], float] = float) -> Variation:
+    """A :class:`Variation` from the tokens after the id (``field value`` pairs); ``number`` reads
+    one value (the ``.fcc`` reader passes its own, which takes C float suffixes and refuses NaN).
 
     Raises
     ------
@@ -76,7 +78,7 @@ def parse_variation(tokens: list[str]) -> Variation:
             got[key] = int(value)
             continue
         try:
-            v = float(value.rstrip("fF") if value[-1:] in "fF" and value[:-1] else value)
+            v = number(value)
         except ValueError:
             raise ValueError(f"a number for '{key}'", repr(value)) from None
         top, unit = FIELDS[key][:2]

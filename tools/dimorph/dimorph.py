@@ -44,7 +44,8 @@ class DimorphOptions:
         as the outer disk florets reach anthesis)
     bracts : the ``bracts`` outermost placements of each head (by distance from its centre O; ties by
         placement order) are involucral bracts: type ``bract``, id ``bract_id``, scale factor
-        ``bract_scale``, their windows set by ``bract_development_frames`` only. They are leaves, not florets: the cone
+        ``bract_scale``, their windows set by ``bract_development_frames`` only. They are leaves,
+        not florets: the cone
         test (eq. 6.1) of the other placements ignores them, so the florets just inside the
         involucre are the ones whose cones can be empty (the bracts of a capitulum are its first,
         outermost primordia, formed in the same phyllotactic sequence as the florets)

@@ -774,7 +774,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
     florets: list[Floret] = []
     placed: dict = {}
     own: list = []  # the florets' own templates (``variation`` lines), in floret order
-    variations = getattr(params, "variations", {}) or {}
+    variations = params.variations
 
     def moved_by_rba(target, sp, k):
         if sp not in rbas:

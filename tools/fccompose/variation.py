@@ -97,8 +97,8 @@ def varied(template, variation: Variation, index: int, petal: float = 1.0):
     base = template.with_petals(factor) if factor != 1.0 else template
     frames = base.frames
     scale = np.array([d["size"] * d["length"], d["size"] * d["height"], d["size"] * d["width"]])
-    axis = template_axis(frames * scale)
     scaled = frames * scale
+    axis = template_axis(scaled)
     rho = np.sqrt(scaled[..., 0] ** 2 + scaled[..., 1] ** 2)
     along = scaled[..., 0] * axis[0] + scaled[..., 1] * axis[1] + scaled[..., 2] * axis[2]
     rho_max, along_max = max(float(rho.max()), 1e-300), max(float(along.max()), 1e-300)
