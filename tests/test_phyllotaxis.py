@@ -136,6 +136,8 @@ def test_unknown_key_names_closest_known_key_and_line():
     ("[dynamics]\nmode = 'centripetall'\n", "did you mean 'centripetal'"),
     ("[dynamics]\nmode = 'segregation'\nthreshold = 0.001\nprimordium_area = 0.01\n", "threshold"),
     ("[surfaces]\n", "did you mean 'surface'"),
+    ("[dynamics]\nmode = 'segregation'\nthreshold = 0.02\nprimordium_area = 0.01\nclose_apex = true\n",
+     "close_apex"),
 ])
 def test_bad_parameters_are_rejected(text, expected, tmp_path):
     if "disc" in text:  # not a built-in: read as a .con path that does not exist
@@ -178,6 +180,27 @@ def test_centripetal_fractionation_proceeds_from_the_rim_inward():
     st = frame_state(full, 199)
     assert st["profile"].total_area == pytest.approx(0.502, rel=1e-9)
     assert st["area"].sum() == pytest.approx(0.5, rel=1e-9)
+
+
+def test_close_apex_leaves_no_naked_top():
+    disk = builtin_curve("disk")
+    kw = dict(mode="centripetal", frames=200, interval=0.5, primordium_area=0.004, profiles=[disk])
+    # 0.5025 = 125 primordia and 0.0025 left over (more than half of one): a last, apical primordium
+    naked = simulate(inner_area=0.5025, **kw)
+    closed = simulate(inner_area=0.5025, close_apex=True, **kw)
+    assert len(naked) == 125 and naked.inner[-1] == pytest.approx(0.0025)
+    assert len(closed) == 126 and closed.emergence[-1] == pytest.approx(62.5)
+    assert closed.inner[-1] == 0.0 and np.all(closed.inner[64:] == 0.0)
+    np.testing.assert_array_equal(closed.emergence[:125], naked.emergence)
+    st = frame_state(closed, 199)  # the surface is the primordia's alone: nothing left at the apex
+    assert st["profile"].total_area == pytest.approx(0.504, rel=1e-9)
+    assert _radius(st)[-1] < _radius(st)[-2]  # the last one innermost
+    # 0.0015 left (less than half a primordium): no primordium, but the top is used up all the same
+    short = simulate(inner_area=0.5015, close_apex=True, **kw)
+    assert len(short) == 125 and short.inner[-1] == 0.0
+    # relative growth of the inner region keeps it empty
+    grown = simulate(inner_area=0.5025, close_apex=True, inner_growth=0.01, **kw)
+    assert grown.inner[-1] == 0.0
 
 
 def test_divergent_fractionation_has_two_fronts():

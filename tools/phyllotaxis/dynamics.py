@@ -45,7 +45,7 @@ MODE_CODES = {"centripetal": 0, "divergent": 1, "segregation": 2}
 
 @njit(cache=True)
 def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, outer0,
-                     inner_rate, outer_rate, threshold, max_count):
+                     inner_rate, outer_rate, threshold, max_count, close_apex=False):
     """The region bookkeeping of sec. 5.3 (a pure kernel).
 
     Parameters
@@ -59,6 +59,10 @@ def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, 
         each step's time
     threshold : float  inner-region area that triggers a primordium (segregation)
     max_count : int  stop (and report) past this many primordia
+    close_apex : bool  fractionation: once the inner region holds less than one primordium, the
+        next primordium of the inner front takes what is left if that is at least half a
+        primordium, and the inner region is used up either way (zero from then on: relative
+        growth keeps it zero), so no naked apex remains (the terminal primordium of a head)
 
     Returns
     -------
@@ -102,6 +106,16 @@ def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, 
                         k += 1
                         a_in -= primordium_area
                         made = True
+                    elif close_apex and a_in > 0.0:
+                        if a_in >= 0.5 * primordium_area:
+                            if k >= max_count:
+                                overflow = True
+                                break
+                            emergence[k] = next_emit
+                            side[k] = -1
+                            k += 1
+                            made = True
+                        a_in = 0.0
                     if mode == 1 and a_out >= primordium_area:
                         if k >= max_count:
                             overflow = True
@@ -164,7 +178,8 @@ def _rate_table(rate, times: np.ndarray, frames: int) -> np.ndarray:
 def simulate(*, mode: str, frames: int, interval: float, primordium_area: float, inner_area: float,
              outer_area: float = 0.0, inner_growth=0.0, outer_growth=0.0, primordium_growth=0.0,
              threshold: float = 0.0, divergence: float = 137.50776405003785, profiles: list,
-             curve_times: list | None = None, substeps: int = 0, max_count: int = 1_000_000) -> DynamicPattern:
+             curve_times: list | None = None, substeps: int = 0, max_count: int = 1_000_000,
+             close_apex: bool = False) -> DynamicPattern:
     """Run the region model (:func:`simulate_regions`) and assign angles and spatial order.
 
     Parameters are those of ``[dynamics]`` (``formats/phyllotaxis.md``); growth arguments are
@@ -182,7 +197,8 @@ def simulate(*, mode: str, frames: int, interval: float, primordium_area: float,
     rout = _rate_table(outer_growth, t, frames)
     emergence, side, inner, outer, overflow = simulate_regions(
         MODE_CODES[mode], int(frames), int(substeps), float(interval), float(primordium_area),
-        float(inner_area), float(outer_area), rin, rout, float(threshold), int(max_count))
+        float(inner_area), float(outer_area), rin, rout, float(threshold), int(max_count),
+        bool(close_apex) and mode != "segregation")
     keep = emergence <= frames - 1 + 1e-9  # the last frame's substeps run past the end
     emergence, side = emergence[keep], side[keep]
     if overflow:

@@ -101,6 +101,7 @@ class Dynamics:
     substeps: int = _key("int", 0)
     development_frames: int | None = _key("int", None)
     max_count: int = _key("int", 1_000_000)
+    close_apex: bool = _key("bool", False)
 
 
 @dataclass(frozen=True)
@@ -345,6 +346,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
             fail("dynamics", "substeps", ">= 0 (0: automatic)")
         if d["development_frames"] is not None and d["development_frames"] <= 0:
             fail("dynamics", "development_frames", "> 0 frames")
+        if d["close_apex"] and d["mode"] == "segregation":
+            fail("dynamics", "close_apex", "false in segregation (its inner region keeps growing: no apex to close)")
     if "receptacle" in p:
         rc = p["receptacle"]
         for key, low, what in (("segments", 3, ">= 3"), ("rings", 1, ">= 1"), ("underside_rings", 1, ">= 1"),
