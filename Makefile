@@ -12,7 +12,7 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: test-fast all venv bytecode test test-blender bench golden golden-check species new-species $(SPECIES_DIRS) clean distclean
+.PHONY: test-fast lint all venv bytecode test test-blender bench golden golden-check species new-species $(SPECIES_DIRS) clean distclean
 
 all: lily
 
@@ -36,7 +36,7 @@ bytecode: $(STAMP)
 # order), and every other test file; each process's report is printed whole, and the target fails if
 # either does. With PYTEST_ARGS (a selection: -k, a file) it is one plain pytest run.
 BUILD_TESTS := tests/test_golden.py $(sort $(wildcard tests/test_pipeline_*.py))
-test: $(STAMP) bytecode
+test: $(STAMP) bytecode lint
 ifeq ($(strip $(PYTEST_ARGS)),)
 	@mkdir -p build; \
 	$(PY) -m pytest -q -p no:cacheprovider $(BUILD_TESTS) > build/.test-builds.log 2>&1 & builds=$$!; \
@@ -48,6 +48,10 @@ ifeq ($(strip $(PYTEST_ARGS)),)
 else
 	$(PY) -m pytest -q $(PYTEST_ARGS)
 endif
+
+# ruff over the whole tree ([tool.ruff] in pyproject.toml); make test runs it first (about a second)
+lint: $(STAMP)
+	$(VENV)/bin/ruff check --quiet .
 
 # the fast door while working: every test but the species builds (and the tests that read them),
 # the ones marked slow (the portability builds, a scaffolded species, the longest canopies) and

@@ -126,7 +126,7 @@ def dense_head(ctx: BenchContext) -> list[Result]:
     ex = repo / "pipelines" / "examples"
     d = ctx.workdir / "dense_head"
     d.mkdir(parents=True, exist_ok=True)
-    run = lambda *a: subprocess.run([str(bin_dir / a[0]), *map(str, a[1:]), "-q"], check=True)  # noqa: E731
+    run = lambda *a: subprocess.run([str(bin_dir / a[0]), *map(str, a[1:]), "-q"], check=True)
     run("phyllotaxis", ex / "phyllotaxis" / "dense_head.toml", "-o", d / "head")
     run("floret-animate", ex / "disk_bud.floret", ex / "disk_open.floret", "--frames", 30, "-o", d / "frames")
     run("polygonize", d / "frames", "--lambda", 0.25, "--eta", ex / "growing_head" / "lobe_eta.func",

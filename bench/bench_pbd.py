@@ -21,11 +21,11 @@ from inflo.tools.pbd import (
     colour_constraints,
     mesh_edges,
     mesh_hinges,
+    part_offsets,
     project_bending_constraints,
     project_bending_constraints_coloured,
     project_distance_constraints,
     project_distance_constraints_coloured,
-    part_offsets,
     project_internal_by_part,
 )
 from inflo.tools.pbd.solver import edge_lengths, hinge_angles

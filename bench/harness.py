@@ -34,7 +34,7 @@ class Result:
     name : str            e.g. ``render_400k_triangles``
     value : float         the figure, in ``unit``
     unit : str            ``s``, ``min``, ``queries/s``...
-    anchor : str          what it is compared with, in words (ARCHITECTURE.md anchors or an issue goal)
+    anchor : str          what it is compared with, in words (docs/architecture.md anchors or an issue goal)
     anchor_value : float  the anchor in the same unit (None when there is no number to divide by)
     note : str            anything a reader needs (sizes, counts)
     """

@@ -1,4 +1,4 @@
-"""Atomic output and file sequences (ARCHITECTURE.md, "Atomic output" and "Sequences").
+"""Atomic output and file sequences (docs/architecture.md, "Atomic output" and "Sequences").
 
 Writers never leave a half-written file under its final name: they write to a hidden temporary
 file in the target folder and ``os.replace`` it into place only when the content is complete.

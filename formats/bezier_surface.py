@@ -1,6 +1,6 @@
 """Bezier surfaces: lpfg/cpfg ``.s`` files of bicubic Bezier patches (L-studio's surface editor).
 
-Petals designed in VLab come in this format (VLAB_FORMATS.md); a surface can serve as a floret key
+Petals designed in VLab come in this format (docs/vlab_formats.md); a surface can serve as a floret key
 pose after :meth:`BezierSurface.to_turtle_frame` (thesis sec. 2.2-2.3 and Lu et al. model petals
 as bicubic Bezier patches). Spec: ``formats/bezier_surface.md``.
 """
@@ -12,9 +12,9 @@ import numpy as np
 
 from inflo.tools.common import linalg as la
 
+from ._vlab import _Cursor, _fmt
 from .atomic import write_text_atomic
 from .errors import parse_float, parse_int, read_lines, shorten
-from ._vlab import _Cursor, _fmt
 from .func import _check_name
 
 __all__ = [
@@ -227,11 +227,11 @@ class BezierSurface:
         """
         return _frame(self.heading, self.up)
 
-    def to_turtle_frame(self) -> "BezierSurface":
+    def to_turtle_frame(self) -> BezierSurface:
         """The surface in the turtle frame: ``p' = R (p - contact) / size`` with ``R = frame()``.
 
         The contact point goes to the origin, the heading to +Y, up to +Z, right to +X (the
-        floret frame of ARCHITECTURE.md: axis along +Y). For the usual header (heading +Z, up +Y)
+        floret frame of docs/architecture.md: axis along +Y). For the usual header (heading +Z, up +Y)
         this is lpfg's ``(x, y, z) -> (-x, z, y)``; lpfg multiplies by the transpose of R, which
         agrees with it whenever R is symmetric, as there, and differs for other headers.
         """

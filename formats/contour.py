@@ -6,7 +6,7 @@ fig. 5.1, eq. 5.1-5.2; interpolated between key shapes in sec. 5.3), for the gen
 of envelopes (Runions sec. 3.2.1) and for generalized-cylinder cross sections. Spec:
 ``formats/contour.md``.
 
-Evaluation follows lpfg (VLAB_FORMATS.md): ``type: or``/``cr`` ("regular") are uniform cubic
+Evaluation follows lpfg (docs/vlab_formats.md): ``type: or``/``cr`` ("regular") are uniform cubic
 B-splines, a closed one periodic (the last 3 control points repeated at the front); ``type: oe``
 /``ce`` ("end-point") are clamped cubic B-splines that interpolate their end points, a closed one
 with its first control point repeated at the end. :meth:`Contour.point_at` re-parametrizes by
@@ -22,9 +22,9 @@ import numpy as np
 
 from inflo.tools.common import linalg as la
 
+from ._vlab import _Cursor, _fmt, read_gallery
 from .atomic import write_text_atomic
 from .errors import parse_float, parse_int, read_lines, shorten
-from ._vlab import _Cursor, _fmt, read_gallery
 from .func import (  # shared B-spline evaluator and editor-line parsers of the VLab text readers
     _check_markers,
     _check_name,
@@ -187,7 +187,7 @@ class Contour:
 
     @classmethod
     def from_points(cls, points, multiplicities=None, *, type: str = "or", name: str = "unnamed",
-                    samples: int = DEFAULT_SAMPLES) -> "Contour":
+                    samples: int = DEFAULT_SAMPLES) -> Contour:
         """A contour of the given ``type`` (``or``, ``cr``, ``oe``, ``ce``, ``open``, ``closed``).
 
         Parameters

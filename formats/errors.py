@@ -8,7 +8,7 @@ from __future__ import annotations
 import difflib
 import math
 import os
-from typing import Iterable, Mapping
+from collections.abc import Iterable, Mapping
 
 __all__ = [
     "FormatError",

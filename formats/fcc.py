@@ -14,10 +14,10 @@ import glob
 import math
 import os
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
-from typing import Mapping
 
 from .atomic import write_text_atomic
 from .errors import FormatError, InputError, did_you_mean, parse_float, parse_int, read_lines, shorten
@@ -73,7 +73,7 @@ class FilePath:
             object.__setattr__(self, "resolved", Path(os.path.abspath(self.raw)))
 
     @classmethod
-    def at(cls, raw: str, base_dir=None, line: int | None = None) -> "FilePath":
+    def at(cls, raw: str, base_dir=None, line: int | None = None) -> FilePath:
         """``raw`` resolved against ``base_dir`` (the current folder when None)."""
         base = os.getcwd() if base_dir is None else os.fspath(base_dir)
         return cls(raw, Path(os.path.abspath(os.path.join(base, raw))), line)

@@ -1,7 +1,7 @@
 """Graphically-defined functions: VLab ``.func`` files and ``.fset`` galleries (funcedit, lpfg).
 
 A function is a planar cubic B-spline through control points ``(x, y)`` with ``x`` running from 0
-to 1; it is evaluated the way lpfg does it (VLAB_FORMATS.md): the spline is sampled at
+to 1; it is evaluated the way lpfg does it (docs/vlab_formats.md): the spline is sampled at
 ``samples`` equally spaced abscissae, and ``f(x)`` interpolates linearly between the samples.
 The thesis uses such functions for the polygonization densities lambda(v) and eta(v) (sec. 2.4,
 eq. 2.1), the floret growth timing (sec. 2.3, ch. 8 b), primordium area A(s) (sec. 5.2, eq. 5.2),
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import write_text_atomic
 from ._vlab import _Cursor, _fmt, read_gallery
+from .atomic import write_text_atomic
 from .errors import parse_float, parse_int, read_lines, shorten
 
 __all__ = [
@@ -59,7 +59,7 @@ def clamped_bspline(control, t) -> np.ndarray:
     ``Uk(j)``: ``p + 1`` zeros, ``1, 2, ..., m - p - 1``, then ``p + 1`` copies of ``m - p``, and
     the curve parameter ``t`` in [0, 1] is scaled onto it. Evaluation is de Boor's algorithm,
     vectorized over ``t``. The last knot span is closed on the right, and ``t = 1`` returns the
-    last control point exactly (a half-open basis would return 0 there: VLAB_FORMATS.md's end
+    last control point exactly (a half-open basis would return 0 there: docs/vlab_formats.md's end
     point trap); ``t = 0`` returns the first one.
 
     Parameters
@@ -208,7 +208,7 @@ class Function:
 
     @classmethod
     def from_points(cls, points, multiplicities=None, *, name: str = "unnamed",
-                    samples: int = DEFAULT_SAMPLES, flip: bool = False) -> "Function":
+                    samples: int = DEFAULT_SAMPLES, flip: bool = False) -> Function:
         """A function with the given control points.
 
         Parameters
@@ -221,7 +221,7 @@ class Function:
         return cls(name, points, multiplicities, samples=samples, flip=flip)
 
     @classmethod
-    def constant(cls, value: float, *, name: str = "constant", samples: int = DEFAULT_SAMPLES) -> "Function":
+    def constant(cls, value: float, *, name: str = "constant", samples: int = DEFAULT_SAMPLES) -> Function:
         """f(x) = ``value`` everywhere: funcedit's default four points, all at height ``value``."""
         v = float(value)
         return cls(name, [[0.0, v], [1.0 / 3.0, v], [2.0 / 3.0, v], [1.0, v]], samples=samples)

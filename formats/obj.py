@@ -1,8 +1,8 @@
 """Wavefront OBJ meshes and OBJ sequences, read without merging or reordering vertices.
 
 The vertex order of an OBJ file is the identity of each vertex across the frames of a sequence
-(ARCHITECTURE.md "OBJ"), so this reader keeps every ``v`` line, in order, used or not (trimesh
-merges or drops vertices; see VLAB_FORMATS.md). Spec: ``formats/obj.md``.
+(docs/architecture.md "OBJ"), so this reader keeps every ``v`` line, in order, used or not (trimesh
+merges or drops vertices; see docs/vlab_formats.md). Spec: ``formats/obj.md``.
 
 Supported statements: ``v x y z [r g b]``, ``vn``, ``vt`` (skipped), ``f`` with ``i``, ``i/t``,
 ``i//n``, ``i/t/n`` references (1-based or negative), polygons fan-triangulated, ``l`` polylines,
@@ -37,7 +37,7 @@ __all__ = [
 ]
 
 FLOAT_FMT = "%.6f"
-"""Coordinates are written with six decimals: stable text for diffs (ARCHITECTURE.md)."""
+"""Coordinates are written with six decimals: stable text for diffs (docs/architecture.md)."""
 
 MTL_NAME = "materials.mtl"
 """The material library a written OBJ with ``usemtl`` names (``mtllib``), beside it in its folder;
@@ -97,7 +97,7 @@ class ObjMesh:
     def n_faces(self) -> int:
         return len(self.faces)
 
-    def same_topology(self, other: "ObjMesh") -> bool:
+    def same_topology(self, other: ObjMesh) -> bool:
         """Same vertex count, same faces and polylines in the same order."""
         return (
             self.n_vertices == other.n_vertices

@@ -2,7 +2,7 @@
 
 A floret's local frame has its axis along +Y; a placement maps local +X to ``right``, +Y to ``up``
 and +Z to ``right x up`` (``right`` first made orthogonal to ``up``), then scales by ``scale``
-(per local axis), then translates by ``pos`` (ARCHITECTURE.md "Frames of reference").
+(per local axis), then translates by ``pos`` (docs/architecture.md "Frames of reference").
 """
 from __future__ import annotations
 

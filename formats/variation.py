@@ -8,8 +8,8 @@ such floret its own copy of the template, deformed by its own draws
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 #: field -> (largest spread, unit, what it varies): the order of the draws too (a floret's draws
 #: are taken for every field in this order, so one field's spread never changes another's values).

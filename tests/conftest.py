@@ -14,7 +14,6 @@ import pytest
 os.environ.setdefault("MESA_SHADER_CACHE_DISABLE", "true")
 
 REPO = Path(__file__).resolve().parent.parent
-SEEDS = REPO.parent / "shared" / "seeds"
 
 CLI_NAMES = [
     "floret-animate",

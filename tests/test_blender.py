@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import REPO, run_cli
+
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.species import find_species
 

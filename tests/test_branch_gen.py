@@ -5,17 +5,16 @@ import math
 
 import numpy as np
 import pytest
+from conftest import no_partial_files, run_cli
 from scipy.spatial import cKDTree
 
+from inflo.formats.errors import FormatError
 from inflo.formats.obj import read_obj
 from inflo.tools.branch_gen.cylinders import generalized_cylinders, parallel_transport
-from inflo.formats.errors import FormatError
 from inflo.tools.branch_gen.params import params_from_dict, read_params
 from inflo.tools.branch_gen.pipe import basipetal_order, chains, check_forest, decimate, pipe_radii, subdivide
 from inflo.tools.branch_gen.rodkaew import Level, RodkaewInput, grow_level, grow_rodkaew
 from inflo.tools.branch_gen.skeleton import growth_scale
-
-from conftest import no_partial_files, run_cli
 
 UP = np.array([0.0, 1.0, 0.0])
 

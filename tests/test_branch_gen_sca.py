@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import run_cli
 from scipy.spatial import cKDTree
 
 from inflo.formats.contour import Contour, write_con
@@ -14,8 +15,6 @@ from inflo.tools.branch_gen.envelope import HERMITE, Envelope, catmull_rom, prof
 from inflo.tools.branch_gen.params import params_from_dict
 from inflo.tools.branch_gen.pipe import check_forest, pipe_radii
 from inflo.tools.branch_gen.sca import attraction_points, colonize, grow_sca
-
-from conftest import run_cli
 
 
 def test_branch_gen_sca_kill_distance_removes_points():

@@ -13,9 +13,9 @@ import pytest
 from click.testing import CliRunner
 
 pxr = pytest.importorskip("pxr")
+from conftest import no_partial_files  # noqa: E402
 from pxr import Usd, UsdGeom, UsdShade  # noqa: E402
 
-from conftest import no_partial_files  # noqa: E402
 from inflo.formats.obj import read_obj  # noqa: E402
 from inflo.formats.pc2 import encode_pc2, read_pc2  # noqa: E402
 from inflo.tools.canopy_export import cli as export_cli  # noqa: E402
@@ -102,7 +102,7 @@ def test_usd_matches_the_obj_frames(build):
     assert list(subsets["mtl4"].GetIndicesAttr().Get(3.0)) == [1, 2]
     assert UsdGeom.Subset.GetFamilyType(mesh, "materialBind") == "nonOverlapping"
     assert UsdGeom.Subset.ValidateFamily(mesh, UsdGeom.Tokens.face, "materialBind") == (True, "")
-    srgb_to_lin = lambda c: c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4  # noqa: E731
+    srgb_to_lin = lambda c: c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
     want = {"mtl3": (0.5, 0.25, 1.0), "mtl4": (1.0, 128 / 255, 0.0)}
     for name, rgb in want.items():
         mat, _ = UsdShade.MaterialBindingAPI(subsets[name].GetPrim()).ComputeBoundMaterial()

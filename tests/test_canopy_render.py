@@ -6,17 +6,17 @@ none can be created. The pure parts (normals, edges, framing maths, sheets, writ
 from __future__ import annotations
 
 import io
+import os
 import re
 import subprocess
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import no_partial_files, run_cli
 from PIL import Image
 
-from conftest import no_partial_files, run_cli
 from inflo.formats.errors import InputError
 from inflo.formats.obj import ObjMesh, write_obj, write_obj_sequence
 from inflo.tools.canopy_render import cli as render_cli
@@ -26,7 +26,13 @@ from inflo.tools.canopy_render.colors import MATERIAL_PALETTE, load_color_file, 
 from inflo.tools.canopy_render.demo import flower
 from inflo.tools.canopy_render.output import encode_gif, write_mp4
 from inflo.tools.canopy_render.render import (
-    GL_PACKAGES, GLUnavailable, RenderOptions, Renderer, polyline_segments, unique_edges, vertex_normals,
+    GL_PACKAGES,
+    GLUnavailable,
+    Renderer,
+    RenderOptions,
+    polyline_segments,
+    unique_edges,
+    vertex_normals,
 )
 from inflo.tools.canopy_render.sheet import contact_sheet, every_nth, frame_index, grid_shape
 

@@ -888,7 +888,7 @@ def test_box_pairs_with_boxes_far_longer_than_the_cell(monkeypatch, budget):
     if budget is not None:
         monkeypatch.setattr(broad, "BIG_BOX_BUDGET", budget)
     rng = np.random.default_rng(11)
-    for trial in range(12):
+    for _trial in range(12):
         b = _boxes_with_a_few_long(rng, 300, 5.0, 0.1, (1, 8), 0.0, 10.0)  # a few hundred cells long
         _assert_box_pairs_are_brute_force(b, b[::4], 0.02)
 
@@ -923,7 +923,7 @@ def test_box_pairs_with_a_few_boxes_over_many_cells_each_side_under_64(monkeypat
     direct = broad._pairs_with_big
     monkeypatch.setattr(broad, "_pairs_with_big", lambda *a: calls.append(1) or direct(*a))
     rng = np.random.default_rng(12)
-    for trial in range(6):
+    for _trial in range(6):
         b = _boxes_with_a_few_long(rng, 600, 3.0, 0.05, (3, 12), 0.5, 1.5)  # 10-40 cells a side
         _assert_box_pairs_are_brute_force(b, b[::3], 0.05)
     assert (len(calls) == 18) if budget is None else not calls

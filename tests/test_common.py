@@ -4,12 +4,11 @@ from __future__ import annotations
 import click
 import pytest
 from click.testing import CliRunner
+from conftest import no_partial_files
 
 from inflo.formats.atomic import atomic_write, list_sequence
 from inflo.formats.errors import FormatError, InputError, parse_float, read_lines
 from inflo.tools.common.cli import inflo_command
-
-from conftest import no_partial_files
 
 
 def make_cli(exc):

@@ -5,13 +5,12 @@ import math
 
 import numpy as np
 import pytest
+from conftest import no_partial_files, run_cli
 
 from inflo.formats.scn import Group, Placement, Scene, read_scn, write_scn
 from inflo.tools.dimorph.cones import FATE_DISK, FATE_RAY, FATE_SMALL_RAY, d_min, d_min_reference, fates
 from inflo.tools.dimorph.dimorph import DimorphOptions, dimorph_scene
 from inflo.tools.dimorph.sweep import simple_head, sweep_alpha, sweep_n
-
-from conftest import no_partial_files, run_cli
 
 FIB = {1, 2, 3, 5, 8, 13, 21, 34, 55, 89, 144}
 

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 from inflo.formats.scn import Group, Placement, Scene, read_scn
 from inflo.tools.dimorph.dimorph import DimorphOptions, dimorph_scene, outermost
 from inflo.tools.dimorph.sweep import simple_head
-
-from conftest import run_cli
 
 
 def _head(n=300, groups=1):

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import no_partial_files, run_cli
 
 from inflo.formats.scn import Placement, Scene, read_scn, write_scn
 from inflo.tools.dimorph.dimorph import DimorphOptions, dimorph_scene
 from inflo.tools.dimorph.sweep import simple_head
-
-from conftest import no_partial_files, run_cli
 
 DYNAMIC = ("[dynamics]\nmode = 'centripetal'\nframes = 12\ninterval = 0.5\nprimordium_area = 0.02\n"
            "inner_area = 0.3\nprimordium_growth = 0.02\n")

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import REPO, no_partial_files, run_cli
+
 from inflo.formats.fcc import read_fcc
 from inflo.formats.obj import ObjMesh, read_obj, read_obj_sequence, write_obj, write_obj_sequence
 from inflo.formats.rba import RbaFrame, write_rba_sequence
@@ -87,7 +87,7 @@ def test_dense_scene_ends_every_frame_without_intersections(inputs, dense_run):
     assert len(paths) == N_FRAMES
     # the placed templates alone would run through each other: the test is not vacuous
     last = []
-    for k, p in enumerate(inputs["placements"]):
+    for _k, p in enumerate(inputs["placements"]):
         m = p.matrix()
         last.append(inputs["frames"][-1] @ m[:3, :3].T + m[:3, 3])
     two = np.concatenate([inputs["faces"], inputs["faces"] + len(inputs["frames"][0])])
@@ -276,7 +276,7 @@ def test_a_floret_with_too_little_room_emerges_smaller_and_grows_back(inputs, tm
     for m in meshes:
         assert len(intersecting_pairs(m.vertices, m.faces)) == 0
     nv = len(inputs["frames"][0])
-    size = lambda v: float(np.ptp(v[:, 1]))  # noqa: E731 - floret height
+    size = lambda v: float(np.ptp(v[:, 1]))
     own = size(meshes[1].vertices[:nv])  # floret 0 at frame 1, same stage
     assert size(meshes[1].vertices[nv:]) < 0.9 * own  # emerged smaller
     # grown back: its base (fixed on the receptacle) is placed at its own size again

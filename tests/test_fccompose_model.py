@@ -74,7 +74,7 @@ def test_schedule_is_a_named_tuple_and_places_the_templates():
     m.rest_values(sched, edge_rest_length=rest_l, hinge_rest_angle=rest_a)
     # lengths (eq. 3.11) and angles (eq. 3.13) of the two template frames, interpolated
     local = m.edge_indices % 4
-    length = lambda p: np.linalg.norm(p[local[:, 0]] - p[local[:, 1]], axis=1)  # noqa: E731
+    length = lambda p: np.linalg.norm(p[local[:, 0]] - p[local[:, 1]], axis=1)
     np.testing.assert_allclose(rest_l, 0.5 * (length(SQUARE) + length(FOLDED)), rtol=1e-14)
     h = m.hinge_indices[0] % 4
     th_a, th_b = (signed_dihedral_angle(*p[h]) for p in (SQUARE, FOLDED))
@@ -98,7 +98,7 @@ def test_simulation_of_an_assembled_model_grows_the_templates():
 
 
 def test_rba_florets_emerge_at_their_first_listed_frame():
-    row = lambda ids: RbaFrame(ids, [[2.0 * i, 0, 0] for i in ids], [[1, 1, 1]] * len(ids),  # noqa: E731
+    row = lambda ids: RbaFrame(ids, [[2.0 * i, 0, 0] for i in ids], [[1, 1, 1]] * len(ids),
                                [[0, 1, 0]] * len(ids), [[1, 0, 0]] * len(ids))
     frames = [row([0]), row([0]), row([0, 1])]
     scene = Scene([Placement("rba", 0, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0], frame_start=0, frame_end=2)

@@ -13,8 +13,8 @@ animation of an inflorescence described in another SCN file").
 from __future__ import annotations
 
 import numpy as np
-
 from conftest import run_cli
+
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import RbaFrame, write_rba_sequence
@@ -74,7 +74,7 @@ def _setup(tmp_path):
                    extra="rigid body animation: 7 1 1 1 rba_inner inner.scn\n")
     # the same canopy written out flat: outer placement j's copy of inner floret i is floret 3 j + i
     flat_pl, flat_frames = [], []
-    for j, (pos, s, tilt) in enumerate(OUTER):
+    for _ in OUTER:
         for p in inner_pl:
             flat_pl.append(Placement("rba", 0, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0],
                                      frame_start=p.frame_start, frame_end=p.frame_end))

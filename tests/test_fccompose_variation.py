@@ -14,7 +14,7 @@ from inflo.formats.fcc import CanopyParams, format_fcc, read_fcc
 from inflo.formats.scn import Placement, Scene
 from inflo.formats.variation import FIELDS, Variation, parse_variation
 from inflo.tools.fccompose.model import Template, assemble_model
-from inflo.tools.fccompose.variation import floret_draws, template_axis, vary_frames, varied
+from inflo.tools.fccompose.variation import floret_draws, template_axis, vary_frames
 
 # a strip lying along +X (a ligule): base at the origin, tip at x = 2, width 0.2 in Z
 STRIP = np.array([[0, 0, -0.1], [0, 0, 0.1], [1, 0, -0.1], [1, 0, 0.1], [2, 0, -0.1], [2, 0, 0.1]], float)

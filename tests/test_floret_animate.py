@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import REPO, run_cli
+
 from inflo.formats.errors import InputError
 from inflo.formats.floret import Floret, Organ, full_petal, petals, read_floret, write_floret
 from inflo.formats.func import Function, write_func

@@ -5,6 +5,7 @@ from math import comb
 
 import numpy as np
 import pytest
+from conftest import no_partial_files
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
@@ -19,8 +20,6 @@ from inflo.formats.bezier_surface import (
     write_bezier_surface,
 )
 from inflo.formats.errors import FormatError, InputError
-
-from conftest import no_partial_files
 
 PETAL = """-0.70 0.70   0.00 0.30   0.00 1.00
 CONTACT POINT  X: 0.00 Y: 0.00 Z: 0.00

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import no_partial_files
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import quad
@@ -14,8 +15,6 @@ from scipy.interpolate import BSpline
 
 from inflo.formats.contour import Contour, format_con, read_con, read_cset, uniform_bspline, write_con, write_cset
 from inflo.formats.errors import FormatError, InputError
-
-from conftest import no_partial_files
 
 CALYX = """cver 1 3
 name: calyx.con

@@ -10,9 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from inflo.formats.errors import FormatError, InputError
 from inflo.formats import fcc as fcc_module
-from inflo.formats.variation import Variation
+from inflo.formats.errors import FormatError, InputError
 from inflo.formats.fcc import (
     ALIASES,
     KEYS,
@@ -29,6 +28,7 @@ from inflo.formats.fcc import (
     read_fcc,
     write_fcc,
 )
+from inflo.formats.variation import Variation
 
 SPEC = Path(__file__).resolve().parent.parent / "formats" / "fcc.md"
 
@@ -558,7 +558,7 @@ def canopy_params(draw):
     rbas = tuple(RigidBodyAnimationEntry(i, draw(pos3), draw(raw_path), draw(raw_path))
                  for i in rba_ids)
     some_ids = st.lists(st.sampled_from(anim_ids), unique=True) if anim_ids else st.just([])
-    opt = lambda s: st.none() | s  # noqa: E731
+    opt = lambda s: st.none() | s
     up = draw(vec3.filter(any))
     near = draw(opt(pos6))
     far = draw(opt(pos6))

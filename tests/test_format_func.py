@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import no_partial_files
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.interpolate import BSpline
@@ -23,8 +24,6 @@ from inflo.formats.func import (
     write_fset,
     write_func,
 )
-
-from conftest import no_partial_files
 
 RHO = """fver 1 1
 name: rho
@@ -63,7 +62,7 @@ def reference_table(fn: Function) -> tuple[np.ndarray, np.ndarray]:
         elif i == s - 1:
             t = 1.0
         else:
-            t = brentq(lambda tt: curve(tt)[0] - x, 0.0, 1.0, xtol=1e-15, rtol=1e-15)
+            t = brentq(lambda tt, x=x: curve(tt)[0] - x, 0.0, 1.0, xtol=1e-15, rtol=1e-15)
         ys[i] = curve(t)[1]
     return xs, ys
 
@@ -77,7 +76,7 @@ def random_function(rng, n: int, samples: int = 100) -> Function:
 
 
 # ---------------------------------------------------------------------------------------------
-# the worked example of VLAB_FORMATS.md
+# the worked example of docs/vlab_formats.md
 
 
 def test_rho_example_reads_and_evaluates(write):

@@ -4,14 +4,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from conftest import no_partial_files
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.obj import ObjMesh, list_obj_sequence, read_obj, read_obj_sequence, write_obj, write_obj_sequence
-
-from conftest import no_partial_files
 
 SIX_DECIMALS = st.integers(-10**7, 10**7).map(lambda k: k / 1e6)
 

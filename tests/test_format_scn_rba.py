@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import no_partial_files
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -10,8 +11,6 @@ from inflo.formats.errors import FormatError
 from inflo.formats.placement import format_preamble, frame_axes, placement_matrix
 from inflo.formats.rba import RbaFrame, rba_bytes, read_rba, read_rba_sequence, write_rba, write_rba_sequence
 from inflo.formats.scn import Group, Placement, Scene, read_scn, write_scn
-
-from conftest import no_partial_files
 
 DEC = st.integers(-10**7, 10**7).map(lambda k: k / 1e6)
 NONZERO = DEC.filter(lambda x: x != 0)

@@ -24,13 +24,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import REPO
 
 from inflo.formats.floret import read_floret, write_floret
 from inflo.formats.rba import RbaFrame, write_rba
 from inflo.formats.scn import Placement, Scene, write_scn
 from inflo.tools import golden as G
-
-from conftest import REPO
 
 TOL = G.Tolerance()
 
@@ -456,7 +455,7 @@ def test_manifest_errors_are_one_line(tmp_path):
 def test_cli_diff_check_and_refresh(tmp_path):
     repo = _fake_repo(tmp_path)
     py = [sys.executable, "-m", "inflo.tools.golden"]
-    run = lambda *a: subprocess.run([*py, *map(str, a)], capture_output=True, text=True, timeout=120)  # noqa: E731
+    run = lambda *a: subprocess.run([*py, *map(str, a)], capture_output=True, text=True, timeout=120)
     r = run("refresh", "fake", "--no-build", "--repo", repo)
     assert r.returncode == 0 and "golden fake: 4 files" in r.stdout, r.stdout + r.stderr
     r = run("check", "all", "--no-build", "--repo", repo)

@@ -6,7 +6,6 @@ import subprocess
 import sys
 
 import pytest
-
 from conftest import CLI_NAMES, REPO, run_cli
 
 

@@ -77,8 +77,8 @@ def test_signed_dihedral_angle_measures_the_hinge(angle):
 def test_mirror_configurations_have_opposite_signs():
     """Fig. 3.2: the unsigned angle of eq. 3.12 cannot tell them apart, eq. 3.13 can."""
     a, b = hinge(40.0), hinge(-40.0)
-    n = lambda p, q, r: np.cross(q - p, r - p) / np.linalg.norm(np.cross(q - p, r - p))  # noqa: E731
-    unsigned = lambda h: math.acos(np.dot(n(h[0], h[2], h[1]), n(h[0], h[1], h[3])))  # noqa: E731
+    n = lambda p, q, r: np.cross(q - p, r - p) / np.linalg.norm(np.cross(q - p, r - p))
+    unsigned = lambda h: math.acos(np.dot(n(h[0], h[2], h[1]), n(h[0], h[1], h[3])))
     assert unsigned(a) == pytest.approx(unsigned(b))
     assert signed_dihedral_angle(*a) == pytest.approx(-signed_dihedral_angle(*b))
 

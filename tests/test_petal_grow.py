@@ -11,24 +11,21 @@ import sys
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
+from conftest import REPO
 from PIL import Image
 
-from click.testing import CliRunner
-
-from conftest import REPO
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.tools.collide import intersecting_pairs
 from inflo.tools.pbd import mesh_edges, mesh_hinges, signed_dihedral_angle
 from inflo.tools.pbd.solver import edge_lengths, hinge_angles
-from inflo.tools.petal_grow.cli import main
 from inflo.tools.petal_grow.bud import grid_bud, read_bud_obj, write_bud_obj
+from inflo.tools.petal_grow.cli import main
 from inflo.tools.petal_grow.growth import HINGE_SIGN, grow_rest_state
 from inflo.tools.petal_grow.maps import parse_direction_map, parse_scalar_map, triangle_directions, triangle_values
 from inflo.tools.petal_grow.params import parse_params
-from inflo.tools.petal_grow.simulate import (Simulation, build_model, joint_angle_at, rotation_matrix, run,
-                                             shape_match)
-
+from inflo.tools.petal_grow.simulate import Simulation, build_model, joint_angle_at, rotation_matrix, run, shape_match
 
 # ---- growth maps (eq. 1) ---------------------------------------------------------------------
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from conftest import run_cli
+
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.fcc import read_fcc, write_fcc
 from inflo.formats.obj import list_obj_sequence, read_obj

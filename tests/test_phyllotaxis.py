@@ -7,20 +7,19 @@ from collections import Counter
 
 import numpy as np
 import pytest
+from conftest import no_partial_files, run_cli
 from scipy.spatial import cKDTree
 
 from inflo.formats.contour import Contour, write_con
+from inflo.formats.errors import FormatError, InputError
 from inflo.formats.func import Function, write_func
 from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import read_scn
-from inflo.formats.errors import FormatError, InputError
 from inflo.tools.phyllotaxis.dynamics import frame_state, simulate
 from inflo.tools.phyllotaxis.hierarchy import grow_hierarchy, hierarchy_state
 from inflo.tools.phyllotaxis.params import parse_params
 from inflo.tools.phyllotaxis.ridley import AreaFunction, area_function, ridley_positions, static_pattern
 from inflo.tools.phyllotaxis.surface import builtin_curve, load_curve, profile_from_points
-
-from conftest import no_partial_files, run_cli
 
 FIB = {1, 2, 3, 5, 8, 13, 21, 34, 55, 89, 144}
 

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import Group, Placement, Scene, read_scn
 from inflo.tools.phyllotaxis.development import apply_development_order, development_ranks
-
-from conftest import run_cli
 
 DYNAMIC = ("[dynamics]\nmode = 'centripetal'\nframes = 12\ninterval = 0.5\nprimordium_area = 0.02\n"
            "inner_area = 0.3\nprimordium_growth = 0.02\n")

@@ -3,13 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import read_scn
 from inflo.tools.phyllotaxis.hierarchy import grow_hierarchy, hierarchy_state
 from inflo.tools.phyllotaxis.room import apply_room, fill_room
-
-from conftest import run_cli
 
 CORYMB = """[primordia]
 floret_id = 0

@@ -25,12 +25,11 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import REPO, run_cli, species_setting
 
 from inflo.formats.floret import check_compatible, read_floret
-from inflo.formats.species import read_species
 from inflo.formats.scn import read_scn
-
-from conftest import REPO, run_cli, species_setting
+from inflo.formats.species import read_species
 
 DAH = REPO / "pipelines" / "dahlia"
 BUILD = REPO / "build" / "dahlia"

@@ -22,11 +22,10 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import REPO, run_cli, species_module, species_setting
 
 from inflo.formats.obj import read_obj
 from inflo.formats.scn import read_scn
-
-from conftest import REPO, run_cli, species_module, species_setting
 
 DYS = REPO / "pipelines" / "dyssodia"
 BUILD = REPO / "build" / "dyssodia"

@@ -20,13 +20,13 @@ import tomllib
 
 import numpy as np
 import pytest
-
 from conftest import REPO
+
+from inflo.tools.collide import intersecting_pairs
+from inflo.tools.pbd import mesh_edges
 from inflo.tools.petal_grow.bud import read_bud_obj
 from inflo.tools.petal_grow.params import parse_params
 from inflo.tools.petal_grow.simulate import _rays_hit, arrangement_violations, build_model
-from inflo.tools.collide import intersecting_pairs
-from inflo.tools.pbd import mesh_edges
 
 EUSTOMA = REPO / "pipelines" / "eustoma"
 BUILD = REPO / "build" / "eustoma"

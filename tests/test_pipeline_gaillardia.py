@@ -32,19 +32,18 @@ from __future__ import annotations
 
 import importlib.util
 import re
-import tomllib
 import subprocess
 import sys
+import tomllib
 
 import numpy as np
 import pytest
+from conftest import REPO, run_cli, species_setting
 
 from inflo.formats.floret import check_compatible, full_petal, read_floret
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.scn import read_scn
 from inflo.tools.collide import intersecting_pairs
-
-from conftest import REPO, run_cli, species_setting
 
 GAI = REPO / "pipelines" / "gaillardia"
 BUILD = REPO / "build" / "gaillardia"

@@ -18,13 +18,12 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import REPO, species_module, species_setting
 
 from inflo.formats.floret import read_floret
 from inflo.formats.obj import ObjMesh
 from inflo.tools.thyrse.generate import thyrse
 from inflo.tools.thyrse.params import read_params
-
-from conftest import REPO, species_module, species_setting
 
 LIL = REPO / "pipelines" / "lilac"
 BUILD = REPO / "build" / "lilac"
@@ -50,7 +49,7 @@ def test_key_poses_are_up_to_date(tmp_path):
 def test_the_lilac_floret_shape():
     poses = {k: read_floret(LIL / "draft" / f"floret_{k}.floret") for k in ("bud", "mid", "open")}
     organs = {k: {o.name: o for o in f.organs} for k, f in poses.items()}
-    for k, orgs in organs.items():
+    for orgs in organs.values():
         assert sorted(orgs) == ["calyx", "corolla"]
         for o in orgs.values():
             assert o.symmetry_n == 4 and o.bilateral and o.fused > o.degree_v  # fused past the v degree

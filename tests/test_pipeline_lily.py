@@ -32,12 +32,11 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import REPO, run_cli
 
 from inflo.formats.floret import check_compatible, read_floret
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.tools.collide import intersecting_pairs
-
-from conftest import REPO, run_cli
 
 LILY = REPO / "pipelines" / "lily"
 KEYS = [LILY / f"key_{k}.floret" for k in ("bud", "early", "mid", "open")]

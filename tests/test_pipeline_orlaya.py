@@ -18,10 +18,9 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import REPO, run_cli, species_module, species_setting
 
 from inflo.formats.scn import read_scn
-
-from conftest import REPO, run_cli, species_module, species_setting
 
 ORL = REPO / "pipelines" / "orlaya"
 BUILD = REPO / "build" / "orlaya"

@@ -26,11 +26,10 @@ import tomllib
 
 import numpy as np
 import pytest
+from conftest import REPO, run_cli, species_setting
 
 from inflo.formats.floret import check_compatible, read_floret
 from inflo.formats.scn import read_scn
-
-from conftest import REPO, run_cli, species_setting
 
 SUN = REPO / "pipelines" / "sunflower"
 BUILD = REPO / "build" / "sunflower"

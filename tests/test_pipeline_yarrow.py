@@ -29,6 +29,7 @@ from collections import Counter
 
 import numpy as np
 import pytest
+from conftest import REPO, run_cli
 from scipy.spatial import cKDTree
 
 from inflo.formats.floret import check_compatible, read_floret
@@ -36,8 +37,6 @@ from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import read_rba
 from inflo.formats.scn import read_scn
-
-from conftest import REPO, run_cli
 
 YARROW = REPO / "pipelines" / "yarrow"
 BUILD = REPO / "build" / "yarrow"

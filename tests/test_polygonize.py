@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 import pytest
+from conftest import REPO, run_cli
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from conftest import REPO, run_cli
 from inflo.formats.errors import InputError
 from inflo.formats.floret import Floret, Organ, read_floret, write_floret
 from inflo.formats.func import Function, write_func

@@ -21,11 +21,9 @@ import ast
 import os
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-
 from conftest import file_digests, project_copy
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -94,7 +92,7 @@ def _cpu_flags() -> set[str]:
 
 
 def _numpy_dispatch() -> list[str]:
-    from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__  # noqa: PLC0415
+    from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
     return [f for f in __cpu_dispatch__ if __cpu_features__.get(f)]
 
 

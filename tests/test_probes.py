@@ -4,12 +4,11 @@ exist afterwards. Probes that used to hang, exhaust memory, crash with exit 1 or
 from __future__ import annotations
 
 import pytest
+from conftest import REPO, run_cli
 
 from inflo.formats.obj import ObjMesh, write_obj
 from inflo.formats.scn import Placement, Scene, write_scn
 from inflo.tools.dimorph.sweep import simple_head
-
-from conftest import REPO, run_cli
 
 FLORET = REPO / "pipelines" / "sunflower" / "draft" / "ray_bud.floret"
 

@@ -4,12 +4,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from conftest import run_cli
 
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.tools.phyllotaxis.receptacle import ReceptacleOptions, receptacle_mesh
 from inflo.tools.phyllotaxis.surface import builtin_curve
-
-from conftest import run_cli
 
 DYNAMIC = ("[surface]\ncurve = 'sphere_cap'\nangle = 60\n[primordia]\n"
            "[dynamics]\nmode = 'centripetal'\nframes = 8\ninterval = 0.5\nprimordium_area = 0.02\n"

@@ -6,8 +6,8 @@ stale-frame test of a longer earlier run)."""
 from __future__ import annotations
 
 import pytest
-
 from conftest import REPO, run_cli
+
 from inflo.formats.floret import read_floret
 from inflo.tools.floret_animate.run import write_frames
 

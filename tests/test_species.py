@@ -8,11 +8,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import REPO, file_digests, project_copy
 
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.species import find_species, make_variables, read_species
-
-from conftest import REPO, file_digests, project_copy
 
 PIPELINES = REPO / "pipelines"
 SPECIES = [p.parent.name for p in sorted(PIPELINES.glob("*/Makefile")) if p.parent.name != "examples"]

@@ -3,14 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import REPO, no_partial_files, run_cli
 
 from inflo.formats.obj import ObjMesh, read_obj, read_obj_sequence, write_obj, write_obj_sequence
 from inflo.tools.collide import intersecting_pairs
 from inflo.tools.subdivide.collisions import collision_resolver
 from inflo.tools.subdivide.loop import loop_level
 from inflo.tools.subdivide.smooth import plan_subdivision, subdivide_frames, subdivide_meshes
-
-from conftest import REPO, no_partial_files, run_cli
 
 
 def corrugated_strip(nx, ny, amp, dz, refine=1, width=1.0, length=4.0):
@@ -157,7 +156,6 @@ def _duplicated(kind):
 def test_duplicated_vertex_is_welded_and_the_result_collision_free(kind):
     from inflo.tools.collide import intersecting_pairs
     from inflo.tools.subdivide.collisions import collision_resolver, default_spacing
-    from inflo.tools.subdivide.smooth import subdivide_meshes
 
     m = _duplicated(kind)
     assert len(intersecting_pairs(m.vertices, m.faces)) > 0  # the duplicate's triangles touch

@@ -7,14 +7,13 @@ import math
 
 import numpy as np
 import pytest
+from conftest import run_cli
 
 from inflo.formats.errors import FormatError
 from inflo.formats.obj import read_obj
 from inflo.formats.scn import read_scn
 from inflo.tools.thyrse.generate import grow_thyrse, node_directions, thyrse, thyrse_scene, write_thyrse
 from inflo.tools.thyrse.params import params_from_toml, read_params
-
-from conftest import run_cli
 
 Y = np.array([0.0, 1.0, 0.0])
 
@@ -224,7 +223,7 @@ def test_outward_children_and_branch_density():
     assert len(out.floret_node) < len(inward.floret_node)
     # laterals that carry laterals: round(L * branch_density) node pairs instead of round(L * density)
     assert len(thin.floret_node) < len(out.floret_node)
-    branch_nodes = lambda lay: sum(1 for k in range(len(lay.node_pos))  # noqa: E731
+    branch_nodes = lambda lay: sum(1 for k in range(len(lay.node_pos))
                                    if not lay.node_tip[k] and (lay.node_parent == k).sum() >= 3)
     assert branch_nodes(thin) < branch_nodes(out)
 

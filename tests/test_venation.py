@@ -7,16 +7,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import no_partial_files, run_cli
 from scipy.spatial import cKDTree
 
 from inflo.formats.contour import Contour, write_con, write_cset
 from inflo.formats.errors import FormatError
 from inflo.formats.func import Function, write_func
 from inflo.formats.obj import read_obj
-from inflo.tools.venation.blade import Growth, blade_from_points, polygon_area, triangulate_blade
-from inflo.tools.venation.blade import _ear_clip
+from inflo.tools.venation.blade import Growth, _ear_clip, blade_from_points, polygon_area, triangulate_blade
 from inflo.tools.venation.graph import (
-    check_forest, cycle_rank, elongation_widths, refine_veins, strahler_orders, vein_widths,
+    check_forest,
+    cycle_rank,
+    elongation_widths,
+    refine_veins,
+    strahler_orders,
+    vein_widths,
 )
 from inflo.tools.venation.neighbourhood import (
     NEAREST,
@@ -30,8 +35,6 @@ from inflo.tools.venation.neighbourhood import (
 )
 from inflo.tools.venation.params import load_inputs, parse_params
 from inflo.tools.venation.simulate import SimParams, simulate
-
-from conftest import no_partial_files, run_cli
 
 
 def _leaf(n=160, length=60.0):

@@ -27,7 +27,6 @@ from pathlib import Path
 import numpy as np
 
 from inflo.formats.scn import Group, Placement, Scene
-
 from inflo.tools.phyllotaxis.dynamics import frame_state, simulate
 from inflo.tools.phyllotaxis.hierarchy import grow_hierarchy, hierarchy_state
 from inflo.tools.phyllotaxis.plot import plot_panels
@@ -181,7 +180,6 @@ def render_figure(path) -> None:
 
     from inflo.tools.canopy_render.render import render_meshes
     from inflo.tools.dimorph.dimorph import DimorphOptions, dimorph_scene
-
     from inflo.tools.phyllotaxis.compound import compound_pattern, compound_scene
     from inflo.tools.phyllotaxis.plot import discs_mesh
 

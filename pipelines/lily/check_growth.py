@@ -18,12 +18,11 @@ from pathlib import Path
 
 import numba
 import numpy as np
+from growth_keys import TEPALS
 
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.tools.collide import intersecting_pairs
 from inflo.tools.petal_grow.simulate import shape_match
-
-from growth_keys import TEPALS
 
 LISTED = (1, 20, 40, 60, 100)
 
@@ -38,7 +37,7 @@ def grids(mesh):
 
 def measures(bud, x, tepals):
     joint, tip, sag = [], [], []
-    for kind, grid in tepals:
+    for _kind, grid in tepals:
         base = grid[:3].ravel()
         r, _ = shape_match(bud[base], x[base])
         joint.append(math.degrees(math.acos(np.clip((np.trace(r) - 1) / 2, -1, 1))))

@@ -23,7 +23,6 @@ centre (phyllotaxis sets a placement's ``right`` along the receptacle's meridian
 """
 from __future__ import annotations
 
-import math
 import sys
 from pathlib import Path
 

@@ -3,14 +3,13 @@
 A generalized surface of revolution Q(theta, z) = CatmullRom(z, theta) (cos theta, sin theta, z)
 interpolates generating curves C_i(z) placed at angles theta_i with Catmull-Rom splines
 (eq. 3.4); a point with cylindrical coordinates (r, theta, z) is inside when
-CatmullRom(z, theta) >= r (chi_Q). inflo's vertical axis is +Y (ARCHITECTURE.md): Runions' z is
+CatmullRom(z, theta) >= r (chi_Q). inflo's vertical axis is +Y (docs/architecture.md): Runions' z is
 the height ``y - centre_y`` and theta is measured from +X toward +Z about the axis through
 ``centre``. A generating curve is a ``.con`` contour drawn with x = radius and y = height; it must
 be a function of height (its y never turns back). Built-ins: sphere, ellipsoid, cone (base disc at
 ``centre``, apex ``height`` above), cylinder (``height`` tall above ``centre``).
 """
 from __future__ import annotations
-
 
 import numpy as np
 

@@ -2,7 +2,7 @@
 
 Every key has a default, so an empty file (or no file) is valid. Unknown keys and sections are
 rejected naming the closest known one; wrong types and out-of-range values are rejected naming the
-file, the key's line and what was expected (ARCHITECTURE.md, "Errors").
+file, the key's line and what was expected (docs/architecture.md, "Errors").
 
 Sections (thesis ch. 7 for ``rodkaew``, Runions ch. 3 for ``sca``/``envelope``):
 

@@ -14,15 +14,15 @@ Frame ``k`` of the sequences (0-based) is time code ``start_frame + k``.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
-from inflo.tools.common import linalg as la
 from inflo.formats.atomic import atomic_path
 from inflo.formats.obj import ObjMesh
+from inflo.tools.common import linalg as la
 
 __all__ = ["USD_SUFFIXES", "SUBSET_MODES", "srgb_to_linear", "vertex_normals", "points_extent", "UsdBuilder"]
 

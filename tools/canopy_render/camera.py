@@ -1,6 +1,6 @@
 """Cameras for ``canopy-render``: named views, automatic framing, matrices, ``.fcc`` camera keys.
 
-World convention (ARCHITECTURE.md "Frames of reference"): +Y is up, the axis of a floret and of
+World convention (docs/architecture.md "Frames of reference"): +Y is up, the axis of a floret and of
 an inflorescence; a view direction is given by an azimuth (degrees, measured about the up axis
 from the +Z axis towards +X) and an elevation (degrees above the horizontal plane). The named
 views are
@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+
 import numpy as np
 
 __all__ = [
@@ -145,12 +146,12 @@ class Camera:
             return orthographic(h * aspect, h, near, far)
         return perspective(self.fov, aspect, near, far)
 
-    def with_light(self, light) -> "Camera":
+    def with_light(self, light) -> Camera:
         """This camera with the key light at world position ``light`` (None: camera-relative)."""
         return replace(self, light=None if light is None else tuple(_vec3(light, "light").tolist()))
 
     @classmethod
-    def from_fcc(cls, params, fallback: "Camera | None" = None) -> "Camera":
+    def from_fcc(cls, params, fallback: Camera | None = None) -> Camera:
         """The camera of a ``.fcc`` file's viewer keys (``read_fcc(path)``); see :func:`camera_from_fcc`."""
         return camera_from_fcc(params, fallback)
 

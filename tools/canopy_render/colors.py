@@ -23,7 +23,7 @@ from __future__ import annotations
 import re
 import tomllib
 import zlib
-from typing import Mapping
+from collections.abc import Mapping
 
 import numpy as np
 

@@ -1,5 +1,5 @@
 #!/bin/sh
-# canopy-render needs Mesa's EGL + llvmpipe (headless, CPU-only OpenGL); see shared RENDERING.md.
+# canopy-render needs Mesa's EGL + llvmpipe (headless, CPU-only OpenGL); see docs/rendering.md.
 # Installs the Debian packages when it can (root or sudo), says exactly what to install when it cannot.
 PKGS="libegl1 libegl-mesa0 libgl1-mesa-dri libgl1"
 have_libs() {

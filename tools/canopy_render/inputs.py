@@ -1,16 +1,16 @@
 """The inputs of ``canopy-render``: OBJ files and OBJ sequences drawn together, frame by frame.
 
 Each input is a *layer*: an OBJ file (drawn in every frame), or a sequence (a folder or a glob of
-OBJ files, ARCHITECTURE.md "Sequences") that gives the layer's mesh in each frame. All sequences
+OBJ files, docs/architecture.md "Sequences") that gives the layer's mesh in each frame. All sequences
 drawn together must have the same number of frames. Frames are read once; consecutive frames of a
 layer with the same topology share their face, material and polyline arrays, so a long sequence
 costs little more memory than its vertex positions.
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 

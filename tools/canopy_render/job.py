@@ -16,7 +16,7 @@ from inflo.tools.common.cli import progress
 from .camera import DEFAULT_FOV, DEFAULT_MARGIN, camera_from_fcc
 from .inputs import FrameReader, count_primitives, resolve_inputs
 from .output import write_gif, write_mp4, write_png
-from .render import RenderOptions, Renderer, auto_camera
+from .render import Renderer, RenderOptions, auto_camera
 from .sheet import contact_sheet, every_nth, format_label, frame_index
 
 __all__ = ["RenderJob", "run_job", "output_kind", "DEFAULT_SIZES", "read_fcc_camera"]

@@ -2,15 +2,15 @@
 
 Every writer builds the whole file in memory (or, for MP4, in a private temporary folder) and
 puts it in place with :func:`inflo.formats.atomic.write_bytes_atomic`: a temporary file in the
-target folder renamed over the target, so a failed run leaves no partial file (ARCHITECTURE.md).
+target folder renamed over the target, so a failed run leaves no partial file (docs/architecture.md).
 """
 from __future__ import annotations
 
 import io
 import os
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Iterable
 
 import numpy as np
 from PIL import Image

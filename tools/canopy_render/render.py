@@ -6,7 +6,7 @@ The library behind ``canopy-render``; arrays in, an ``(H, W, 3) uint8`` image ou
     from inflo.tools.canopy_render.render import render_meshes, RenderOptions
     image = render_meshes([read_obj("flower.obj")], options=RenderOptions(size=(800, 600)))
 
-What a picture gets (shared RENDERING.md): a depth buffer; 4x multisampling resolved into the
+What a picture gets (docs/rendering.md): a depth buffer; 4x multisampling resolved into the
 image; no back-face culling and two-sided lighting (petals are open surfaces: the shading normal
 is turned towards the viewer per fragment, using the triangle's own plane to decide which side is
 seen); smooth shading with area-weighted vertex normals (the OBJ's normals when it has them); a
@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -514,7 +514,7 @@ class Renderer:
         self._fbos = ()
 
     # context manager -------------------------------------------------------------------------
-    def __enter__(self) -> "Renderer":
+    def __enter__(self) -> Renderer:
         return self
 
     def __exit__(self, *exc) -> None:

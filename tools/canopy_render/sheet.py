@@ -7,7 +7,7 @@ from the end (-1 is the last frame). Internally frames are 0-based indices.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont

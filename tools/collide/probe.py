@@ -24,9 +24,20 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .broad import (PART_SWEEP_MAX_ELEMENTS, PARTS_ANY, PARTS_CROSS, _overlapping_parts,
-                    _part_boxes, _part_starts, _share_vertex, _sorted_pairs, edge_boxes, parts_grouped,
-                    triangle_boxes, vertex_boxes)
+from .broad import (
+    PART_SWEEP_MAX_ELEMENTS,
+    PARTS_ANY,
+    PARTS_CROSS,
+    _overlapping_parts,
+    _part_boxes,
+    _part_starts,
+    _share_vertex,
+    _sorted_pairs,
+    edge_boxes,
+    parts_grouped,
+    triangle_boxes,
+    vertex_boxes,
+)
 from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
 from .tritri import _pair_flag
 from .tritri import _share_vertex as _tri_share_vertex

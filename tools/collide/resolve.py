@@ -27,8 +27,18 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
-from .broad import (PARTS_ANY, PARTS_CROSS, PARTS_SAME, BoxGrid, _element_range, _sorted_pairs, box_pairs,
-                    edge_boxes, triangle_boxes, vertex_boxes)
+from .broad import (
+    PARTS_ANY,
+    PARTS_CROSS,
+    PARTS_SAME,
+    BoxGrid,
+    _element_range,
+    _sorted_pairs,
+    box_pairs,
+    edge_boxes,
+    triangle_boxes,
+    vertex_boxes,
+)
 from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
 from .probe import can_probe, probe_contacts
 from .response import project_collision_constraints
@@ -102,11 +112,11 @@ class Contacts:
         return len(self.kind)
 
     @staticmethod
-    def empty() -> "Contacts":
+    def empty() -> Contacts:
         return Contacts(np.zeros(0, np.int8), np.zeros((0, 4), np.int32), np.zeros((0, 4)),
                         np.zeros((0, 3)), np.zeros(0), np.zeros((0, 2), np.int32), np.zeros(0))
 
-    def concat(self, other: "Contacts") -> "Contacts":
+    def concat(self, other: Contacts) -> Contacts:
         """Rows of ``self`` then the new rows of ``other``; a pair already in ``self`` (same kind
         and indices) found again takes ``other``'s newer normal, coefficients and time of impact
         (the one it was found with may point the wrong way once the elements have turned)."""

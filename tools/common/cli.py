@@ -1,4 +1,4 @@
-"""What every inflo CLI does the same way (ARCHITECTURE.md, "Errors" and "Progress").
+"""What every inflo CLI does the same way (docs/architecture.md, "Errors" and "Progress").
 
 - Bad input (:class:`~inflo.formats.errors.InputError`, including ``FormatError``) prints one line
   ``<cli>: error: <file>:<line>: expected ..., found ...`` and exits with code 2.

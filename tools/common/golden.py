@@ -3,7 +3,7 @@ issue 15): ``python -m inflo.tools.common.golden check|refresh|diff ...`` still 
 ``python -m inflo.tools.golden``, so that old notes (and the header of the committed
 ``tests/golden/*/listing.toml`` files) keep working. Use the new name in anything new.
 """
-from inflo.tools.golden import *  # noqa: F401,F403 - the old import path, same objects
+from inflo.tools.golden import *  # noqa: F403 - the old import path, same objects
 from inflo.tools.golden import __all__  # noqa: F401
 
 if __name__ == "__main__":

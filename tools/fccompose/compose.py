@@ -72,20 +72,20 @@ from inflo.formats.atomic import frame_name, remove_stale_frames, write_bytes_at
 from inflo.formats.errors import InputError
 from inflo.formats.fcc import CanopyParams, check_references
 from inflo.formats.obj import ObjMesh, write_obj, written_vertices
-from inflo.tools.common import linalg as la
 from inflo.tools.collide.broad import lattice_cell_size, triangle_boxes
 from inflo.tools.collide.resolve import CollisionResult, default_tolerance, resolve_collisions
 from inflo.tools.collide.tritri import intersecting_pairs, intersecting_pairs_with
+from inflo.tools.common import linalg as la
 from inflo.tools.pbd.solver import (
     bending_residual,
     colour_constraints,
     distance_residual,
     edge_stretch_range,
     overstretched_edges,
+    part_offsets,
     parts_out_of_bounds,
     project_bending_constraints_coloured,
     project_distance_constraints_coloured,
-    part_offsets,
     solve_parts,
 )
 
@@ -173,7 +173,7 @@ class Present:
     """their edges, numbered in ``vertex_ids``"""
 
     @classmethod
-    def of(cls, model: Model, born: np.ndarray) -> "Present":
+    def of(cls, model: Model, born: np.ndarray) -> Present:
         """The system of the florets of the (nf,) bool mask ``born``."""
         m = model
         if born.all():

@@ -50,8 +50,8 @@ commas or line breaks; ``#`` starts a comment.
 from __future__ import annotations
 
 import copy
-import math
 import functools
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -60,9 +60,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
+from inflo.formats.atomic import first_missing_frame
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.fcc import CanopyParams
-from inflo.formats.atomic import first_missing_frame
 from inflo.formats.obj import read_obj, read_obj_sequence
 from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import read_rba_sequence
@@ -131,7 +131,7 @@ class Template:
         if self.key is None:
             self.key = self.id
 
-    def with_petals(self, factor: float) -> "Template":
+    def with_petals(self, factor: float) -> Template:
         """This template with its petals grown by ``factor`` (thesis fig. 6.4c: a small ray
         floret's enlarged petals sized by the available space, the rest of the floret as it is):
         local vertex v of every frame scaled by ``1 + w_v (factor - 1)`` about the floret's origin
@@ -152,7 +152,7 @@ class Template:
 
     @classmethod
     def from_frames(cls, id: int, frames, faces, *, fixed=None, k_stretch: float = 0.99, k_bend: float = 0.99,
-                    source: str = "", materials=None, face_material=None) -> "Template":
+                    source: str = "", materials=None, face_material=None) -> Template:
         """A template of ``frames`` ((F, nv, 3) local positions, already scaled) and triangles
         ``faces`` (m, 3): its edges and hinges are those of the triangles (:func:`mesh_edges`,
         :func:`mesh_hinges`), ``fixed`` the vertex ids of its weight file (None: none)."""
@@ -557,7 +557,7 @@ class State:
     emerge_frame: np.ndarray
 
     @classmethod
-    def at_start(cls, model: "Model", vertex_x: np.ndarray | None = None) -> "State":
+    def at_start(cls, model: Model, vertex_x: np.ndarray | None = None) -> State:
         """Frame 0: the florets whose emergence frame is 0 present at their own size; positions
         ``vertex_x``, by default every floret's template at its time at frame 0, placed."""
         nf = len(model.florets)
@@ -643,7 +643,7 @@ def _rba_matrix(floret: Floret, frame: float) -> np.ndarray:
 
     pa, sa, ua, ra = row(a)
     pb, sb, ub, rb = row(b)
-    lerp = lambda x, y: (1 - s) * x + s * y  # noqa: E731
+    lerp = lambda x, y: (1 - s) * x + s * y
     # the placement's own scale (SCN, e.g. set by dimorph) multiplies every RBA row's scale
     scale = lerp(sa, sb) * floret.rba_scale * np.asarray(floret.placement.scale, float)
     return placement_matrix(lerp(pa, pb), scale, lerp(ua, ub), lerp(ra, rb))
@@ -886,7 +886,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
             ends.append(len(seq.paths) - 1)
         n_frames = max(ends)
 
-    cat = lambda xs, dt, shape: (np.ascontiguousarray(np.concatenate(xs), dtype=dt)  # noqa: E731
+    cat = lambda xs, dt, shape: (np.ascontiguousarray(np.concatenate(xs), dtype=dt)
                                  if xs else np.zeros(shape, dt))
     return Model(
         florets=florets,

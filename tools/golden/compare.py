@@ -99,7 +99,7 @@ class Tolerance:
     normal_abs: float = 1e-3
     int_rel: float = 0.0
 
-    def updated(self, mapping) -> "Tolerance":
+    def updated(self, mapping) -> Tolerance:
         """A copy with the keys of ``mapping`` (a manifest ``tolerance`` table) replaced."""
         if not mapping:
             return self
@@ -301,7 +301,7 @@ def _compare_obj(d: FileDiff, golden: Path, found: Path, tol: Tolerance, opts: d
     neq = np.nonzero(np.any(g.faces[:m] != f.faces[:m], axis=1))[0]
     if neq.size:
         i = int(neq[0])
-        tri = lambda a: " ".join(str(int(v) + 1) for v in a)  # noqa: E731
+        tri = lambda a: " ".join(str(int(v) + 1) for v in a)
         first, n = _first(neq[1:])
         d.add(f"faces differ from face {i + 1}: golden {tri(g.faces[i])}, found {tri(f.faces[i])} "
               f"({neq.size:,} of {m:,} faces differ)",
@@ -311,7 +311,7 @@ def _compare_obj(d: FileDiff, golden: Path, found: Path, tol: Tolerance, opts: d
         d.add(f"polyline count: golden {len(g.lines):,}, found {len(f.lines):,}")
     bad = [k for k, (a, b) in enumerate(zip(g.lines, f.lines)) if not np.array_equal(a, b)]
     if bad:
-        pl = lambda a: shorten(" ".join(str(int(v) + 1) for v in a), 50)  # noqa: E731
+        pl = lambda a: shorten(" ".join(str(int(v) + 1) for v in a), 50)
         d.add(f"{len(bad):,} polylines differ",
               [f"polyline {k + 1}: golden {pl(g.lines[k])}, found {pl(f.lines[k])}" for k in bad])
     # groups and materials: the names, and which faces they hold
@@ -393,7 +393,7 @@ def _compare_scn(d: FileDiff, golden: Path, found: Path, tol: Tolerance, opts: d
         if both:
             ks = [k for k, _, _ in both]
             _compare_numbers(d, attr, [a for _, a, _ in both], [b for _, _, b in both], tol,
-                             labels=lambda i: f"placement {ks[i]}")
+                             labels=lambda i, ks=ks: f"placement {ks[i]}")
 
 
 def _compare_rba(d: FileDiff, golden: Path, found: Path, tol: Tolerance, opts: dict) -> None:
@@ -684,7 +684,7 @@ def diff_files(golden, found, name: str | None = None, tol: Tolerance = DEFAULT,
     except ValueError as exc:  # FormatError/InputError are ValueErrors; a bad manifest option too
         d.status = "unreadable"
         d.findings.append(Finding(f"cannot compare: {exc}"))
-    except Exception as exc:  # noqa: BLE001 - a report, not a crash
+    except Exception as exc:
         d.status = "unreadable"
         d.findings.append(Finding(f"cannot compare: {type(exc).__name__}: {exc}"))
     return d

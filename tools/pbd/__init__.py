@@ -17,17 +17,17 @@ from .constraints import (
     wrap_angle,
 )
 from .solver import (
+    bending_residual,
     colour_constraints,
+    distance_residual,
     mesh_edges,
     mesh_hinges,
+    part_offsets,
     project_bending_constraints,
     project_bending_constraints_coloured,
     project_distance_constraints,
     project_distance_constraints_coloured,
     project_internal_by_part,
-    part_offsets,
-    bending_residual,
-    distance_residual,
 )
 
 __all__ = [

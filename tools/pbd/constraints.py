@@ -40,7 +40,7 @@ _EPS = 1e-300
 
 @njit(cache=True)
 def wrap_angle(a):
-    """``a`` taken modulo 2 pi into [-pi, pi) (angle differences, VLAB_FORMATS.md pitfalls)."""
+    """``a`` taken modulo 2 pi into [-pi, pi) (angle differences, docs/vlab_formats.md pitfalls)."""
     two_pi = 2.0 * math.pi
     r = (a + math.pi) % two_pi
     if r < 0.0:

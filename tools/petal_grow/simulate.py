@@ -366,7 +366,7 @@ class GrowResult:
 
 
 class Simulation:
-    """The state of one run: rest values, stiffness, positions (Model/State split of STYLE.md)."""
+    """The state of one run: rest values, stiffness, positions (the Model/State split: what is fixed apart from what moves)."""
 
     def __init__(self, model: Model, params: Params):
         self.m = model

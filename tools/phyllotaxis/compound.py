@@ -81,7 +81,7 @@ def compound_pattern(profile: Profile, head_area: AreaFunction, *, head_curve: s
         rot = np.array([[c, 0, -s], [0, 1, 0], [s, 0, c]])  # rotation about local +Y by `turn`
         basis = np.stack([x, y, z])  # rows: images of local X, Y, Z
 
-        def to_world(v, translate):
+        def to_world(v, translate, rot=rot, basis=basis, k=k):
             return la.matmul(la.matmul(v, rot.T), basis) + (heads.pos[k] if translate else 0.0)
 
         fp.append(to_world(sub.pos, True))

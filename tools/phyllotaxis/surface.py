@@ -68,7 +68,7 @@ class Profile:
         """Arc length where the cumulative area ``S(s)`` reaches ``a`` (inverse of :attr:`area`)."""
         return np.interp(a, self.area, self.s)
 
-    def scaled(self, factor: float) -> "Profile":
+    def scaled(self, factor: float) -> Profile:
         """The same curve scaled by ``factor`` about the origin (areas scale by ``factor**2``)."""
         f = float(factor)
         return Profile(self.s * f, self.r * f, self.y * f, self.tr, self.ty, self.nr, self.ny,

@@ -12,7 +12,7 @@ def _aspect(ctx, param, value):
     try:
         x = float(value)
     except ValueError:
-        raise click.BadParameter(f"expected 'auto' or a number > 0, found {value!r}")
+        raise click.BadParameter(f"expected 'auto' or a number > 0, found {value!r}") from None
     if not (ASPECT_RANGE[0] <= x <= ASPECT_RANGE[1]):
         raise click.BadParameter(f"expected 'auto' or a number in [{ASPECT_RANGE[0]:g}, {ASPECT_RANGE[1]:g}], "
                                  f"found {value!r}")

@@ -7,12 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
-from inflo.tools.common import linalg as la
 from inflo.formats.atomic import frame_name, list_sequence, remove_stale_frames
 from inflo.formats.errors import InputError
 from inflo.formats.floret import check_compatible, full_petal, read_floret
 from inflo.formats.obj import write_obj
 from inflo.tools.bspline import surface_grid
+from inflo.tools.common import linalg as la
 from inflo.tools.common.cli import progress
 
 from .mesh import FloretMesher, collapsed_rows, quality

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from inflo.tools.common import linalg as la
 from inflo.tools.collide import resolve_collisions
+from inflo.tools.common import linalg as la
 from inflo.tools.pbd.solver import mesh_edges  # re-exported: unique edges (i < j), sorted, (e, 2) int32
 
 __all__ = ["mesh_edges", "collision_resolver", "default_spacing"]

@@ -345,7 +345,7 @@ def parse_sweep(text: str, path="<sweep>") -> Sweep:
                     raise FormatError(path, _line_of(text, section, k, nth),
                                       f"a key of [{section}]{did_you_mean(k, keys)}", repr(k))
     sw = raw.get("sweep", {})
-    L = lambda key, section="sweep", nth=0: _line_of(text, section, key, nth)  # noqa: E731
+    L = lambda key, section="sweep", nth=0: _line_of(text, section, key, nth)
     if "stage" in raw and "pipeline" in raw:
         raise FormatError(path, _line_of(text, "stage", None), "either [pipeline] or [[stage]] tables, not both",
                           "both")

@@ -72,7 +72,7 @@ def auto_batch(sweep: Sweep, pending: int, workers: int) -> int:
 def _dashboard(client) -> str | None:
     try:
         services = client.scheduler_info().get("services", {})
-    except Exception:  # noqa: BLE001
+    except Exception:
         return None
     return client.dashboard_link if "dashboard" in services else None
 
@@ -154,7 +154,7 @@ def _run_pending(sweep, out_dir, pending, summary, *, scheduler, workers, quiet,
                 items = futures[fut]
                 try:
                     results = fut.result()
-                except Exception as exc:  # noqa: BLE001 - a worker died (KilledWorker) or the task was lost
+                except Exception as exc:
                     results = [failed_result(v, f"worker lost the task: {type(exc).__name__}: {exc}".splitlines()[0],
                                              1) for v, _ in items]
                 for r in results:

@@ -290,7 +290,7 @@ def _run_inprocess(cli: str, args: list[str]) -> tuple[int, str, float]:
         except InputError as exc:
             buf.write(f"{cli}: error: {exc}\n")
             code = 2
-        except Exception as exc:  # noqa: BLE001 - a failed variant, recorded
+        except Exception as exc:
             buf.write(f"{cli}: failed: {type(exc).__name__}: {exc}\n")
             code = 1
     return code, buf.getvalue(), _peak_mb_self()
@@ -434,7 +434,7 @@ def run_variant(sweep: Sweep, out_dir, v: Variant, fingerprint: str) -> dict:
                     line = one_line_error(text, code)
                     error = line if line.startswith(st.cli) else f"{st.name}: {line}"
                     break
-    except Exception as exc:  # noqa: BLE001 - recorded on the variant
+    except Exception as exc:
         code = code or 1
         error = f"{type(exc).__name__}: {exc}"
     wall = time.perf_counter() - t0
@@ -461,6 +461,6 @@ def run_batch(sweep: Sweep, out_dir: str, items: list[tuple[Variant, str]]) -> l
     for v, fp in items:
         try:
             out.append(run_variant(sweep, out_dir, v, fp))
-        except Exception as exc:  # noqa: BLE001 - e.g. the output folder became unwritable
+        except Exception as exc:
             out.append(failed_result(v, f"{type(exc).__name__}: {exc}", 1))
     return out

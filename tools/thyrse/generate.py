@@ -283,7 +283,7 @@ def grow_thyrse(p: Params) -> ThyrseLayout:
     return lay
 
 
-def _layout(b: "_Builder") -> ThyrseLayout:
+def _layout(b: _Builder) -> ThyrseLayout:
     tp = b.p.thyrse
     base = b.node(np.asarray(b.p.base, float), -1, 0.0)
     ts = [tp.first_node + (1 - tp.first_node) * j / max(tp.nodes, 1) for j in range(tp.nodes)]

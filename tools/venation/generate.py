@@ -18,8 +18,17 @@ import numpy as np
 from inflo.formats.atomic import frame_name
 
 from .graph import cycle_rank, elongation_widths, refine_veins, strahler_orders, vein_widths
-from .output import (TextureStyle, render_texture, save_png, stale_frames, texture_box, write_blade_mesh,
-                     write_graph, write_margin, write_widths)
+from .output import (
+    TextureStyle,
+    render_texture,
+    save_png,
+    stale_frames,
+    texture_box,
+    write_blade_mesh,
+    write_graph,
+    write_margin,
+    write_widths,
+)
 from .params import Inputs, Params
 from .simulate import SimParams, Snapshot, VenationResult, simulate
 

@@ -248,7 +248,7 @@ def refine_veins(node_pos, node_parent, extra_edges, threshold: float, alpha: fl
     joint[extra.ravel()] = True
     _seed(int(seed) % (2 ** 31))
     removed = np.zeros(n, bool)
-    new_pts, new_owner, new_parent_ref = [], [], []  # new_parent_ref: ('old', i) or ('new', k) encoded
+    new_pts, new_owner, _new_parent_ref = [], [], []  # new_parent_ref: ('old', i) or ('new', k) encoded
     links = []  # (child ref, parent ref) for every edge inside refined chains
     for c in chains(parent, joint):
         if len(c) < 3:

@@ -52,14 +52,16 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from .blade import Blade, Growth, _inside, inside_blade
 from .neighbourhood import (
+    HULL_DIRECTIONS,
     MAX_NEIGHBOURS,
     NEAREST,
     RELATIVE,
@@ -73,7 +75,6 @@ from .neighbourhood import (
     make_grid,
     nearest_incremental,
     relative_neighbourhoods,
-    HULL_DIRECTIONS,
 )
 
 __all__ = ["SimParams", "VenationResult", "simulate", "Snapshot"]

@@ -27,7 +27,8 @@ from inflo.tools.fccompose.synthetic import (
 N_FRAMES = 20
 
 
-def main(folder=Path(__file__).resolve().parent) -> None:
+def main(folder: Path | None = None) -> None:
+    folder = folder or Path(__file__).resolve().parent
     frames, faces, fixed = opening_floret(N_FRAMES)
     write_floret_animation(folder / "anim", frames, faces, fixed, folder / "petal_base.txt")
     write_scene(folder / "scene.scn", two_floret_scene(N_FRAMES))

@@ -124,7 +124,7 @@ def lobe_outline(p0, d, length, w0, w1, children, out):
     right = sorted((c for c in children if c[1] < 0), key=lambda c: c[0])
     left = sorted((c for c in children if c[1] > 0), key=lambda c: -c[0])
     out.append(edge(0.0, -1))
-    for t, side, spec in right:
+    for t, _side, spec in right:
         cd = _rot(d, -spec["angle"])
         half = spec["w0"] / max(abs(np.dot(_rot(cd, math.pi / 2), d)), 0.3)
         out.append(edge(t - half / length, -1))
@@ -135,7 +135,7 @@ def lobe_outline(p0, d, length, w0, w1, children, out):
     out.append(edge(1.0, -1))
     out.append(p0 + (length + w1) * d)  # the tip
     out.append(edge(1.0, 1))
-    for t, side, spec in left:
+    for t, _side, spec in left:
         cd = _rot(d, spec["angle"])
         half = spec["w0"] / max(abs(np.dot(_rot(cd, math.pi / 2), d)), 0.3)
         out.append(edge(t + half / length, 1))
