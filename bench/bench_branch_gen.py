@@ -1,9 +1,9 @@
 """branch-gen: space colonization (Runions sec. 3.2.4) and extended Rodkaew (thesis ch. 7) run times.
 
 Anchors: Runions' run-time experiment (N = 3000 attraction points in a unit sphere, one tree node
-at the origin, D = 0.01, d_k = 2D; "a few seconds or minutes"), with issue 7's goal of 1 s; the
+at the origin, D = 0.01, d_k = 2D; "a few seconds or minutes"), with a goal of 1 s; the
 growth of run time with N (fig. 3.9: about linear); the extended Rodkaew algorithm for 5,000
-florets with timed emergence (issue 7's goal: 5 s); and the spatial-hash nearest-other-tree query
+florets with timed emergence (goal: 5 s); and the spatial-hash nearest-other-tree query
 against an all-pairs scan of the same nodes (same run).
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Continuous collision narrow phase: queries per second, inflo vs ipctk in the same run (issue 5).
+"""Continuous collision narrow phase: queries per second, inflo vs ipctk in the same run.
 
 Random queries (four points in [-1, 1]^3 each moving by up to 1 per axis; about 7% of them
 collide), the same for both libraries:
@@ -14,7 +14,7 @@ collide), the same for both libraries:
 - ``ccd_canopy_pairs``: the narrow phase as fccompose runs it, on one thread, over the candidate
   pairs of a canopy's step (a grid of opening florets, every floret's petals pressed down through
   its neighbours': the broad phase's vertex-triangle and edge-edge pairs of one step, most of them
-  neighbours within a floret that the cubic's cull rejects); queries/s per core, goal 3e6 (issue 25).
+  neighbours within a floret that the cubic's cull rejects); queries/s per core, goal 3e6.
 """
 from __future__ import annotations
 

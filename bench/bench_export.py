@@ -1,4 +1,4 @@
-"""canopy-export (issue 21): USD export time and size against the OBJ sequences; Blender import.
+"""canopy-export: USD export time and size against the OBJ sequences; Blender import.
 
 - ``export_lily``: the draft lily's ``lily.usdc`` (tepals and column, 100 frames) from
   ``build/lily`` (built with ``make -C pipelines/lily usd`` when missing): export seconds and the

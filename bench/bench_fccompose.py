@@ -1,4 +1,4 @@
-"""Whole-canopy growth with collisions (issue 5; thesis table 4.1).
+"""Whole-canopy growth with collisions (thesis table 4.1).
 
 A synthetic canopy of identical 5-petal florets (:mod:`inflo.tools.fccompose.synthetic`, 330
 triangles each) on a jittered grid, opening over the frames so that neighbours' petals meet;
@@ -6,11 +6,11 @@ triangles each) on a jittered grid, opening over the frames so that neighbours' 
 checks every 50 frames, an OBJ every 25 frames):
 
 - ``fccompose_100k``: 300 florets (99,000 triangles), 100 frames;
-- ``fccompose_100k_no_crowding``: the same 100k canopy with the crowding work of issue 13 off
+- ``fccompose_100k_no_crowding``: the same 100k canopy with the crowding work off
   (``relax iterations: 0``, ``edge stretch bounds: 0.01 100``): the florets are then squeezed to
-  a few per cent of their edge lengths and stretched several times over, as before issue 13; the
+  a few per cent of their edge lengths and stretched several times over, as before that work; the
   difference to ``fccompose_100k`` is what keeping every edge within [0.5, 1.5] x rest costs here
-  (the engine itself measured alone: issue 13's "not slower by more than 10 %");
+  (the engine itself measured alone: "not slower by more than 10 %");
 - ``fccompose_350k``: 1,060 florets (349,800 triangles), the thesis's yarrow size (60 min in
   table 4.1; goal under 6 min on this 2-core machine, memory under 4 GB), 100 frames. (``_run``
   can extrapolate from fewer frames, but collisions start only once the petals open, so the
@@ -115,7 +115,7 @@ def growth(ctx: BenchContext) -> list[Result]:
 
 
 def dense_head(ctx: BenchContext) -> list[Result]:
-    """The dense growing head of ``pipelines/examples/growing_head`` (issue 13): 278 florets of a
+    """The dense growing head of ``pipelines/examples/growing_head``: 278 florets of a
     dynamic phyllotaxis with the phase effect, 77,840 triangles, 80 frames; its fccompose stage
     timed, with the crowding figures of its log (edge stretch, florets present). (Before
     2026-12-01 the floret had 5 vertices on its lobe-tip rows too, 320 triangles: 88,960.)"""

@@ -1,4 +1,4 @@
-"""floret-animate + polygonize speed (issue 3: under 1 s for 100 frames after numba's compile).
+"""floret-animate + polygonize speed (goal: under 1 s for 100 frames after numba's compile).
 
 Workload: the example disk floret's corolla (pipelines/examples: 5 fused petals, closed bud ->
 open), polygonized with the example's kind of lambda(v) and eta(v) functions, refined to about

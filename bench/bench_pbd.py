@@ -1,11 +1,11 @@
-"""PBD constraint projections per second on a ~100k-triangle canopy (issue 5).
+"""PBD constraint projections per second on a ~100k-triangle canopy.
 
 The canopy: 300 synthetic 5-petal florets (:mod:`inflo.tools.fccompose.synthetic`, 330 triangles
 each) placed on a grid, half open. Rest values are the current ones scaled by 0.99 (lengths) and
 shifted by 0.05 rad (angles), so every projection does its full work. Reported separately:
 
 - ``pbd_distance_projections``: serial Gauss-Seidel sweep of the distance constraints (eq. 3.11);
-  anchor: the ~6e7 projections/s a plain numba loop reaches on one core here (issue 5);
+  anchor: the ~6e7 projections/s a plain numba loop reaches on one core here;
 - ``pbd_bending_projections``: serial sweep of the signed dihedral constraints (eq. 3.13);
 - ``..._coloured``: the colour-by-colour ``prange`` sweeps on all cores (ratio to serial in the note);
 - ``pbd_internal_by_floret``: what fccompose runs, distance then bending sweeps floret by floret,

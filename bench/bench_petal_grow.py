@@ -1,9 +1,9 @@
-"""petal-grow (issue 22; Ijiri et al. 2008, sec. 6.3): 100 keyframes of an opening flower grown by
+"""petal-grow (Ijiri et al. 2008, sec. 6.3): 100 keyframes of an opening flower grown by
 growth maps, with collisions and the exact test of every written keyframe.
 
 - ``petal_grow_eustoma_100``: the Eustoma of pipelines/eustoma at the paper's resolution (five
   petals of 456 triangles, 2280 in all), Mellow Yellow's maps. Anchor: 8 min on a 2.4 GHz Core 2
-  Duo (sec. 6.3); issue 22's goal: under 10 s.
+  Duo (sec. 6.3); goal: under 10 s.
 - ``petal_grow_lily_100``: the growth-map lily of pipelines/lily/growth.toml (three petals of 680
   triangles inside three sepals of 560, 3720 in all). Anchor: 11.5 min; goal: under 10 s.
 - ``petal_grow_single_petal_100``: one Eustoma petal alone. Anchor: 2.5 min; goal: under 1 s.

@@ -1,4 +1,4 @@
-"""Phyllotaxis and dimorph throughput (issue 4 goals).
+"""Phyllotaxis and dimorph throughput.
 
 - a dynamic head of 10,000 florets (centripetal fractionation, thesis sec. 5.3) simulated and
   written as 200 RBA frames plus scene.scn; goal under 2 s. Anchor: the same frames written

@@ -1,4 +1,4 @@
-"""canopy-render speed: a 400k-triangle synthetic canopy to PNG (issue 2: under 10 s).
+"""canopy-render speed: a 400k-triangle synthetic canopy to PNG (goal: under 10 s).
 
 - ``render_400k_triangles_cli``: the ``canopy-render`` command end to end in a fresh process
   (imports, GL context, reading the 15 MB OBJ, framing, drawing, PNG), best of 3.

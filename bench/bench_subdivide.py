@@ -1,4 +1,4 @@
-"""subdivide: two Loop levels with collision handling on a ~100k-triangle canopy (issue 6).
+"""subdivide: two Loop levels with collision handling on a ~100k-triangle canopy (goal: 30 s).
 
 The canopy: 420 open synthetic 5-petal florets (:mod:`inflo.tools.fccompose.synthetic`, 240
 triangles each, 100,800 in all) on a jittered grid, neighbours' petal tips a few percent of a petal

@@ -1,4 +1,4 @@
-"""inflo-sweep (issue 24): the canalization sweep's throughput (heads per second) on 1 vs 2 Dask
+"""inflo-sweep: the canalization sweep's throughput (heads per second) on 1 vs 2 Dask
 workers, and a small yarrow-variants sweep's wall time against the same builds one after another.
 
 - ``sweep_canalization_heads_per_s_1w`` / ``_2w``: pipelines/examples/sweeps/canalization.toml
@@ -9,7 +9,7 @@ workers, and a small yarrow-variants sweep's wall time against the same builds o
 - ``sweep_yarrow_2w_vs_serial`` (skipped in quick mode: four draft yarrow builds are minutes):
   the wall time of yarrow_variants.toml on 2 workers over the sum of its variants' own times.
 
-Anchor: issue 24's goal of using the machine's cores; 2.0 = perfect scaling on 2 workers.
+Anchor: the goal of using the machine's cores; 2.0 = perfect scaling on 2 workers.
 """
 from __future__ import annotations
 

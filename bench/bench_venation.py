@@ -1,4 +1,4 @@
-"""venation (issue 23; Runions ch. 4): open and closed leaf venation patterns of about 10,000 vein
+"""venation (Runions ch. 4): open and closed leaf venation patterns of about 10,000 vein
 nodes in a growing leaf, and how the run time grows with the node count.
 
 - ``venation_closed_10k``: the poplar-like closed pattern of pipelines/examples/venation/poplar.toml
@@ -11,7 +11,7 @@ nodes in a growing leaf, and how the run time grows with the node count.
 - ``venation_sunflower_leaf``: the sunflower example (closed, blind veinlets, corner cutting of
   Runions ch. 5), simulation and refinement, about 30,000 nodes (anchor scaled to its size).
 
-Anchor: issue 23's goal of 5 s for 10,000 nodes (Runions sec. 4.5: two hours for the exact
+Anchor: the goal of 5 s for 10,000 nodes (Runions sec. 4.5: two hours for the exact
 poplar of fig. 4.23, two minutes with the Urquhart approximation). Times are the simulation's
 (``VenationResult.seconds``: darts, neighbourhoods, growth), best of ``repeat`` runs, kernels
 compiled before.

@@ -103,7 +103,7 @@ def format_rows(ids, values):
 def tiny_nonzero_rows(vals: np.ndarray) -> np.ndarray:
     """Rows of ``id``-less ``pos scale up right`` values (n, 12) holding a non-zero scale component,
     or a non-zero up/right vector, that ``%.6f`` would print as zero: :func:`format_preamble` writes
-    those in exponent form (issue 14: a valid scale of 4e-7 came back as 0)."""
+    those in exponent form (a valid scale of 4e-7 once came back as 0)."""
     a = np.abs(vals)
     tiny = (a > 0) & (a < 1e-6)
     scale = tiny[:, 3:6].any(axis=1)

@@ -403,7 +403,7 @@ class KeySpec:
         ``strict``; None: any finite number.
     high : float or None
         ``"int"``: at most ``high`` (iteration and frame counts: a count beyond it is a typo, not a
-        run this machine could finish, issue 14); None: no upper bound.
+        run this machine could finish); None: no upper bound.
     strict : bool
     check : str
         A condition on the values together, as the spec words it (:data:`_CHECKS`).
@@ -454,7 +454,7 @@ _SYNTAX = {
 }
 
 _COUNT0, _COUNT1 = KeySpec("int", low=0), KeySpec("int", low=1)
-#: Upper bounds of the counts: iterations per step, steps per frame, frames (issue 14: a count of
+#: Upper bounds of the counts: iterations per step, steps per frame, frames (a count of
 #: 1e11 hung, one of 1e23 overflowed the kernels' integers).
 _ITERS, _FRAMES = 10_000, 100_000
 

@@ -5,8 +5,8 @@ corolla and stamen tube). Each organ is the clamped B-spline control mesh of ONE
 floret's local frame (+Y the floret axis ``up``, +X ``right``), replicated by n-fold radial
 symmetry, optionally given as half a petal and mirrored (bilateral symmetry), with the first k
 control points of each lateral boundary fused to the neighbours (thesis 2.2). ``floret-animate``
-reads two or more key poses and writes one ``.floret`` per frame; ``polygonize`` reads those frames
-(issue 3). The spec page is ``formats/floret.md``.
+reads two or more key poses and writes one ``.floret`` per frame; ``polygonize`` reads those frames.
+The spec page is ``formats/floret.md``.
 
 The geometric meaning of the symmetry fields is implemented once, here, in :func:`full_petal` and
 :func:`petals`, so the tools and the spec cannot drift apart.
@@ -631,7 +631,7 @@ def read_floret(path) -> Floret:
             eta=b.get("eta"),
         )
         flat = cp.reshape(-1, 3)
-        if len(flat) and (flat == flat[0]).all():  # issue 14: such a key pose gave frames of nothing
+        if len(flat) and (flat == flat[0]).all():  # such a key pose once gave frames of nothing
             raise err(b.key_lines.get("points", b.line), f"control points spanning a surface in organ {b.name!r} (an "
                       "organ whose points all coincide has no size to interpolate or polygonize)",
                       f"all {len(flat)} at {' '.join(f'{c:g}' for c in flat[0])}")

@@ -1,4 +1,4 @@
-"""canopy-export's USD opened in real Blender (issue 21): ``bpy``, Blender 4.5 LTS as a Python module.
+"""canopy-export's USD opened in real Blender: ``bpy``, Blender 4.5 LTS as a Python module.
 
 bpy is a large install (a 370 MB wheel, about 950 MB installed), so it lives in its own venv,
 ``.venv-blender/`` (``make test-blender`` makes it and runs this file); inflo's venv stays without

@@ -1,4 +1,4 @@
-"""branch-gen: extended Rodkaew (thesis ch. 7), pipe model, generalized cylinders, CLI (issue 7)."""
+"""branch-gen: extended Rodkaew (thesis ch. 7), pipe model, generalized cylinders, CLI."""
 from __future__ import annotations
 
 import math
@@ -509,7 +509,7 @@ def test_branch_gen_growth_scale_functions(tmp_path, write):
 
 
 def test_branch_gen_rodkaew_kernel_compiles_once():
-    """The particle kernel takes NamedTuples of arrays (issue 15): one compiled signature across
+    """The particle kernel takes NamedTuples of arrays: one compiled signature across
     levels, growth of space, w_b tables, birth positions, and node arrays and hash table that grow."""
     from inflo.tools.branch_gen import rodkaew as rk
 

@@ -1,4 +1,4 @@
-"""branch-gen --algorithm sca: space colonization and envelopes (Runions ch. 3, issue 7)."""
+"""branch-gen --algorithm sca: space colonization and envelopes (Runions ch. 3)."""
 from __future__ import annotations
 
 import math
@@ -375,7 +375,7 @@ def test_branch_gen_sca_points_added_during_the_run():
 
 
 def test_branch_gen_sca_kernel_compiles_once():
-    """The iteration kernel takes NamedTuples of arrays (issue 15): one compiled signature, whatever
+    """The iteration kernel takes NamedTuples of arrays: one compiled signature, whatever
     the caller's scalar types, as the points are added and the node arrays grow."""
     from inflo.tools.branch_gen import sca
 

@@ -1,4 +1,4 @@
-"""canopy-export (issue 21): OBJ sequences + colours -> one USD file, read back with pxr.
+"""canopy-export: OBJ sequences + colours -> one USD file, read back with pxr.
 
 A tiny synthetic build: a 3-frame sequence whose third frame gains a vertex and a face (a floret
 emerging), and a static part (one OBJ file without materials). The USD is opened with

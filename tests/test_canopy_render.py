@@ -488,7 +488,7 @@ def test_failure_while_writing_an_animation_leaves_no_file(renderer, monkeypatch
 
 
 # ------------------------------------------------------------------------------------------------
-# texture maps (--texture, --mtl-textures; issue 23's vein texture on its blade)
+# texture maps (--texture, --mtl-textures; venation's vein texture on its blade)
 
 
 def _textured_quad(tmp_path, *, material="leaf", seam=False):

@@ -1,4 +1,4 @@
-"""Narrow phase at the edges (issue 14): coplanar motion decided against rational arithmetic, and
+"""Narrow phase at the edges: coplanar motion decided against rational arithmetic, and
 degenerate triangles and edges (coincident pair, all three coincident, collinear, zero-length
 edge, zero motion) without an exception.
 

@@ -119,7 +119,7 @@ def test_degenerate_triangle():
     # a point-sized triangle and a zero-length edge do not crash
     assert vt(v(0.5, 0, 1), v(0.5, 0, -1), a, a, a)[0] == 0
     assert ee(a, a, c, c, a, a, c, c)[0] == 0
-    # two coincident corners (raised ZeroDivisionError before issue 14): the triangle is edge ac
+    # two coincident corners (once raised ZeroDivisionError): the triangle is edge ac
     n, out = vt(v(1.5, 0, 1), v(1.5, 0, -1), a, a, c)
     assert n == 1 and out[0] == pytest.approx(0.5, abs=1e-12)
     np.testing.assert_allclose(out[1] * a + out[2] * a + out[3] * c, [1.5, 0, 0], atol=1e-12)
@@ -702,7 +702,7 @@ def test_culled_is_the_full_tests_early_exit():
 
 
 # ----------------------------------------------------------------------------------------------
-# The whole-part fallback (issue 13)
+# The whole-part fallback
 # ----------------------------------------------------------------------------------------------
 
 

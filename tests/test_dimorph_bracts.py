@@ -1,5 +1,5 @@
 """dimorph --bracts: the outermost primordia of a head are involucral bracts, left out of the cone
-test (issue 16; thesis ch. 9 on gaillardia's involucral bracts)."""
+test (thesis ch. 9 on gaillardia's involucral bracts)."""
 from __future__ import annotations
 
 import numpy as np

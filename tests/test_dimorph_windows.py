@@ -1,4 +1,4 @@
-"""dimorph per-type developmental windows (issue 13): ``--ray-lead``, ``--ray/--disk-development-frames``,
+"""dimorph per-type developmental windows: ``--ray-lead``, ``--ray/--disk-development-frames``,
 and rba placements whose SCN scale after dimorph is exactly the ray/disk factor."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""fccompose end to end (issue 5): template reproduction, the dense two-floret scene stays
+"""fccompose end to end: template reproduction, the dense two-floret scene stays
 intersection-free, --resume is bit-identical, RBA motion, and bad input."""
 from __future__ import annotations
 
@@ -523,7 +523,7 @@ def test_florets_with_no_room_are_made_smaller_not_torn(inputs, tmp_path):
 @pytest.mark.slow
 def test_florets_squeezed_hard_stay_whole(inputs, tmp_path):
     """The same head with florets 1.2 x their primordia and a thickness h of a tenth of a floret
-    (before issue 13 the per-vertex revert tore such florets and the solve diverged, to 1e11 units,
+    (before the whole-part fallback the per-vertex revert tore such florets and the solve diverged, to 1e11 units,
     within a few frames of their opening): now the florets of pairs still crossing are moved back
     whole along their own motion, so the run goes on collision-free with nothing torn.
 
@@ -638,7 +638,7 @@ def test_phase_effect_each_floret_at_the_stage_its_age_gives(inputs, tmp_path):
 
 @pytest.mark.slow
 def test_dense_growing_head_stays_in_shape_collision_free_and_whole(tmp_path):
-    """The growing_head example made small for CI (issue 13): the disk floret of
+    """The growing_head example made small for CI: the disk floret of
     pipelines/examples (polygonized as the example does), a centripetal dense head from
     phyllotaxis with the phase effect (36 frames, each floret opening over 20), fccompose with the
     example's parameters. Neighbouring corollas touch (collisions are found and resolved), and in
@@ -734,7 +734,7 @@ def test_rba_matrices_of_all_florets_at_once_equal_the_one_by_one_placement(inpu
 
 def test_resume_refuses_an_input_changed_since_the_interruption(inputs, tmp_path):
     """The resume fingerprint covers every input file: a scene edited between the interrupted run
-    and --resume is named in a one-line error, exit 2 (issue 14)."""
+    and --resume is named in a one-line error, exit 2."""
     d = tmp_path / "case"
     shutil.copytree(inputs["dir"], d)
     out = tmp_path / "out"
@@ -749,7 +749,7 @@ def test_resume_refuses_an_input_changed_since_the_interruption(inputs, tmp_path
 
 def test_a_gap_in_an_input_sequence_is_refused(inputs, tmp_path):
     """File NNNN is frame NNNN: a missing RBA file or animation frame would re-time everything
-    after it silently; fccompose names the first missing file (issue 14)."""
+    after it silently; fccompose names the first missing file."""
     from inflo.formats.atomic import first_missing_frame
 
     assert first_missing_frame(["a/frame_0000.obj", "a/frame_0001.obj", "a/frame_0003.obj"]) == "frame_0002.obj"

@@ -1,4 +1,4 @@
-"""fccompose's Model/State/Control split (issue 15): assemble_model without files, Schedule,
+"""fccompose's Model/State/Control split: assemble_model without files, Schedule,
 State and the resume files it is written to and read from."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Nested scenes in fccompose (issue 18; thesis ch. 8: "a SCN file instantiates a rigid body
+"""Nested scenes in fccompose (thesis ch. 8: "a SCN file instantiates a rigid body
 animation of an inflorescence described in another SCN file").
 
 - a two-level scene (an outer scene of placements naming a ``rigid body animation`` entry, whose

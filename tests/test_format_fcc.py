@@ -342,7 +342,7 @@ MALFORMED = [
     ("solver iterations: 5.0\n", 1, "an integer for 'solver iterations'"),
     ("solver iterations: 5f\n", 1, "an integer for 'solver iterations'"),
     ("updates per frame: 0\n", 1, "an integer >= 1"),
-    # counts beyond what a run could finish (issue 14: 1e11 hung, 1e23 overflowed a kernel)
+    # counts beyond what a run could finish (1e11 hung, 1e23 overflowed a kernel)
     ("solver iterations: 100000000000000000000000\n", 1, "an integer in [0, 10000]"),
     ("collision iterations: 99999999999\n", 1, "an integer in [0, 10000]"),
     ("updates per frame: 1000000000\n", 1, "an integer in [1, 1000]"),

@@ -461,7 +461,7 @@ def organs(draw, name):
     nu_full = 2 * nu - 1 if bilateral else nu
     n = draw(st.integers(1, 8))
     cp = np.array(draw(st.lists(d6, min_size=nv * nu * 3, max_size=nv * nu * 3))).reshape(nv, nu, 3)
-    if (cp == cp[0, 0]).all():  # an organ of no size is refused by the reader (issue 14)
+    if (cp == cp[0, 0]).all():  # an organ of no size is refused by the reader
         cp[-1, -1, 1] += 1.0
     funcs = st.sampled_from(["lam.func", "sub/eta.func", "../up.func"])
     lam = st.none() | st.integers(1, 10**7).map(lambda i: i / 1e6) | funcs

@@ -96,7 +96,7 @@ def test_scn_round_trip(tmp_path_factory, scene):
 
 
 def test_thesis_example_restored(write):
-    """The C.2 example, its lost characters restored (issue 2)."""
+    """The C.2 example, its lost characters restored."""
     p = write("s1.scn", (
         "# Constraint animation with ID 0, corresponding to\n"
         "# an animation listed in the FCComposer parameter file.\n"
@@ -327,7 +327,7 @@ def test_rba_fast_reader_equals_the_line_reader(tmp_path, monkeypatch):
 
 def test_tiny_nonzero_scale_survives_writing(tmp_path):
     """A valid scale of 4e-7 (or an up vector of 1e-8 components) is not written as 0, which the
-    readers refuse (issue 14); other numbers keep the fixed format."""
+    readers refuse; other numbers keep the fixed format."""
     from inflo.formats.scn import Placement, Scene, read_scn, write_scn
 
     sc = Scene(placements=[Placement("o", 0, [1e-7, 0, 0], [4e-7, 1.0, 3e-7], [1e-8, 2e-8, 0], [1, 0, 0])])

@@ -1,4 +1,4 @@
-"""Golden stage outputs (issue 8): every species with ``tests/golden/<species>/manifest.toml`` is
+"""Golden stage outputs: every species with ``tests/golden/<species>/manifest.toml`` is
 built at draft quality (``make -C pipelines/<species> QUALITY=draft <targets>``, once per session,
 incremental) and each golden file is compared with the build by the tolerance-aware diff of
 ``inflo.tools.golden`` (structure exact, coordinates within 1e-5 x scene size, timings
@@ -576,7 +576,7 @@ def test_yarrow_goldens_are_small_and_complete():
     assert all(p.is_file() for p in paths)
     assert sum(p.stat().st_size for p in paths) < 5 * 2**20
     # every stage: key-pose frames, polygons, the head, the growing pattern and the heads and
-    # florets on the canopy's clock (issue 19), dimorph, the canopy, branches, the smoothed final
+    # florets on the canopy's clock, dimorph, the canopy, branches, the smoothed final
     # frame, the check
     assert {"ray_frames/frame_0019.floret", "disk_obj/frame_0019.obj", "head/scene.scn", "growth/rba/0070.rba",
             "heads/rba/0031.rba", "corymb/rba/0031.rba", "corymb/scene.scn", "corymb/typed.scn",

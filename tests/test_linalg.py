@@ -1,5 +1,5 @@
 """inflo.tools.common.linalg: fixed-order products, norms, inverses, determinants, eigenvectors
-and Kabsch rotations agree with numpy/LAPACK to rounding, in the order they promise (issue 53)."""
+and Kabsch rotations agree with numpy/LAPACK to rounding, in the order they promise (same bytes on every machine)."""
 import numpy as np
 import pytest
 

@@ -1,4 +1,4 @@
-"""petal-grow (issue 22; Ijiri et al. 2008): growth maps (eq. 1), regional growth (eqs. 2-4), the
+"""petal-grow (Ijiri et al. 2008): growth maps (eq. 1), regional growth (eqs. 2-4), the
 PBD global shape against a reference energy minimization (eqs. 5-7, scipy.optimize), attachment
 by shape matching (sec. 5.3), the parameter file and bud reader, and a short CLI run whose
 keyframes keep their topology, their organs' order and no intersecting triangle pair."""

@@ -250,8 +250,8 @@ def test_dynamic_cli_writes_rba_frames_with_every_emerged_floret(tmp_path, write
     assert res2.returncode == 0
     assert (tmp_path / "again/scene.scn").read_bytes() == (out / "scene.scn").read_bytes()
     assert (tmp_path / "again/rba/0011.rba").read_bytes() == (out / "rba/0011.rba").read_bytes()
-    # the header names the parameter file the same way however it was typed (issue 14: an absolute
-    # path made two checkouts' scenes differ)
+    # the header names the parameter file the same way however it was typed (an absolute
+    # path once made two checkouts' scenes differ)
     (tmp_path / "sub").mkdir()
     res3 = run_cli("phyllotaxis", "./sub/../dyn.toml", "-o", "rel", "--quiet", cwd=tmp_path)
     assert res3.returncode == 0, res3.stderr

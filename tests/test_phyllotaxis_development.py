@@ -1,4 +1,4 @@
-"""phyllotaxis developmental windows (issue 13, the phase effect): ``[dynamics]``/``[hierarchy]``
+"""phyllotaxis developmental windows (the phase effect): ``[dynamics]``/``[hierarchy]``
 ``development_frames``, ``[primordia] development_order/_offset/_frames``, rba placements at scale 1."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The dahlia pipeline (issue 17, pipelines/dahlia): its inputs, its head at both qualities, the
+"""The dahlia pipeline (pipelines/dahlia): its inputs, its head at both qualities, the
 sizes along the ball, the collisions-off run, and the draft build's check.
 
 - the committed key poses are what make_keys.py writes, compatible pose to pose, the two
@@ -12,7 +12,7 @@ sizes along the ball, the collisions-off run, and the draft build's check.
 - size_along.py: the later florets larger by 1 + gain f^power, the bracts untouched;
 - the ray floret's rounded, blunt tip (its rows' arcs drawn back to TIP_END, no point);
 - if the draft build exists (the golden test builds it): check_dahlia.py's report says OK, and
-  its figures of issue 44 (coverage from above, the receptacle in view, the florets' largest
+  its figures of the look (coverage from above, the receptacle in view, the florets' largest
   angle between adjacent faces) meet species.toml [check]; the rays and bracts develop over the
   windows the Makefile gives them (dimorph), the bracts over the whole run.
 """
@@ -179,7 +179,7 @@ def _draft_report() -> str:
 
 
 def test_draft_build_closed_from_above_and_smooth():
-    """Issue 44's figures in the draft build's check report, against species.toml [check]."""
+    """The look's figures in the draft build's check report, against species.toml [check]."""
     text = _draft_report()
     check = read_species(DAH / "species.toml").check
     m = re.search(r"^from above: (\S+) of the silhouette's hull covered, (\S+) of the receptacle in view; "

@@ -1,4 +1,4 @@
-"""The Dyssodia pipeline (issue 18, pipelines/dyssodia): six heads composed from one, rays decided
+"""The Dyssodia pipeline (pipelines/dyssodia): six heads composed from one, rays decided
 over the whole inflorescence, and the draft build's check.
 
 - compose_heads.py: a central head and five on a ring at 72-degree steps, each a rigid copy of
@@ -11,7 +11,7 @@ over the whole inflorescence, and the draft build's check.
   florets on the outer margin of the group (none on the central head, every one on the outer side
   of its head), the windows of each head centripetal (its rim first);
 - if the draft build exists (the golden test builds it): check_dyssodia.py's report says OK, and
-  its figures of the look (issue 44) meet species.toml [check]: the group crowds (top-view
+  its figures of the look meet species.toml [check]: the group crowds (top-view
   coverage), most disk florets are reshaped by their neighbours, the rays spread outward, and
   no ray stands open before its head's rim florets have begun.
 """
@@ -158,13 +158,13 @@ def test_draft_build_looks_crowded_reshaped_and_spreading(draft_last):
     check = read_species(DYS / "species.toml").check
     chk = species_module("dyssodia", "check_dyssodia")
     scene, last, k = draft_last
-    # the heads press together: the group from above covers most of its hull (0.51 before issue 44)
+    # the heads press together: the group from above covers most of its hull (0.51 before the work on the look)
     assert view_coverage(last, axis=1) >= check["coverage_min"] >= 0.8
-    # the disk florets reshaped by their neighbours (fig. 9.8; 0.2 before issue 44)
+    # the disk florets reshaped by their neighbours (fig. 9.8; 0.2 before the work on the look)
     dev = np.array(list(chk.deviations(BUILD, last, k, scene).values()))
     assert len(dev) == sum(p.type == "disk" for p in scene.placements)
     assert (dev > check["reshaped_by"]).mean() >= check["reshaped_min"]
-    # the rays spread outward, none hanging (51 degrees below the horizontal before issue 44)
+    # the rays spread outward, none hanging (51 degrees below the horizontal before the work on the look)
     droop = chk.ray_droop(last, scene)
     assert len(droop) == sum(p.type == "ray" for p in scene.placements)
     assert np.mean(droop) <= check["ray_droop_max"] and max(droop) < 45

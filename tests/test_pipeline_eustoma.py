@@ -1,4 +1,4 @@
-"""The Eustoma pipeline (issue 22, pipelines/eustoma; Ijiri et al. 2008, sec. 6.2, figs. 12b, 16, 17).
+"""The Eustoma pipeline (pipelines/eustoma; Ijiri et al. 2008, sec. 6.2, figs. 12b, 16, 17).
 
 - the committed cultivar parameter files are what ``make_keys.py --params`` writes;
 - the final bud petal has the paper's resolution (458 triangles, 261 particles, 718 edges, within

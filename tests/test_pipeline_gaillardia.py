@@ -1,4 +1,4 @@
-"""The gaillardia pipeline (issue 16, pipelines/gaillardia): its inputs, its head at both qualities,
+"""The gaillardia pipeline (pipelines/gaillardia): its inputs, its head at both qualities,
 and the draft build's checks.
 
 What is checked (Owens thesis ch. 9, figs. 9.3, 9.4; ch. 6, figs. 6.2, 6.3; fig. 5.2a):

@@ -1,4 +1,4 @@
-"""The lilac pipeline (issue 20, pipelines/lilac): a branching-first thyrse with its collisions
+"""The lilac pipeline (pipelines/lilac): a branching-first thyrse with its collisions
 resolved (thesis sec. 4.5, figs. 4.9, 4.10, table 4.1).
 
 - make_keys.py writes the committed key poses (both qualities); the floret is a green calyx cup

@@ -1,4 +1,4 @@
-"""The lily pipeline (issue 8, pipelines/lily): its inputs and a short run of its stages.
+"""The lily pipeline (pipelines/lily): its inputs and a short run of its stages.
 
 What is checked (Ijiri et al. 2008, sec. 6.1 and 6.3):
 

@@ -1,4 +1,4 @@
-"""The Orlaya pipeline (issue 18, pipelines/orlaya): the compound umbel, the three forms of fig.
+"""The Orlaya pipeline (pipelines/orlaya): the compound umbel, the three forms of fig.
 6.4c with petals that grow alone, the key poses, and the draft build's check.
 
 - make_keys.py writes the committed key poses (both qualities);

@@ -1,4 +1,4 @@
-"""The sunflower pipeline (issue 16, pipelines/sunflower): its inputs, its head at both qualities,
+"""The sunflower pipeline (pipelines/sunflower): its inputs, its head at both qualities,
 and the draft build's checks.
 
 What is checked (Owens thesis ch. 9, figs. 9.5, 9.6; ch. 6, figs. 6.2, 6.3):

@@ -1,4 +1,4 @@
-"""The yarrow pipeline (issues 8 and 19, pipelines/yarrow): its inputs, short runs of its stages, the build.
+"""The yarrow pipeline (pipelines/yarrow): its inputs, short runs of its stages, the build.
 
 What is checked (Owens thesis figs. 5.3, 6.4a, 7.6, 9.9-9.14, ch. 8):
 

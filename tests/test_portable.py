@@ -1,4 +1,4 @@
-"""Same bytes on every machine (issue 53).
+"""Same bytes on every machine.
 
 OpenBLAS picks its kernels by processor, numpy its SIMD loops, numba its target CPU; a result
 that follows any of them differs in its last bits between an Intel Xeon and an AMD EPYC, and

@@ -1,4 +1,4 @@
-"""Bad numbers are one-line errors with exit 2 and no output (issue 14, "Every bad number is a clear
+"""Bad numbers are one-line errors with exit 2 and no output ("Every bad number is a clear
 error"): one row per probe -- the command, the message fragment expected, the output that must not
 exist afterwards. Probes that used to hang, exhaust memory, crash with exit 1 or accept garbage."""
 from __future__ import annotations

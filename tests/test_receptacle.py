@@ -1,4 +1,4 @@
-"""phyllotaxis [receptacle]: the supporting surface as a closed mesh, one per RBA frame (issue 16)."""
+"""phyllotaxis [receptacle]: the supporting surface as a closed mesh, one per RBA frame."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""A rerun into a folder with an older, longer run (issue 14): the older run's frames go before the
+"""A rerun into a folder with an older, longer run: the older run's frames go before the
 new run writes any, so a rerun interrupted half way leaves a shorter sequence of its own frames,
 never new frames 0..k beside old ones after k (which canopy-render and subdivide would read as one
 run). floret-animate, polygonize and fccompose (without --resume; tests/test_fccompose.py keeps the

@@ -129,7 +129,7 @@ def test_matches_plain_loop_when_no_collisions_arise():
     assert rep[0].collision_constraints == 0
 
 
-# ---------------------------------------------------------------- duplicated vertices (issue 14)
+# ---------------------------------------------------------------- duplicated vertices
 
 def _duplicated(kind):
     """The lily's last canopy frame with one vertex duplicated: 'seam' (half the triangles round it

@@ -1,4 +1,4 @@
-"""inflo-sweep (issue 24): sweep files, variants, overrides, and sweeps on Dask.
+"""inflo-sweep: sweep files, variants, overrides, and sweeps on Dask.
 
 Kept fast: single-stage sweeps of phyllotaxis + dimorph on heads of 20-40 florets and a pipeline of
 shell commands, on a LocalCluster of 2 workers and on a `dask scheduler` + `dask worker` started

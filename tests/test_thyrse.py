@@ -1,4 +1,4 @@
-"""thyrse: the branching-first layout of a lilac thyrse (issue 20; thesis sec. 4.5, figs. 4.9,
+"""thyrse: the branching-first layout of a lilac thyrse (thesis sec. 4.5, figs. 4.9,
 4.10, ch. 7): the layout on tiny cases, decussate angles, the positional functions (length, order,
 density, angle, size, development window) respected, branch-gen's meshes reused, the CLI."""
 from __future__ import annotations

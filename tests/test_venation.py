@@ -1,4 +1,4 @@
-"""venation: open and closed leaf venation patterns (Runions ch. 4; issue 23)."""
+"""venation: open and closed leaf venation patterns (Runions ch. 4)."""
 from __future__ import annotations
 
 import math

@@ -17,7 +17,7 @@ Prints, and fails (exit 1) on any of:
   the first third); the phase effect in every head: at two thirds of the run, its disk florets'
   heights above their bases (floret units) fall from its rim to its centre (Spearman rank
   correlation with the distance from the head's centre > 0.5);
-- **the look** (issue 44), with the thresholds of species.toml [check]: the group crowds (the last
+- **the look**, with the thresholds of species.toml [check]: the group crowds (the last
   frame from above covers at least ``coverage_min`` of its silhouette's convex hull,
   view_coverage along Y); the disk florets are reshaped by their neighbours (fig. 9.8: at least
   ``reshaped_min`` of them deviate from their template by more than ``reshaped_by``, see

@@ -1,4 +1,4 @@
-"""Write the Eustoma bud of issue 22 (Ijiri et al. 2008, sec. 6.2, fig. 12b): one petal mesh with uv
+"""Write the Eustoma bud (Ijiri et al. 2008, sec. 6.2, fig. 12b): one petal mesh with uv
 that ``eustoma_*.toml`` place five times round the flower axis (72 degrees apart).
 
 Usage: python make_keys.py --quality draft|final -o OUT_DIR   (writes OUT_DIR/petal.obj)

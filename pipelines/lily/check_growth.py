@@ -1,4 +1,4 @@
-"""Exact checks of the growth-map lily (the `growth-check` stage; issue 22, Ijiri et al. sec. 6.1).
+"""Exact checks of the growth-map lily (the `growth-check` stage; Ijiri et al. sec. 6.1).
 
 Usage: python check_growth.py FRAMES_DIR     (FRAMES_DIR = build/lily/growth/canopy)
 

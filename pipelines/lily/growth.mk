@@ -1,4 +1,4 @@
-# The growth-map lily (issue 22; Ijiri et al. 2008, sec. 6.1, figs. 1, 2, 7): the bud grown into
+# The growth-map lily (Ijiri et al. 2008, sec. 6.1, figs. 1, 2, 7): the bud grown into
 # the open flower by petal-grow's growth maps instead of the four key poses. Included by Makefile:
 #
 #   make lily METHOD=growth                 (top level)   or   make -C pipelines/lily growth

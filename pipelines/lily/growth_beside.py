@@ -1,4 +1,4 @@
-"""The open growth-map lily beside the key-pose lily (issue 22): one picture, two panels.
+"""The open growth-map lily beside the key-pose lily: one picture, two panels.
 
 Usage: python growth_beside.py BUILD_DIR -o OUT.png     (BUILD_DIR = build/lily)
 

@@ -1,4 +1,4 @@
-"""The growth-map lily (issue 22; Ijiri et al. 2008, sec. 6.1, figs. 1, 2, 7, table 1): its bud
+"""The growth-map lily (Ijiri et al. 2008, sec. 6.1, figs. 1, 2, 7, table 1): its bud
 meshes and its petal-grow parameter file.
 
 Usage: python growth_keys.py -o OUT_DIR            (OUT_DIR/petal.obj, OUT_DIR/sepal.obj)

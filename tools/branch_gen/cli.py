@@ -1,4 +1,4 @@
-"""Command-line front end of ``branch-gen`` (issue 7; thesis ch. 7 and 8 g, Runions ch. 3).
+"""Command-line front end of ``branch-gen`` (thesis ch. 7 and 8 g, Runions ch. 3).
 
     branch-gen SCENE.scn [PARAMS.toml] -o OUT_DIR [--rba DIR] [--algorithm rodkaew|sca] [--seed N]
                [--base X Y Z]

@@ -191,7 +191,7 @@ COORD_LIMIT = 1e12
 
 
 def check_rodkaew_work(inp: RodkaewInput, params: Params) -> None:
-    """Refuse, before any work, a run that could not finish (issue 14: ``step = 1e-9`` or a floret
+    """Refuse, before any work, a run that could not finish (``step = 1e-9`` or a floret
     at 1e300 hung): floret or group coordinates beyond :data:`COORD_LIMIT`, and a ``step`` so short
     that the farthest floret is more than ``max_steps`` steps from the base (each particle moves one
     ``step`` per simulation step, eq. 7.1, so that is a lower bound of the steps the run needs).

@@ -15,7 +15,7 @@ distance, :func:`segment_segment_distance`).
 and the first time of impact. An even number of crossings in a step leaves the pair on the side
 it started on and needs no response (4.2.2.3); callers respond to odd counts.
 
-Coplanar motion (issue 14). When the four points stay (nearly) coplanar over the whole step the
+Coplanar motion. When the four points stay (nearly) coplanar over the whole step the
 cubic vanishes identically (or is rounding noise) and its roots say nothing. Contact is then
 decided exactly as in the plane: the first moment of contact is t = 0 or a moment when a vertex
 lies on an edge of the other element (a point can only enter a triangle through its boundary, two
@@ -27,7 +27,7 @@ still tried) and run the inside test at each, earliest first. The same test is t
 the cubic path when the cubic is ill-conditioned (coefficients below ``_ILL_REL L^3``) and it
 found nothing. A hit is only ever reported at an instant where the distance is <= tol.
 
-Degenerate elements (issue 14): a triangle with coincident vertices, collinear corners or a
+Degenerate elements: a triangle with coincident vertices, collinear corners or a
 zero-length edge is its longest edge (or its point) for :func:`point_triangle_distance`; no
 kernel here divides by zero.
 
@@ -58,7 +58,7 @@ _COPLANAR_REL = 1e-13
 # relative |f| at a critical point that counts as a double root (tangential touch)
 _TOUCH_REL = 1e-12
 # relative size of the cubic below which its roots are ill-conditioned: when the cubic path finds
-# no contact, the coplanar candidate test runs as well (issue 14)
+# no contact, the coplanar candidate test runs as well
 _ILL_REL = 1e-9
 # |ab x ac|^2 <= _DEGEN_REL * (longest edge)^4: the triangle is a segment or a point
 _DEGEN_REL = 1e-28
@@ -298,7 +298,7 @@ def _point_segment_param(px, py, pz, ux, uy, uz, wx, wy, wz):
 
 @njit(cache=True)
 def _degenerate_triangle_bary(p, a, b, c, bary):
-    """Barycentric weights of the point closest to p on the longest edge of abc (issue 14: a
+    """Barycentric weights of the point closest to p on the longest edge of abc (a
     collapsed triangle, collinear corners or coincident vertices, is that segment or point)."""
     lab = (b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2 + (b[2] - a[2]) ** 2
     lbc = (c[0] - b[0]) ** 2 + (c[1] - b[1]) ** 2 + (c[2] - b[2]) ** 2
@@ -329,7 +329,7 @@ def point_triangle_distance(p, a, b, c, bary):
     tol". The closest point is found by Voronoi regions (Ericson, Real-Time Collision Detection
     5.1.5). A degenerate triangle (``|ab x ac|^2 <= 1e-28`` times its longest edge to the fourth:
     coincident vertices, collinear corners, a zero-length edge) is its longest edge, or its point
-    when all three corners coincide (issue 14); no division by zero on any input.
+    when all three corners coincide; no division by zero on any input.
 
     Parameters
     ----------
@@ -592,7 +592,7 @@ def _sort_times(cand, n):
 
 @njit(cache=True)
 def _vt_coplanar(p0, a0, b0, c0, p1, a1, b1, c1, tol, out):
-    """Vertex-triangle contact when the four points stay (nearly) coplanar over the step (issue 14).
+    """Vertex-triangle contact when the four points stay (nearly) coplanar over the step.
 
     The first moment p is within the (closed) triangle is t = 0 or a moment it lies on an edge,
     a root of :func:`_on_line_times` for the edges ab, bc, ca; passing a corner is also a root of
@@ -630,7 +630,7 @@ def _vt_coplanar(p0, a0, b0, c0, p1, a1, b1, c1, tol, out):
 
 @njit(cache=True)
 def _ee_coplanar(a0, b0, c0, d0, a1, b1, c1, d1, tol, out):
-    """Edge-edge contact when the four points stay (nearly) coplanar over the step (issue 14).
+    """Edge-edge contact when the four points stay (nearly) coplanar over the step.
 
     Two segments in a plane start to touch at t = 0 or when an endpoint of one lies on the other
     (a crossing of interiors persists backwards in time): the roots of :func:`_on_line_times` for
@@ -690,7 +690,7 @@ def vertex_triangle_ccd(p0, a0, b0, c0, p1, a1, b1, c1, tol, out):
         other side and needs a response; even (enter and leave within the step): none (4.2.2.3).
         When the four points stay coplanar over the step (the cubic vanishes) the exact in-plane
         test :func:`_vt_coplanar` decides: 1 for a contact, else 0; it also runs when an
-        ill-conditioned cubic (below ``_ILL_REL L^3``) gave no verified crossing (issue 14).
+        ill-conditioned cubic (below ``_ILL_REL L^3``) gave no verified crossing.
     """
     k0, k1, k2, k3 = cubic_vertex_triangle(p0, a0, b0, c0, p1, a1, b1, c1)
     L = _max_extent(p0, a0, b0, c0, p1, a1, b1, c1)
@@ -776,7 +776,7 @@ def edge_edge_ccd(a0, b0, c0, d0, a1, b1, c1, d1, tol, out):
     -------
     int
         Number of verified crossings (odd: needs a response, 4.2.2.3). Coplanar motion and an
-        ill-conditioned cubic that gave nothing: :func:`_ee_coplanar` decides, 1 or 0 (issue 14).
+        ill-conditioned cubic that gave nothing: :func:`_ee_coplanar` decides, 1 or 0.
     """
     k0, k1, k2, k3 = cubic_edge_edge(a0, b0, c0, d0, a1, b1, c1, d1)
     L = _max_extent(a0, b0, c0, d0, a1, b1, c1, d1)

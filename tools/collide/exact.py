@@ -10,7 +10,7 @@ orient2d); pairs where some sign is not certified are decided here. Slow (tens o
 pair) but called only for nearly degenerate configurations: coplanar or touching triangles.
 
 The same integer arithmetic gives the ground truth of continuous queries whose four points stay
-in one plane over the whole step (issue 14; the tests of :mod:`.ccd`'s coplanar path):
+in one plane over the whole step (the tests of :mod:`.ccd`'s coplanar path):
 :func:`coplanar_ccd_exact` decides whether a vertex and a triangle (or two edges) moving linearly
 in a common plane touch at some t in [0, 1], with the contact times, roots of quadratics, kept as
 exact numbers ``(x + y sqrt(D)) / z``; :func:`coplanar_gap_sq_exact` is their squared distance at
@@ -135,7 +135,7 @@ def triangles_intersect_exact(p0, p1, p2, q0, q1, q2) -> bool:
 
 
 # --------------------------------------------------------------------------------------------------
-# Continuous queries in a common plane (issue 14)
+# Continuous queries in a common plane
 # --------------------------------------------------------------------------------------------------
 
 

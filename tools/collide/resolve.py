@@ -1032,7 +1032,7 @@ class CollisionResult:
     """parts (``fallback="parts"``) still out of shape at the end: their carried shape crosses
     something, and so does each smaller shape ``parts["shrink"]`` offers, so they keep the
     collision-free shape the solve gave them (reported; fccompose does not redo such a step:
-    halving it made squeezed canopies 9 x slower, issue 13)"""
+    halving it made squeezed canopies 9 x slower)"""
     shrunk: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """(n_parts,) the scale each part was put at by the ``"parts"`` fallback's last resort for parts
     out of shape (``parts["shrink"]``): 1 where none; empty when the fallback did not run"""

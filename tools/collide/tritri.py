@@ -1,4 +1,4 @@
-"""Static triangle-triangle intersection test (the sanity check of issue 5 and the tests' judge).
+"""Static triangle-triangle intersection test (fccompose's sanity check and the tests' judge).
 
 Two triangles intersect when they share at least one point. The test is built on orientation
 predicates (signs of 3x3 determinants), not on distances with a tolerance: two non-coplanar

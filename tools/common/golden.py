@@ -1,5 +1,5 @@
-"""Deprecated name of :mod:`inflo.tools.golden` (the golden-file tooling moved out of ``common``,
-issue 15): ``python -m inflo.tools.common.golden check|refresh|diff ...`` still runs, forwarded to
+"""Deprecated name of :mod:`inflo.tools.golden` (the golden-file tooling moved out of ``common``):
+``python -m inflo.tools.common.golden check|refresh|diff ...`` still runs, forwarded to
 ``python -m inflo.tools.golden``, so that old notes (and the header of the committed
 ``tests/golden/*/listing.toml`` files) keep working. Use the new name in anything new.
 """

@@ -5,7 +5,7 @@ numpy's ``@`` / ``np.matmul`` / ``np.dot``, ``np.linalg.norm`` of a whole array,
 time (``DYNAMIC_ARCH``): the Haswell, SkylakeX and Zen kernels order and fuse the products
 differently, so the last bits of a 4 x 4 inverse or a 3-vector's norm differ between an Intel
 Xeon and an AMD EPYC. fccompose's collision response amplifies such bits in crowded frames
-until the vertices differ visibly (issue 53: a gaillardia frame, two yarrow frames). numpy's
+until the vertices differ visibly (a gaillardia frame, two yarrow frames). numpy's
 ``np.einsum`` reduces contiguous axes with SIMD accumulators whose width and FMA use follow
 the processor as well.
 

@@ -1,4 +1,4 @@
-"""Command-line front end of ``fccompose`` (issue 5): parse the ``.fcc``, compose, report."""
+"""Command-line front end of ``fccompose``: parse the ``.fcc``, compose, report."""
 from __future__ import annotations
 
 import dataclasses
@@ -47,7 +47,7 @@ def main(params, output, resume, strict, allow_initial_intersections, frames, up
 def _refuse_output_holding_inputs(source, p, output) -> None:
     """Bad input (one line, exit 2) when the output folder is, or holds, a file or folder the run
     reads: fccompose removes the frames of earlier runs from its output folder, so ``-o anim``
-    where ``anim`` is an input animation would delete its own inputs (issue 14)."""
+    where ``anim`` is an input animation would delete its own inputs."""
     from pathlib import Path
 
     from inflo.formats.errors import InputError

@@ -699,7 +699,7 @@ def _merged(failed: CollisionResult, a: CollisionResult, b: CollisionResult) -> 
 def _input_hashes(params: CanopyParams) -> dict:
     """sha256 of every file the run reads besides the templates (scene files, RBA frames, weight
     and petal weight files), keyed by the path as the ``.fcc`` names it (an RBA folder: ``folder/NNNN.rba`` each),
-    so that ``--resume`` can name the input that changed (issue 14)."""
+    so that ``--resume`` can name the input that changed."""
     out = {}
     paths = [(f.raw, f.resolved) for f in params.scene_files]
     for r in params.rigid_body_animations:
@@ -736,7 +736,7 @@ WRITE_FORMATS = ("%.6f", "%.9f", "%.12f", "%.17g")
 def written_format(x: np.ndarray, faces: np.ndarray, formats=WRITE_FORMATS, tri_part: np.ndarray | None = None) -> str:
     """The first of ``formats`` whose written coordinates keep the canopy as collision-free as
     ``x`` is: rounding to 6 decimals can make two petals that lie flat on each other, closer than
-    the rounding, cross (a written-frame guarantee, issue 14). The written numbers are parsed back
+    the rounding, cross (a written-frame guarantee). The written numbers are parsed back
     and tested exactly (:func:`intersecting_pairs`, touching counts); where ``x`` itself has
     intersecting pairs (the sanity check reports them), more digits cannot help and the first
     format is kept. ``tri_part``: the floret of each face (the exact test goes floret by floret)."""

@@ -216,7 +216,7 @@ class Level:
 
 def coincident_vertices(frames: np.ndarray, faces: np.ndarray):
     """The first frame and pair of distinct vertices (0-based, both used by triangles) at exactly the
-    same point, or None (issue 14: a template with a duplicated, unwelded vertex).
+    same point, or None (as in a template with a duplicated, unwelded vertex).
 
     Zero-area triangles whose corners are distinct points (collinear corners, slivers) are accepted:
     the collision core treats them as their longest edge. Coincident distinct vertices are not:
@@ -908,7 +908,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
     )
 
 
-#: ``spacing`` may be at most this many times the largest floret's extent (issue 14: a spacing ten
+#: ``spacing`` may be at most this many times the largest floret's extent (a spacing ten
 #: times the florets' size made every triangle a collision candidate of every other and the run
 #: was killed for memory).
 SPACING_LIMIT = 4.0

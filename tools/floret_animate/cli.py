@@ -1,4 +1,4 @@
-"""Command-line front end of ``floret-animate`` (thesis 2.3, 8 b); issue 3)."""
+"""Command-line front end of ``floret-animate`` (thesis 2.3, 8 b))."""
 from __future__ import annotations
 
 import click

@@ -1,4 +1,4 @@
-"""Golden stage outputs (issue 8): the golden files of each species' draft build and a
+"""Golden stage outputs: the golden files of each species' draft build and a
 tolerance-aware diff of inflo's stage formats. Doc (tolerances, manifest, refresh):
 ``tests/golden/README.md``.
 

@@ -125,7 +125,7 @@ petal-grow's collision response and what is computed from their frames (tests/go
 "Chaotic stages"). Its structure is still compared exactly (vertex and face counts, faces, groups,
 materials, column names, words, zeros); coordinates within 1 % of the scene size, numbers within
 10 %, counts within 25 %: three times what the draft heads built on an Intel Xeon needed against
-goldens made on an AMD EPYC before issue 53 (a dyssodia vertex 0.26 % of its scene apart, a
+goldens made on an AMD EPYC before the fixed-order linear algebra (a dyssodia vertex 0.26 % of its scene apart, a
 check report's figure 4 % off). What must hold of those frames (no intersecting pair, every edge
 within its stretch bounds, every floret present, the phase effect) the species' check scripts
 assert in every build, and ``tests/test_portable.py`` holds the stages to the same bytes under

@@ -1,5 +1,5 @@
 """``petal-grow``: opening flowers grown by growth maps (Ijiri, Yokoo, Kawabata, Igarashi, *Surface-based
-Growth Simulation for Opening Flowers*, GI 2008; issue 22).
+Growth Simulation for Opening Flowers*, GI 2008).
 
 - :mod:`.maps`: growth maps (PNG or functions of (u, v)), eq. 1.
 - :mod:`.growth`: regional growth kernel, eqs. 2-4 (sec. 4).

@@ -1,4 +1,4 @@
-"""Command-line front end of ``petal-grow`` (issue 22; Ijiri et al. 2008).
+"""Command-line front end of ``petal-grow`` (Ijiri et al. 2008).
 
     petal-grow PARAMS.toml -o OUT_DIR [--keyframes N] [--no-collisions]
 

@@ -1,4 +1,4 @@
-"""Command-line front end of ``polygonize`` (thesis 2.4, 8 c); issue 3)."""
+"""Command-line front end of ``polygonize`` (thesis 2.4, 8 c))."""
 from __future__ import annotations
 
 import click

@@ -23,7 +23,7 @@ __all__ = ["PolygonizeReport", "build_mesher", "polygonize_frames", "polygonize_
 
 @dataclass
 class PolygonizeReport:
-    """Per-run figures (issue 3): triangles per floret, minimum angle, triangles under 10 degrees
+    """Per-run figures: triangles per floret, minimum angle, triangles under 10 degrees
     in the worst frame, degenerate triangles, closest pair of distinct vertices."""
 
     n_frames: int = 0

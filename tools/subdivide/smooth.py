@@ -119,7 +119,7 @@ class Weld:
 
 def weld_coincident(frames: Sequence[np.ndarray], faces: np.ndarray) -> Weld:
     """Weld the face vertices that lie at exactly the same point in every frame, and drop the
-    triangles that then repeat a vertex (issue 14).
+    triangles that then repeat a vertex.
 
     Meshes from other tools carry duplicated vertices (an unwelded seam, a sliver triangle made by a
     duplicated vertex): the triangles on either side touch there, which the exact test counts as

@@ -1,4 +1,4 @@
-"""``inflo-sweep``: variants and parameter sweeps of a pipeline or of CLI stages on Dask (issue 24).
+"""``inflo-sweep``: variants and parameter sweeps of a pipeline or of CLI stages on Dask.
 
 - :mod:`.spec` reads a sweep file (formats/sweep.md) into frozen dataclasses and generates its
   variants (a grid, or random samples with a seed);

@@ -1,4 +1,4 @@
-"""Command-line front end of ``inflo-sweep`` (issue 24; the sweep file: formats/sweep.md).
+"""Command-line front end of ``inflo-sweep`` (the sweep file: formats/sweep.md).
 
 ``inflo-sweep SWEEP.toml -o OUT_DIR [--scheduler ADDRESS] [--workers N]`` runs every variant of
 the sweep as Dask tasks (a LocalCluster of N workers, or the scheduler at ADDRESS), each in

@@ -1,4 +1,4 @@
-"""A variant's inputs (issue 24): parameter values written into copies of TOML and ``.fcc`` files,
+"""A variant's inputs: parameter values written into copies of TOML and ``.fcc`` files,
 CLI flags set in a stage's arguments, ``{...}`` placeholders filled.
 
 Files are edited as text, so comments and layout survive and the copy differs from the original

@@ -1,4 +1,4 @@
-"""What a sweep writes at the end (issue 24): ``results.csv``, ``contact_sheet.png`` (every
+"""What a sweep writes at the end: ``results.csv``, ``contact_sheet.png`` (every
 variant's still labelled by its parameters, Pillow) and ``heatmap.png`` (a 2-D numeric grid of a
 scalar metric with Fibonacci numbers marked, matplotlib). All written atomically.
 """

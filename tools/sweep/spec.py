@@ -1,4 +1,4 @@
-"""Sweep files (formats/sweep.md; issue 24): parsing into frozen dataclasses, and the variants.
+"""Sweep files (formats/sweep.md): parsing into frozen dataclasses, and the variants.
 
 A sweep names either a pipeline folder (``[pipeline]``: a copy of the folder per variant, its own
 ``make`` with the build folder variable pointing into the variant) or a chain of CLI stages

@@ -1,4 +1,4 @@
-"""Running a sweep on Dask distributed (issue 24): a ``LocalCluster`` by default, or the scheduler
+"""Running a sweep on Dask distributed: a ``LocalCluster`` by default, or the scheduler
 at an address (a real cluster: ``dask scheduler`` + ``dask worker``, dask-jobqueue on SLURM/PBS,
 a Kubernetes deployment; inflo is the same).
 

@@ -1,4 +1,4 @@
-"""One variant of a sweep (issue 24): its folder, its inputs, its run, its metrics, its ``done``.
+"""One variant of a sweep: its folder, its inputs, its run, its metrics, its ``done``.
 
 Layout of ``OUT_DIR/variants/<id>/``::
 

@@ -1,4 +1,4 @@
-"""Command-line front end of ``thyrse`` (issue 20; thesis sec. 4.5, figs. 4.9, 4.10, ch. 7).
+"""Command-line front end of ``thyrse`` (thesis sec. 4.5, figs. 4.9, 4.10, ch. 7).
 
     thyrse [PARAMS.toml] -o OUT_DIR [--base X Y Z] [--room FLORET.obj ...]
 

@@ -1,4 +1,4 @@
-"""Command-line front end of ``venation`` (issue 23; Runions ch. 4).
+"""Command-line front end of ``venation`` (Runions ch. 4).
 
     venation PARAMS.toml -o OUT_DIR [--seed N] [--frame-step N] [--frame-textures]
 

@@ -1,4 +1,4 @@
-"""Write the dense two-floret test scene of issue 5 into this folder.
+"""Write the dense two-floret test scene into this folder.
 
 Two synthetic 5-petal florets (an OBJ sequence of an opening floret, ``anim/``) stand 1 unit apart,
 so their open petals would run through each other; fccompose grows them with collisions on and
