@@ -15,7 +15,8 @@ What is checked (Owens thesis ch. 9, figs. 9.5, 9.6; ch. 6, figs. 6.2, 6.3):
 - the phase effect by age: disk florets emerge centripetally (an outer floret emerges no later
   than its inner neighbours) and each develops over the same window from its emergence;
 - the final canopy's size is that of the thesis's model (table 4.1: about 130k triangles);
-- if the draft build exists (the golden test builds it): check_sunflower.py's report says OK.
+- if the draft build exists (the golden test builds it): check_sunflower.py's report says OK,
+  the disk floret's proportions and the disk's cover from above included.
 """
 from __future__ import annotations
 
@@ -196,3 +197,5 @@ def test_draft_build_checks_pass_if_built():
     text = check.read_text()
     assert text.strip().endswith("OK"), text
     assert "ray florets: 34 (expected 34)" in text
+    # the disk floret in proportion (anther tube against corolla) and the carpet seen from above
+    assert "disk floret (open): anther tube" in text and "disk florets from above cover" in text

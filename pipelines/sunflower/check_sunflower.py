@@ -19,20 +19,75 @@ Prints, and fails (exit 1) on any of:
 - **development the right way round**: the first ray or bract half open before ``emerged`` of the
   disk florets have emerged (checks.check_development);
 - **clones**: a floret type whose extents in the last frame vary (CV) less than ``individual_cv``
-  (the .fcc's ``variation`` lines; checks.check_individuals).
+  (the .fcc's ``variation`` lines; checks.check_individuals);
+- **the disk floret in proportion** (not a bed of pins): in the last template frame (disk_obj/),
+  the anther tube's width over the corolla's (the widest ring of each organ) below
+  ``anther_width``, or its exserted length (anther top over corolla top) over the corolla's height
+  outside ``anther_exserted``; in the last canopy frame, the disk florets seen from above cover
+  less than ``disk_cover`` of their silhouette's convex hull (checks.view_coverage: the corollas'
+  mouths must touch, a carpet).
 """
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.species import species_of
-from inflo.tools.species.checks import check_development, check_head, check_individuals, check_phase
+from inflo.tools.species.checks import (
+    check_development,
+    check_head,
+    check_individuals,
+    check_phase,
+    floret_faces,
+    view_coverage,
+)
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 CHECK = species_of(__file__).check
 RAYS = CHECK["rays"]
 BUD = CHECK["bud"]
+
+
+def disk_proportions(build: Path) -> dict:
+    """The open disk floret (the last template frame, local frame: +Y its axis): the largest radius
+    and the top of its corolla and of its anther tube."""
+    mesh = read_obj(list_obj_sequence(build / "disk_obj")[-1])
+    organ = np.array([mesh.groups[g].rsplit("_", 1)[0] for g in mesh.face_group])
+    out = {}
+    for name in ("corolla", "anthers"):
+        v = mesh.vertices[np.unique(mesh.faces[organ == name])]
+        out[name] = (float(np.hypot(v[:, 0], v[:, 2]).max()), float(v[:, 1].max()))
+    return out
+
+
+def disk_cover(head) -> float:
+    """Share of the disk florets' silhouette (its convex hull) seen from above (+Y) that they
+    cover in the last canopy frame."""
+    mesh = read_obj(head.canopy[-1])
+    faces = [f for pid, f in floret_faces(mesh).items() if head.types[pid] == "disk"]
+    mesh.faces = mesh.faces[np.concatenate(faces)]
+    return view_coverage(mesh, 1, pixels=800)
+
+
+def check_disk(build: Path, head, failures: list) -> None:
+    p = disk_proportions(build)
+    (rc, yc), (ra, ya) = p["corolla"], p["anthers"]
+    width, exserted = ra / rc, (ya - yc) / yc
+    lo, hi = CHECK["anther_exserted"]
+    cover = disk_cover(head)
+    print(f"disk floret (open): anther tube {2 * ra:.2f} wide, corolla {2 * rc:.2f} (ratio {width:.2f}, "
+          f"at least {CHECK['anther_width']}); anthers exserted {ya - yc:.2f} over a corolla {yc:.2f} high "
+          f"({exserted:.2f}, {lo}-{hi}); disk florets from above cover {cover:.3f} of the disk "
+          f"(at least {CHECK['disk_cover']})")
+    if width < CHECK["anther_width"]:
+        failures.append(f"disk floret: anther tube {width:.2f} of the corolla's width (pins)")
+    if not lo <= exserted <= hi:
+        failures.append(f"disk floret: anthers exserted {exserted:.2f} of the corolla's height")
+    if cover < CHECK["disk_cover"]:
+        failures.append(f"disk florets cover {cover:.3f} of the disk from above (no carpet)")
 
 
 def main(build: Path) -> int:
@@ -41,6 +96,7 @@ def main(build: Path) -> int:
     check_phase(head, bud=BUD, failures=failures)
     check_development(head, failures=failures, emerged=CHECK["emerged"])
     check_individuals(head, failures=failures, least=CHECK["individual_cv"])
+    check_disk(build, head, failures)
     print("OK" if not failures else "FAILED: " + "; ".join(failures))
     return 0 if not failures else 1
 

@@ -15,11 +15,16 @@ points away from the head centre along the receptacle's meridian.
   corolla almost up to the petal tips. As the flowers open, sexual organs - stamens, then pistils -
   raise above the level of the petals ... modeled summarily as cylinders growing along the central
   axis"): organ ``corolla`` (five-fold, bilateral half petal 3 columns x 7 rows, the first 6 rows of
-  each lateral boundary fused: the lobes part only in the last row), organ ``anthers`` (the anther
-  tube: a five-fold cylinder fused along its whole height, dark) and organ ``pistil`` (a thin
-  cylinder inside it). Three key poses: ``bud`` (a closed barrel, its lobes converging over the
-  organs inside), ``open`` (the corolla opened into a tube with five short spreading lobes, the
-  anther tube risen above them) and ``late`` (the pistil risen above the anthers).
+  each lateral boundary fused: the lobes part only in the last row), organ ``anthers`` (five-fold,
+  fused along its whole height, dark: a cone of filaments from the corolla's base, then the anther
+  tube, about half the corolla's height long and a little over half its throat wide, as in a real
+  floret: a corolla 7-8 mm long, an anther tube 3-4 mm long about as wide as the throat's inside)
+  and organ ``pistil`` (two-fold: a style fused over its lower third, parting into two stigma
+  branches). Three key poses: ``bud`` (a closed barrel, its lobes converging over the organs
+  inside), ``open`` (the corolla opened into a narrow tube and a wide throat under five short
+  spreading lobes, their tips 1.24 disc diameters across so that neighbouring mouths touch, the
+  anther tube a third of the corolla's height above them) and ``late`` (the style risen through
+  the anther tube, its two branches spread).
 - **Ray floret** (ch. 9: "Three large fused petals point outward, giving the appearance of a
   single large petal. The remaining two petals are highly reduced. We have only included the
   conspicuous large petals"): organ ``ligule``, symmetry 1, bilateral half of 5 columns x 8 rows,
@@ -34,7 +39,6 @@ points away from the head centre along the receptacle's meridian.
 """
 from __future__ import annotations
 
-import math
 import sys
 from pathlib import Path
 
@@ -50,33 +54,59 @@ HERE = Path(__file__).resolve().parent
 # of a median edge between needle triangles, and crowded florets stretch them several times over
 # (formats/fcc.md, "Mesh quality matters")
 RES = {
-    "draft": {"corolla": ("0.34", "../lobe_eta_draft.func"), "anthers": ("0.5", "3"), "pistil": ("1.0", "3"),
+    "draft": {"corolla": ("0.34", "../lobe_eta_draft.func"), "anthers": ("0.5", "3"), "pistil": ("0.34", "3"),
               "ligule": ("0.2", "5"), "bract": ("0.34", "3")},
-    "final": {"corolla": ("0.34", "../lobe_eta_final.func"), "anthers": ("1.0", "3"), "pistil": ("1.0", "3"),
+    "final": {"corolla": ("0.34", "../lobe_eta_final.func"), "anthers": ("0.5", "3"), "pistil": ("0.34", "3"),
               "ligule": ("0.1", "9"), "bract": ("0.2", "5")},
 }
 
 # ---- disk floret ----------------------------------------------------------------------------------
 DISK_NU, DISK_NV, DISK_FUSED = 3, 7, 6
+# the pistil: a two-fold bilateral organ (the style and its two branches), half petal of 2 columns
+# (the midline, toward +X, and the symmetry plane x = 0) x 5 rows; its first 3 rows' boundary
+# points are fused, so the two halves are one style up to a third of its length (v in [0, 1/3]) and
+# part above it into the two stigma branches (closed in bud and open, 0.01 apart: two surfaces
+# that only touch count as intersecting)
+STYLE_NV, STYLE_FUSED = 5, 3
 DISK = {
     # corolla: radius, height and half angle (degrees; 36 = the symmetry plane) per row;
-    # anthers / pistil: (radius, bottom, top) of the cylinder
+    # anthers: (radius, height) of its three rows (a five-fold tube fused along its whole height:
+    # the filaments, a cone from the corolla's base, then the anther tube); pistil: (x of the
+    # midline, x and z of the boundary point, height) of each of its rows
     "bud": dict(time=0.0,
                 r=[0.16, 0.24, 0.31, 0.33, 0.30, 0.20, 0.05],
                 y=[0.00, 0.14, 0.30, 0.46, 0.60, 0.72, 0.78],
                 half=[36, 36, 36, 36, 36, 34, 12],
-                anthers=(0.10, 0.0, 0.40), pistil=(0.035, 0.0, 0.34)),
+                anthers=[(0.08, 0.00), (0.17, 0.30), (0.17, 0.56)],
+                pistil=[(0.05, 0.00, 0.05, 0.00), (0.05, 0.00, 0.05, 0.16), (0.05, 0.00, 0.05, 0.30),
+                        (0.05, 0.005, 0.05, 0.40), (0.05, 0.005, 0.05, 0.48)]),
     "open": dict(time=0.55,
-                 r=[0.15, 0.20, 0.28, 0.36, 0.42, 0.46, 0.56],
-                 y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.86, 0.90],
-                 half=[36, 36, 36, 36, 36, 34, 8],
-                 anthers=(0.10, 0.0, 1.12), pistil=(0.035, 0.0, 0.96)),
+                 r=[0.15, 0.19, 0.27, 0.37, 0.46, 0.51, 0.62],
+                 y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.88, 0.93],
+                 half=[36, 36, 36, 36, 36, 34, 10],
+                 anthers=[(0.10, 0.00), (0.24, 0.66), (0.24, 1.16)],
+                 pistil=[(0.06, 0.00, 0.06, 0.00), (0.06, 0.00, 0.06, 0.36), (0.06, 0.00, 0.06, 0.70),
+                         (0.06, 0.005, 0.06, 0.90), (0.06, 0.005, 0.06, 1.04)]),
     "late": dict(time=1.0,
-                 r=[0.15, 0.20, 0.28, 0.36, 0.42, 0.47, 0.58],
-                 y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.85, 0.86],
-                 half=[36, 36, 36, 36, 36, 34, 8],
-                 anthers=(0.10, 0.0, 1.16), pistil=(0.035, 0.0, 1.50)),
+                 r=[0.15, 0.19, 0.27, 0.37, 0.46, 0.52, 0.64],
+                 y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.87, 0.90],
+                 half=[36, 36, 36, 36, 36, 34, 10],
+                 anthers=[(0.10, 0.00), (0.24, 0.66), (0.24, 1.18)],
+                 pistil=[(0.06, 0.00, 0.06, 0.00), (0.06, 0.00, 0.06, 0.60), (0.06, 0.00, 0.06, 1.20),
+                         (0.08, 0.03, 0.045, 1.34), (0.17, 0.13, 0.03, 1.42)]),
 }
+
+
+def tube_net(rows):
+    """Half petal of a five-fold tube fused along its whole height: one (radius, height) per row."""
+    a = np.radians([0.0, 36.0])
+    return np.array([[(r * np.cos(t), y, r * np.sin(t)) for t in a] for r, y in rows])
+
+
+def style_net(rows):
+    """Half petal of the two-fold style: the midline point (x, y, 0), the boundary point (xb, y, zb)."""
+    return np.array([[(x, y, 0.0), (xb, y, zb)] for x, xb, zb, y in rows])
+
 
 # ---- ray floret: the ligule's midrib (x outward, y up), half width per row, cup ----------------------
 RAY_NU, RAY_NV = 5, 8
@@ -128,8 +158,8 @@ def write(out: Path, quality: str) -> None:
         text = head.format(what="disk floret", key=key, q=quality, name="disk", t=p["time"])
         text += organ("corolla", 1, "3 3", f"{DISK_NU} {DISK_NV}", "5 0", DISK_FUSED, res["corolla"],
                       ring_net(p["r"], p["y"], p["half"], DISK_NU)) + "\n"
-        text += organ("anthers", 2, "1 2", "2 3", "5 0", 3, res["anthers"], cylinder_net(*p["anthers"])) + "\n"
-        text += organ("pistil", 3, "1 2", "2 3", "5 0", 3, res["pistil"], cylinder_net(*p["pistil"]))
+        text += organ("anthers", 2, "1 1", "2 3", "5 0", 3, res["anthers"], tube_net(p["anthers"])) + "\n"
+        text += organ("pistil", 3, "1 2", f"2 {STYLE_NV}", "2 0", STYLE_FUSED, res["pistil"], style_net(p["pistil"]))
         (out / f"disk_{key}.floret").write_text(text)
     for key, p in RAY.items():
         text = head.format(what="ray floret", key=key, q=quality, name="ray", t=p["time"])
