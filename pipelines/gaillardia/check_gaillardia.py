@@ -114,10 +114,10 @@ def main(build: Path) -> int:
 
     # a dense disk: the receptacle left in view from above at the last frame
     visible = 1.0 - view_coverage(read_obj(head.canopy[-1]), axis=1, region=read_obj(head.receptacle[-1]))
-    print(f"receptacle in view from above at the last frame: {100 * visible:.1f} % (<= {100 * RECEPTACLE_VISIBLE:.0f} %)")
+    print(f"receptacle in view from above at the last frame: {100 * visible:.1f} % (<= {100 * RECEPTACLE_VISIBLE:.1f} %)")
     if visible > RECEPTACLE_VISIBLE:
         failures.append(f"{100 * visible:.1f} % of the receptacle in view from above, expected <= "
-                        f"{100 * RECEPTACLE_VISIBLE:.0f} %")
+                        f"{100 * RECEPTACLE_VISIBLE:.1f} %")
 
     # development the right way round: rays and bracts open with the head, not round a bare meristem
     disk = [p for p in scene.placements if p.type == "disk"]

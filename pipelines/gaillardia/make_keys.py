@@ -97,6 +97,12 @@ ARC_HALF = 150.0  # degrees from the bottom midline to the edge of the slit, eac
 RAY_NU = 7  # half cross-section columns, ARC_HALF / 6 = 25 degrees apart
 TUBE_NV, LIMB_NV = 8, 4
 THETA = np.radians(np.linspace(0.0, ARC_HALF, RAY_NU))
+# the tube is closed almost all round at its base (a fistulose ray: a corolla tube that opens in
+# its slit only as it bends outward): its half arc is ARC_BASE at the base ring, falling to
+# ARC_HALF by BASE_ROWS of its rows; the receptacle inside the base ring no longer shows through
+# the slit from above
+ARC_BASE = 168.0
+BASE_ROWS = 3
 # the limb's base ring is tucked INSET inside the tube's wall, TUCK back from the tube's rim along the
 # centre line (floret units): the yellow mouth continues the orange tube from inside it, so no
 # background shows between them from any side, and the two never touch (fccompose's exact test
@@ -156,16 +162,18 @@ def centre_line(length: float, bend: float, nv: int, extra=()):
     return pts[:nv], heading[:nv], pts[nv:], heading[nv:]
 
 
-def ring_rows(centre, heading, radius, back=None, zscale=None):
+def ring_rows(centre, heading, radius, back=None, zscale=None, arc=None):
     """Half cross-sections: row j an arc of radius[j] round centre[j], perpendicular to the heading,
-    column i at THETA[i] from the bottom midline toward +Z; ``back[j, i]`` moves a point back along
-    the centre line (the lobes); ``zscale[j]`` widens row j sideways (+-Z: an elliptic foot)."""
+    column i at THETA[i] from the bottom midline toward +Z (or evenly to ``arc[j]`` degrees);
+    ``back[j, i]`` moves a point back along the centre line (the lobes); ``zscale[j]`` widens row j
+    sideways (+-Z: an elliptic foot)."""
     nv = len(centre)
     pts = np.zeros((nv, RAY_NU, 3))
     for j in range(nv):
         t = np.array([np.sin(heading[j]), np.cos(heading[j])])
         bottom = np.array([t[1], -t[0]])
-        for i, th in enumerate(THETA):
+        theta = THETA if arc is None else np.radians(np.linspace(0.0, arc[j], RAY_NU))
+        for i, th in enumerate(theta):
             xy = centre[j] + radius[j] * np.cos(th) * bottom
             if back is not None:
                 xy = xy - back[j, i] * t
@@ -190,7 +198,8 @@ def ray_nets(s: float):
     # the foot: the tube's lowest rows widened sideways (FOOT x at the base ring), so the ring of
     # rays hides the receptacle between them (the nearest ray is 0.47 floret units away)
     foot = 1.0 + (FOOT - 1.0) * np.clip(1.0 - np.linspace(0.0, 1.0, TUBE_NV) / 0.4, 0.0, 1.0) ** 2
-    tube = ring_rows(c, h, tube_r(np.linspace(0.0, length, TUBE_NV)), zscale=foot)
+    arc = ARC_HALF + (ARC_BASE - ARC_HALF) * np.clip(1.0 - np.arange(TUBE_NV) / BASE_ROWS, 0.0, 1.0)
+    tube = ring_rows(c, h, tube_r(np.linspace(0.0, length, TUBE_NV)), zscale=foot, arc=arc)
     rl = np.array([tube_r(length - TUCK) - INSET, p["r_end"],
                    p["r_end"] + 0.45 * (p["r_mouth"] - p["r_end"]), p["r_mouth"]])
     back = np.zeros((LIMB_NV, RAY_NU))
