@@ -37,12 +37,12 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from make_keys import INSET, M_LIMB, M_TUBE, RES, TUCK
 from scipy.spatial import cKDTree
 
-from inflo.formats.species import species_of
 from inflo.formats.obj import read_obj
+from inflo.formats.species import species_of
 from inflo.tools.species.checks import check_head, check_individuals, check_phase, floret_faces, view_coverage
-from make_keys import INSET, M_LIMB, M_TUBE, RES, TUCK
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 SPECIES = species_of(__file__)
