@@ -436,9 +436,9 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase(fraction, grown
     out of their anchors again and again; with the grids over what left rebuilt every round, now
     and then, and only once (their stale entries skipped, a grid over the re-anchored ones); with
     every grown box paired at round 0, or each the first round it is active."""
-    from inflo.tools.collide import resolve
+    from inflo.tools.collide import detect
     from inflo.tools.collide.broad import box_pairs_brute, edge_boxes, triangle_boxes, vertex_boxes
-    from inflo.tools.collide.resolve import _StepBroadPhase
+    from inflo.tools.collide.detect import _StepBroadPhase
     from inflo.tools.pbd import mesh_edges
 
     def _candidates(x0, x1, tri, edges, pad, cell, active):  # brute force reference
@@ -463,8 +463,8 @@ def test_step_broad_phase_retry_rounds_match_a_fresh_broad_phase(fraction, grown
     edges = mesh_edges(tri)
     x1 = x0 + rng.normal(0, 0.02, x0.shape)
     pad, cell = 1e-4, 0.1
-    monkeypatch.setattr(resolve, "REBUILD_FRACTION", fraction)
-    monkeypatch.setattr(resolve, "ROUND0_GROWN_PAIRS", grown)
+    monkeypatch.setattr(detect, "REBUILD_FRACTION", fraction)
+    monkeypatch.setattr(detect, "ROUND0_GROWN_PAIRS", grown)
     bp = _StepBroadPhase(x0, tri, edges, pad, cell)
     grids = []  # the grids over what left, round by round
     vt0, ee0 = bp.first(x1)
@@ -550,7 +550,8 @@ def test_split_broad_phase_finds_the_same_contacts():
     found in the part's moving frame, pairs of two parts in the scene's (``_SplitBroadPhase``). The
     contacts, in their order, are those of the one-frame broad phase, at round 0 and over retry
     rounds, with far fewer candidate pairs."""
-    from inflo.tools.collide.resolve import _narrow, _SplitBroadPhase, _StepBroadPhase, step_broad_phase
+    from inflo.tools.collide.contacts import _narrow
+    from inflo.tools.collide.detect import _SplitBroadPhase, _StepBroadPhase, step_broad_phase
     from inflo.tools.pbd import mesh_edges
 
     rng = np.random.default_rng(11)
@@ -619,8 +620,9 @@ def test_probe_finds_round_0s_contacts_and_counts():
     """The round-0 probe (pairs tested as the part-by-part sweep finds them, none written) gives
     the contacts of the step broad phase's round 0 and its log counts, in the one-frame and in the
     moving-frame (split) case, and none where nothing crosses."""
+    from inflo.tools.collide.contacts import _narrow
+    from inflo.tools.collide.detect import _SplitBroadPhase, step_broad_phase
     from inflo.tools.collide.probe import can_probe, probe_contacts
-    from inflo.tools.collide.resolve import _narrow, _SplitBroadPhase, step_broad_phase
 
     x0, x1, tri, edges, part = _crowd()
     pad, cell, tol = 1e-4, 0.1, 2e-4
@@ -648,7 +650,8 @@ def test_probe_finds_round_0s_contacts_and_counts():
 def test_probe_overflow_of_a_parts_slots(monkeypatch):
     """A part with more crossing pairs than its first-pass slots is run again with room for all."""
     from inflo.tools.collide import probe
-    from inflo.tools.collide.resolve import _narrow, step_broad_phase
+    from inflo.tools.collide.contacts import _narrow
+    from inflo.tools.collide.detect import step_broad_phase
 
     x0, x1, tri, edges, part = _crowd()
     pad, cell, tol = 1e-4, 0.1, 2e-4
@@ -717,7 +720,8 @@ def _two_squares(gap):
 def test_retreat_parts_moves_whole_parts_back_along_their_motion():
     """Square 1 passes through square 0 in the step; moved back whole, it ends at a blend of its
     start and end (every vertex at the same fraction), the step collision-free, square 0 as it was."""
-    from inflo.tools.collide.resolve import detect_collisions, retreat_parts
+    from inflo.tools.collide.detect import detect_collisions
+    from inflo.tools.collide.retreat import retreat_parts
 
     x0, tri, edges, vp = _two_squares(0.5)
     x1 = x0.copy()
@@ -737,7 +741,8 @@ def test_retreat_parts_moves_whole_parts_back_along_their_motion():
 def test_retreat_parts_keeps_up_with_the_carried_motion():
     """With ``carried`` (the start shape carried by each part's rigid motion), a part moved back
     goes towards that rather than to x0: here the carried square is free, so it ends there."""
-    from inflo.tools.collide.resolve import detect_collisions, retreat_parts
+    from inflo.tools.collide.detect import detect_collisions
+    from inflo.tools.collide.retreat import retreat_parts
 
     x0, tri, edges, vp = _two_squares(0.5)
     carried = x0.copy()
@@ -757,7 +762,9 @@ def test_a_misshapen_part_without_room_for_its_carried_shape_is_put_at_a_smaller
     shape whose carried shape crosses something is put on the first smaller shape offered for it
     that the step reaches collision-free; ``shrunk`` says at which scale. Where none fits (or the
     free one is not offered for that part) it keeps the solve's shape and counts as misshapen."""
-    from inflo.tools.collide.resolve import CollisionResult, _retreat_fallback, detect_collisions
+    from inflo.tools.collide.detect import detect_collisions
+    from inflo.tools.collide.resolve import CollisionResult
+    from inflo.tools.collide.retreat import _retreat_fallback
 
     x0, tri, edges, vp = _two_squares(0.5)
     tol = 1e-9
@@ -811,7 +818,8 @@ def test_a_part_that_fits_at_no_scale_is_given_room_by_its_neighbours_made_small
     intersects a neighbour in shape is put there together with that neighbour scaled about its
     base, at the largest scale at which the two intersect nothing (here 0.4: the neighbour square
     then stops short of the part's plane x = 0.5)."""
-    from inflo.tools.collide.resolve import CollisionResult, _shrink_with_blockers
+    from inflo.tools.collide.resolve import CollisionResult
+    from inflo.tools.collide.retreat import _shrink_with_blockers
 
     sq = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)  # part 0 (base at the origin)
     wall = np.array([[0.5, 0.2, 0.1], [0.5, 0.8, 0.1], [0.5, 0.8, 0.7], [0.5, 0.2, 0.7]])  # part 1
@@ -935,7 +943,7 @@ def test_box_pairs_with_a_few_boxes_over_many_cells_each_side_under_64(monkeypat
 
 
 def test_touching_flags_the_elements_with_a_flagged_vertex_of_each_set():
-    from inflo.tools.collide.resolve import _touching
+    from inflo.tools.collide.detect import _touching
 
     tri = np.array([[0, 1, 2], [2, 3, 4], [4, 5, 0]], np.int32)
     edges = mesh_edges(tri)
@@ -953,7 +961,7 @@ def test_step_box_stats_are_those_of_the_written_boxes():
     positions (``_step_box_stats``): bit for bit those of the written vertex, triangle and edge
     boxes (``_box_stats``), with signed zeros, a zero pad, flat and empty element sets."""
     from inflo.tools.collide.broad import edge_boxes, triangle_boxes, vertex_boxes
-    from inflo.tools.collide.resolve import _box_stats, _step_box_stats
+    from inflo.tools.collide.detect import _box_stats, _step_box_stats
 
     rng = np.random.default_rng(11)
     x0 = rng.normal(size=(40, 3)) * np.array([1.0, 1e-3, 10.0])
@@ -982,7 +990,7 @@ def test_row_groups_is_the_inverse_of_unique_rows():
     """The contacts' merge groups rows by (kind, indices) from two packed int64 keys: the same ids
     as ``np.unique(rows, axis=0)``'s inverse (ranks of the rows in lexicographic order), with
     repeated rows, large indices, and the fallback for values the keys cannot hold."""
-    from inflo.tools.collide.resolve import _row_groups
+    from inflo.tools.collide.contacts import _row_groups
 
     rng = np.random.default_rng(5)
     for hi in (4, 1000, 2**31 - 1):

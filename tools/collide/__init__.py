@@ -4,7 +4,11 @@
 - :mod:`.broad`: broad phase on a hashed uniform grid.
 - :mod:`.tritri`: exact static triangle-triangle intersection test.
 - :mod:`.response`: collision constraints C_vt (eq. 4.6) and C_ee (eq. 4.7).
-- :mod:`.resolve`: detection over a mesh and the retry loop of Algorithm 1.
+- :mod:`.contacts`: collision contacts and the narrow phase over candidate pairs.
+- :mod:`.detect`: detection over a mesh, and the broad phase of a step's rounds.
+- :mod:`.resolve`: the retry loop of Algorithm 1.
+- :mod:`.retreat`: the fallback that keeps parts (florets) whole.
+- :mod:`.probe`: round 0's contacts from the last step's, without grids.
 """
 from .broad import box_pairs, edge_boxes, lattice_cell_size, triangle_boxes, vertex_boxes
 from .ccd import (
@@ -17,7 +21,9 @@ from .ccd import (
     segment_segment_distance,
     vertex_triangle_ccd,
 )
-from .resolve import CollisionResult, Contacts, default_tolerance, detect_collisions, resolve_collisions
+from .contacts import Contacts, default_tolerance
+from .detect import detect_collisions
+from .resolve import CollisionResult, resolve_collisions
 from .response import (
     project_collision_constraints,
     solve_collision_constraint,

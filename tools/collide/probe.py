@@ -2,7 +2,7 @@
 
 Most steps of a growing head before its florets meet (and many of a crowded canopy's emergence)
 find no contact in their first detection round. The step's broad phase
-(:func:`.resolve.step_broad_phase`) nonetheless builds its grids, pairs every element's box grown
+(:func:`.detect.step_broad_phase`) nonetheless builds its grids, pairs every element's box grown
 by the retry rounds' slack and keeps the pairs for the rounds that never come; in the dense
 growing head, where a folded bud's triangles overlap a dozen of their own neighbours each, that was
 two thirds of the step.
@@ -14,10 +14,10 @@ elements of each that reach into the other's box), and each overlapping pair is 
 same continuous tests as the narrow phase (:func:`.ccd.vertex_triangle_ccd`,
 :func:`.ccd.edge_edge_ccd`), without writing the pair. The candidate pairs are exactly round 0's
 (the same boxes, the same filters: a shared vertex, within / across parts, the floret's moving
-frame of :class:`.resolve._SplitBroadPhase`), so where the probe finds no contact round 0 finds
+frame of :class:`.detect._SplitBroadPhase`), so where the probe finds no contact round 0 finds
 none, and its counts are round 0's log figures; the pairs it finds crossing are round 0's contacts
 (in their order). The retry rounds' broad phase is then started from round 0's positions only if a
-retry comes (:class:`.resolve._ProbedBroadPhase`).
+retry comes (:class:`.detect._ProbedBroadPhase`).
 """
 from __future__ import annotations
 
@@ -89,13 +89,13 @@ def probe_contacts(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray, edges: np.nd
         Part (floret) of every vertex; :func:`can_probe` must hold.
     shift : (n, 3) float64 or None
         Each vertex's part's mean motion where pairs within a part are found in its moving frame
-        (:class:`.resolve._SplitBroadPhase`), else None.
+        (:class:`.detect._SplitBroadPhase`), else None.
 
     Returns
     -------
     (vt, ee, stats)
         ``vt``, ``ee``: (k, 2) int32 vertex-triangle and edge-edge pairs crossing an odd number of
-        times (round 0's contacts), sorted; ``stats``: the counts of :func:`.resolve._narrow`
+        times (round 0's contacts), sorted; ``stats``: the counts of :func:`.contacts._narrow`
         (candidates, hits, even hits).
     """
     x0 = np.ascontiguousarray(x0, dtype=np.float64)

@@ -73,7 +73,8 @@ from inflo.formats.errors import InputError
 from inflo.formats.fcc import CanopyParams, check_references
 from inflo.formats.obj import ObjMesh, write_obj, written_vertices
 from inflo.tools.collide.broad import lattice_cell_size, triangle_boxes
-from inflo.tools.collide.resolve import CollisionResult, default_tolerance, resolve_collisions
+from inflo.tools.collide.contacts import default_tolerance
+from inflo.tools.collide.resolve import CollisionResult, resolve_collisions
 from inflo.tools.collide.tritri import intersecting_pairs, intersecting_pairs_with
 from inflo.tools.common import linalg as la
 from inflo.tools.pbd.solver import (
