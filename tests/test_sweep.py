@@ -311,3 +311,27 @@ def test_canalization_example_parses():
 
     sw = read_sweep(REPO / "pipelines" / "examples" / "sweeps" / "canalization.toml")
     assert len(variants(sw)) == 1500 and [a.name for a in sw.axes] == ["n", "alpha"]
+
+
+def test_yarrow_example_runs_from_a_clone(tmp_path):
+    """The README's yarrow sweep runs its variants' copies of the pipeline, the pipeline's own Python
+    scripts included (they import their shared helpers as a package, not through sys.path): one
+    variant, its stages up to corymb_heads.py (a few seconds)."""
+    ex = REPO / "pipelines" / "examples" / "sweeps" / "yarrow_variants.toml"
+    text = ex.read_text()
+    text = text.replace("samples = 4", "samples = 1")
+    text = text.replace('path = "../../yarrow"', f'path = "{REPO / "pipelines" / "yarrow"}"')
+    text = text.replace('build = "../../../build/yarrow"', f'build = "{REPO / "build" / "yarrow"}"')
+    text = text.replace('targets = ["pictures", "check"]', 'targets = ["corymb"]')
+    text = text[:text.index("[metrics]")].replace('still = "yarrow_top.png"', "")
+    sweep = tmp_path / "yarrow_one.toml"
+    sweep.write_text(text)
+    out = tmp_path / "y"
+    res = run_cli("inflo-sweep", sweep, "-o", out, "--workers", "1", "--dashboard", ":0")
+    assert res.returncode == 0, res.stderr
+    rows = _rows(out)
+    assert [r["status"] for r in rows] == ["ok"], rows
+    vdir = out / "variants" / rows[0]["id"]
+    assert "ModuleNotFoundError" not in (vdir / "log.txt").read_text()
+    assert (vdir / "build" / "corymb" / "scene.scn").is_file()
+    assert not (REPO / "pipelines" / "yarrow" / "build").exists()
