@@ -15,7 +15,8 @@ from pathlib import Path
 from .errors import InputError
 
 __all__ = ["atomic_path", "atomic_write", "write_text_atomic", "write_bytes_atomic", "list_sequence", "frame_name",
-           "remove_stale_frames"]
+           "remove_stale_frames", "refuse_output_over_inputs", "check_output_path", "output_lock",
+           "staged_output", "own_stale", "read_manifest"]
 
 
 @contextlib.contextmanager
@@ -144,3 +145,144 @@ def remove_stale_frames(folder, keep, suffix: str, prefix: str = "frame_") -> li
             p.unlink()
             removed.append(p)
     return removed
+
+
+# ---------------------------------------------------------------------------------------------
+# outputs that never eat inputs, reruns that never mix, one writer per folder
+
+LOCK_NAME = ".inflo.lock"
+MANIFEST_PREFIX = ".inflo-"
+
+
+def _real(p) -> Path:
+    return Path(os.path.realpath(os.fspath(p)))
+
+
+def refuse_output_over_inputs(output, inputs, *, folder: bool = True, option: str = "-o") -> None:
+    """Bad input (:class:`InputError`, one line) when ``output`` would delete or overwrite an input.
+
+    ``inputs``: paths, or ``(path, label)`` pairs (every input, weight, map and key pose the run
+    reads). Real paths are compared (links and ``..`` resolved): a file output must not be an
+    input; a folder output (``folder=True``) must be none of them and hold none of them, since a
+    sequence writer replaces or removes the frame files in its folder. Call it before the first
+    write."""
+    out = _real(output)
+    for item in inputs:
+        path, label = item if isinstance(item, tuple) else (item, "input")
+        if path is None:
+            continue
+        p = _real(path)
+        if p == out or (folder and out in p.parents):
+            how = "is" if p == out else "holds"
+            raise InputError(f"{output}: expected an output that is no input, found {option} {output} that {how} "
+                             f"the {label} {path}")
+
+
+def check_output_path(output, *, folder: bool) -> None:
+    """Bad input (one line) when ``output`` cannot be written: a folder output that is a file, a
+    file output that is a folder, or a parent that is a file. Checked before any work."""
+    out = Path(output)
+    if folder and out.exists() and not out.is_dir():
+        raise InputError(f"{output}: expected an output folder, found a file")
+    if not folder and out.is_dir():
+        raise InputError(f"{output}: expected an output file, found a folder")
+    for parent in (out.parent, *out.parent.parents):
+        if parent.exists():
+            if not parent.is_dir():
+                raise InputError(f"{output}: expected an output path whose parents are folders, found the file {parent}")
+            if not os.access(parent, os.W_OK | os.X_OK):
+                raise InputError(f"{output}: expected an output path that can be written, found {parent} not writable")
+            break
+
+
+@contextlib.contextmanager
+def output_lock(folder, tool: str):
+    """Hold ``folder/.inflo.lock`` while a run writes ``folder``; a second run into the same folder
+    is refused (one line) instead of interleaving its frames with the first's. The lock is the
+    kernel's (``flock``): a killed run releases it."""
+    import fcntl
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise InputError(f"{folder}: expected an output folder no other run is writing, found another "
+                             f"run writing it now ({LOCK_NAME} is held)") from None
+        yield folder
+    finally:
+        os.close(fd)
+
+
+def _manifest(folder: Path, tool: str) -> Path:
+    return folder / f"{MANIFEST_PREFIX}{tool}.manifest"
+
+
+def read_manifest(folder, tool: str) -> list[str] | None:
+    """The files (relative to ``folder``) ``tool``'s last complete run wrote there, or None."""
+    try:
+        text = _manifest(Path(folder), tool).read_text(encoding="utf-8")
+    except OSError:
+        return None
+    return [ln for ln in text.splitlines() if ln and not ln.startswith("#")]
+
+
+def own_stale(folder, tool: str, stale_patterns=()) -> list[Path]:
+    """Files of ``folder`` that are ``tool``'s own earlier output: those its manifest lists or, for
+    a folder written before manifests existed (none there), names matching ``stale_patterns``
+    (regular expressions over the path relative to ``folder``, e.g. ``frame_\\d+\\.obj``)."""
+    folder = Path(folder)
+    listed = read_manifest(folder, tool)
+    if listed is not None:
+        return [folder / n for n in listed if (folder / n).is_file()]
+    if not folder.is_dir():
+        return []
+    pats = [re.compile(s + "$") for s in stale_patterns]
+    out = []
+    for p in sorted(folder.rglob("*")):
+        rel = p.relative_to(folder).as_posix()
+        if p.is_file() and not any(x.startswith(".") for x in p.relative_to(folder).parts) \
+                and any(r.match(rel) for r in pats):
+            out.append(p)
+    return out
+
+
+@contextlib.contextmanager
+def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: str = "-o"):
+    """Write a run's output folder through a staging folder: yields a fresh hidden folder inside
+    ``folder`` to write into; when the body completes, the earlier run's own files (its manifest,
+    or ``stale_patterns`` for a folder from before manifests) are removed, the new files moved into
+    ``folder`` and a manifest written. A failed or killed run leaves the earlier output as it was
+    (no mix of two runs); its staging folder is removed by the next run. Refuses (one line) an
+    output that is or holds an input, a folder that is a file, and a second concurrent run."""
+    import shutil
+
+    folder = Path(folder)
+    check_output_path(folder, folder=True)
+    refuse_output_over_inputs(folder, inputs, folder=True, option=option)
+    with output_lock(folder, tool):
+        staging = folder / f".staging-{tool}"
+        if staging.exists():
+            shutil.rmtree(staging)
+        staging.mkdir()
+        try:
+            yield staging
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
+        new = sorted(p.relative_to(staging) for p in staging.rglob("*") if p.is_file())
+        new_names = {p.as_posix() for p in new}
+        for old in own_stale(folder, tool, stale_patterns):
+            rel = old.relative_to(folder).as_posix()
+            if rel not in new_names:
+                old.unlink()
+        for rel in new:
+            dest = folder / rel
+            dest.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(staging / rel, dest)
+        shutil.rmtree(staging, ignore_errors=True)
+        write_text_atomic(_manifest(folder, tool),
+                          f"# the files {tool}'s last complete run wrote here\n"
+                          + "".join(f"{p.as_posix()}\n" for p in new))

@@ -16,7 +16,7 @@ import click
 
 from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import read_scn
-from inflo.tools.common.cli import inflo_command, progress
+from inflo.tools.common.cli import SEED, inflo_command, progress
 
 from .generate import branch_gen, write_branch_gen
 from .params import read_params
@@ -33,7 +33,7 @@ from .params import read_params
               help="With --rba: write every N-th frame (and the last).")
 @click.option("--algorithm", type=click.Choice(["rodkaew", "sca"]), default=None,
               help="Override the parameter file's algorithm.")
-@click.option("--seed", type=int, default=None, help="Override the parameter file's seed.")
+@click.option("--seed", type=SEED, default=None, help="Override the parameter file's seed.")
 @click.option("--base", type=float, nargs=3, default=None, help="Inflorescence base point (default 0 0 0).")
 def main(scene, params, output, rba, frame_step, algorithm, seed, base, quiet, debug):
     with warnings.catch_warnings():

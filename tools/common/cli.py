@@ -3,6 +3,8 @@
 - Bad input (:class:`~inflo.formats.errors.InputError`, including ``FormatError``) prints one line
   ``<cli>: error: <file>:<line>: expected ..., found ...`` and exits with code 2.
 - A failed run (any other exception) prints one line and exits with code 1.
+- An output path the system refuses (a file where a folder must be made, a missing or read-only
+  parent) and a numeric overflow are bad input too: one line, exit 2.
 - ``--debug`` re-raises so the traceback is shown.
 - Ctrl-C exits with code 130; files already renamed into place are complete (atomic writes).
 - Progress bars go to stderr, only on a terminal and without ``--quiet``.
@@ -24,7 +26,23 @@ import click
 
 from inflo.formats.errors import InputError
 
-__all__ = ["inflo_command", "progress"]
+__all__ = ["inflo_command", "progress", "SEED", "stall_notice"]
+
+#: the type of every ``--seed``: numpy's generators take seeds in [0, 2**32 - 1]
+SEED = click.IntRange(0, 2**32 - 1)
+
+
+def _path_error(exc: OSError) -> str:
+    """One line for an output (or input) path the system refused: file, what was expected, found."""
+    what = {
+        "FileExistsError": "expected a path that can be a folder, found a file in the way",
+        "NotADirectoryError": "expected a folder, found a file",
+        "IsADirectoryError": "expected a file, found a folder",
+        "FileNotFoundError": "expected a path that exists or can be made, found none",
+        "PermissionError": "expected a path that can be written, found it not permitted",
+    }.get(type(exc).__name__, f"expected a path that can be used, found {exc.strerror or exc}")
+    where = exc.filename if exc.filename is not None else "path"
+    return f"{where}: {what}"
 
 
 def inflo_command(name: str, **command_kwargs):
@@ -48,6 +66,18 @@ def inflo_command(name: str, **command_kwargs):
                 sys.exit(2)
             except click.exceptions.ClickException:
                 raise
+            except (FileExistsError, NotADirectoryError, IsADirectoryError, FileNotFoundError,
+                    PermissionError) as exc:
+                if debug:
+                    raise
+                click.echo(f"{name}: error: {_path_error(exc)}", err=True)
+                sys.exit(2)
+            except (OverflowError, FloatingPointError) as exc:
+                if debug:
+                    raise
+                click.echo(f"{name}: error: expected input whose numbers stay within floating point range, found "
+                           f"an overflow ({exc})", err=True)
+                sys.exit(2)
             except Exception as exc:  # a failed run: one line unless --debug
                 if debug:
                     raise
@@ -83,6 +113,25 @@ def progress(iterable=None, *, length: int | None = None, label: str = "", quiet
         item_show_func=(lambda item: item) if unit else None,
     ) as bar:
         yield _Rate(bar, unit) if unit else bar
+
+
+@contextlib.contextmanager
+def stall_notice(label: str, *, after: float = 30.0, every: float = 60.0):
+    """Yields ``tick(done, total)``: when the work has run ``after`` seconds, a line on stderr
+    every ``every`` seconds says how far it is (``venation: still running, 120 of 5000 steps after
+    90 s``), with or without ``--quiet`` (which silences the bar, not a stall), so a run that is
+    slow beyond its bounds is never silent."""
+    t0 = time.perf_counter()
+    last = [t0]
+
+    def tick(done, total=None, unit="steps"):
+        now = time.perf_counter()
+        if now - t0 >= after and now - last[0] >= every:
+            last[0] = now
+            of = f" of {total}" if total is not None else ""
+            click.echo(f"{label}: still running, {done}{of} {unit} after {now - t0:.0f} s", err=True)
+
+    yield tick
 
 
 class _Rate:

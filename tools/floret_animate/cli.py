@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from inflo.tools.common.cli import inflo_command
+from inflo.tools.common.cli import SEED, inflo_command
 
 
 @inflo_command(
@@ -29,7 +29,7 @@ from inflo.tools.common.cli import inflo_command
 @click.option("--lu", "lu_params", type=click.Path(), default=None,
               help="Growth-function mode (Lu et al.): grow the single key pose by the growth rates "
                    "in this TOML file.")
-@click.option("--seed", default=0, show_default=True, type=int,
+@click.option("--seed", default=0, show_default=True, type=SEED,
               help="Seed of the random petal perturbation in --lu mode.")
 def main(key_poses, output, frames, growth, lu_params, seed, quiet, debug):
     from .run import animate_files

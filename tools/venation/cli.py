@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import click
 
-from inflo.tools.common.cli import inflo_command, progress
+from inflo.formats.atomic import staged_output
+from inflo.tools.common.cli import SEED, inflo_command, progress, stall_notice
 
 from .generate import run_venation, summary
 from .params import load_inputs, read_params
@@ -20,7 +21,7 @@ from .params import load_inputs, read_params
 @inflo_command("venation", help="Grow open or closed leaf venation patterns in a growing blade (Runions ch. 4).")
 @click.argument("params", type=click.Path())
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output folder.")
-@click.option("--seed", type=int, default=None, help="Override the parameter file's seed.")
+@click.option("--seed", type=SEED, default=None, help="Override the parameter file's seed.")
 @click.option("--frame-step", type=click.IntRange(min=0), default=None,
               help="Write the pattern every N iterations into OUT_DIR/frames (0: none; default: the file's).")
 @click.option("--frame-textures/--no-frame-textures", default=None,
@@ -29,8 +30,23 @@ def main(params, output, seed, frame_step, frame_textures, quiet, debug):
     p = read_params(params)
     inputs = load_inputs(p)
     limit = max(p.run.max_iterations, 1)
-    with progress(length=min(limit, max(inputs.growth.steps, 1) + 50), label="venation", quiet=quiet) as bar:
-        run = run_venation(p, inputs, output, seed=seed, frame_step=frame_step, frame_textures=frame_textures,
-                           progress=bar.update)
+    scale = p.growth.scale
+    files = [params] + ([p.blade.contour] if p.blade.contour else []) + (
+        (scale if isinstance(scale, list) else [scale]) if scale else [])
+    # the earlier run's files are replaced only when this one completes (no new veins on an old texture)
+    stale = (r"veins\.obj", r"veins\.widths", r"blade\.obj", r"blade\.mtl", r"texture\.png",
+             r"frames/(veins|blade|texture)_\d+\.(obj|widths|png|mtl)")
+    with staged_output(output, "venation", stale_patterns=stale, inputs=[(f, "input") for f in files]) as stage, \
+            stall_notice("venation") as tick, \
+            progress(length=min(limit, max(inputs.growth.steps, 1) + 50), label="venation", quiet=quiet) as bar:
+        done = [0]
+
+        def advance(n):
+            bar.update(n)
+            done[0] += n
+            tick(done[0], limit, "iterations")
+
+        run = run_venation(p, inputs, stage, seed=seed, frame_step=frame_step, frame_textures=frame_textures,
+                           progress=advance)
     if not quiet:
         click.echo(summary(run, output), err=True)

@@ -329,6 +329,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("", "max_iterations", ">= 1")
     if r["max_nodes"] < 1:
         fail("", "max_nodes", ">= 1")
+    if not 0 <= r["seed"] <= 2**32 - 1:
+        fail("", "seed", "in [0, 4294967295]")
     b = p["blade"]
     if b["contour"] and b["polygon"]:
         fail("blade", "polygon", "absent when blade.contour is given (one blade)")
@@ -506,7 +508,52 @@ def load_inputs(p: Params) -> Inputs:
         bad = roots[np.flatnonzero(~ok)[0]].tolist()
         raise FormatError(p.source, _line_of(p.text, "veins", "roots") if p.veins.roots else _line_of(p.text, "blade", "base"),
                           "initial vein nodes inside the blade at its initial size (or within veins.step of its margin)", repr(bad))
+    _check_work(p, blade, growth)
     return Inputs(blade=blade, growth=growth, roots=roots)
+
+
+#: the work a parameter file may ask for, checked before any is done (formats/venation.md, "Bounds")
+MAX_SPAN = 5_000  # veins.step lengths across the final blade (the vein-node grid's side)
+MAX_DARTS = 1_000_000  # darts thrown in one step (sources.darts x the final real blade area)
+MAX_ITERATIONS = 10_000_000
+MAX_NODES = 50_000_000
+
+
+def _check_work(p: Params, blade: Blade, growth: Growth) -> None:
+    """Refuse (one line) parameters whose implied work or memory is beyond the bounds: a step so
+    small, a dart density so high or a growth so slow that the run would not end in reasonable time
+    or would ask for more memory than a machine has."""
+    def fail(section, key, expected, found):
+        raise FormatError(p.source, _line_of(p.text, section, key), expected, found)
+
+    if p.run.max_iterations > MAX_ITERATIONS:
+        fail("", "max_iterations", f"max_iterations <= {MAX_ITERATIONS}", f"{p.run.max_iterations}")
+    if p.run.max_nodes > MAX_NODES:
+        fail("", "max_nodes", f"max_nodes <= {MAX_NODES}", f"{p.run.max_nodes}")
+    steps = growth.steps
+    if steps > p.run.max_iterations:
+        key = "steps" if growth.functions is not None else "rate"
+        fail("growth", key, f"growth that reaches its final size within max_iterations = {p.run.max_iterations} "
+             "steps (a rate that grows the blade)", f"{steps} steps")
+    fs = growth.final_scale if growth.kind != "none" else np.ones(2)
+    if not np.all(np.isfinite(fs)):
+        fail("growth", "final", "a finite final scale", repr(fs.tolist()))
+    poly = blade.polygon
+    ext = float(np.ptp(poly, axis=0).max()) * float(np.max(fs))
+    span = ext / p.veins.step
+    if not span <= MAX_SPAN:
+        fail("veins", "step", f"veins.step >= the final blade's extent / {MAX_SPAN} = {ext / MAX_SPAN:.6g} "
+             f"(at most {MAX_SPAN} vein segments across the blade)", f"{p.veins.step:g}")
+    x, y = poly[:, 0], poly[:, 1]
+    area = 0.5 * abs(float(np.sum(x * np.roll(y, 1) - y * np.roll(x, 1)))) * float(fs[0]) * float(fs[1])
+    darts = p.sources.darts * area
+    if not darts <= MAX_DARTS:
+        fail("sources", "darts", f"sources.darts <= {MAX_DARTS} / the final blade area {area:.6g} = "
+             f"{MAX_DARTS / max(area, 1e-300):.6g} (at most {MAX_DARTS} darts a step)", f"{p.sources.darts:g}")
+    px = p.texture.size * p.texture.supersample
+    if px > MAX_TEXTURE:
+        fail("texture", "supersample", f"texture.size x texture.supersample <= {MAX_TEXTURE} pixels",
+             f"{p.texture.size} x {p.texture.supersample} = {px}")
 
 
 def _in_or_on(blade: Blade, pts, scale, tol) -> np.ndarray:
