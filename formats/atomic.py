@@ -262,6 +262,7 @@ def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: st
     folder = Path(folder)
     check_output_path(folder, folder=True)
     refuse_output_over_inputs(folder, inputs, folder=True, option=option)
+    existed = folder.exists()
     with output_lock(folder, tool):
         staging = folder / f".staging-{tool}"
         if staging.exists():
@@ -271,6 +272,10 @@ def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: st
             yield staging
         except BaseException:
             shutil.rmtree(staging, ignore_errors=True)
+            if not existed:  # a failed first run leaves no folder behind
+                with contextlib.suppress(OSError):
+                    (folder / LOCK_NAME).unlink()
+                    folder.rmdir()
             raise
         new = sorted(p.relative_to(staging) for p in staging.rglob("*") if p.is_file())
         new_names = {p.as_posix() for p in new}

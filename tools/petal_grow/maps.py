@@ -12,6 +12,7 @@ mapped from [0, 255] to [-1, 1] (red: u, green: v; sec. 3.1), or two expressions
 from __future__ import annotations
 
 import ast
+import copy
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -59,7 +60,42 @@ def _compile(text: str, path, line, what: str):
             raise FormatError(path, line, f"{what}: numbers", repr(node.value))
         if isinstance(node, ast.IfExp):
             raise FormatError(path, line, f"{what}: no 'if' (use step() or smoothstep())", shorten(text))
-    return compile(tree, "<growth map>", "eval")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow) and _constant(node.right):
+            e = _float_value(node.right, path, line, what, text)
+            if not abs(e) <= MAX_EXPONENT:
+                raise FormatError(path, line, f"{what}: constant exponents within +-{MAX_EXPONENT}", shorten(text))
+    code = compile(tree, "<growth map>", "eval")
+    try:
+        _eval(code, np.array([[0.0, 0.0], [0.5, 0.5], [1.0, 1.0]]))
+    except (OverflowError, ZeroDivisionError, ValueError, TypeError, MemoryError) as exc:
+        raise FormatError(path, line, f"{what}: an expression with a value at every (u, v)",
+                          f"{shorten(text)} ({type(exc).__name__})") from None
+    return code
+
+
+#: the largest constant exponent of a growth expression: an integer power is evaluated exactly by
+#: Python, so 9**9**9 would run for hours and fill memory
+MAX_EXPONENT = 1024
+
+
+def _constant(node) -> bool:
+    return not any(isinstance(n, ast.Name) and n.id in ("u", "v") for n in ast.walk(node))
+
+
+def _float_value(node, path, line, what, text) -> float:
+    """A name-free subexpression evaluated in floating point (never Python's exact integers)."""
+
+    class _Floats(ast.NodeTransformer):
+        def visit_Constant(self, n):
+            return ast.copy_location(ast.Constant(float(n.value)), n) if isinstance(n.value, int) else n
+
+    tree = ast.fix_missing_locations(_Floats().visit(ast.Expression(body=copy.deepcopy(node))))
+    try:
+        with np.errstate(all="ignore"):
+            return float(eval(compile(tree, "<exponent>", "eval"), {"__builtins__": {}}, {**_FUNCS, **_CONSTS}))
+    except (OverflowError, ZeroDivisionError, ValueError, TypeError):
+        raise FormatError(path, line, f"{what}: constant exponents within +-{MAX_EXPONENT}", shorten(text)) from None
 
 
 def _eval(code, uv: np.ndarray) -> np.ndarray:
@@ -69,12 +105,20 @@ def _eval(code, uv: np.ndarray) -> np.ndarray:
     return np.broadcast_to(np.asarray(out, dtype=np.float64), (len(uv),)).copy()
 
 
+#: the largest growth-map PNG (pixels): a map is held as float64 RGB, 24 bytes a pixel
+MAX_MAP_PIXELS = 4096 * 4096
+
+
 def _read_png(path: Path, src, line, what: str) -> np.ndarray:
     """(H, W, 3) float64 in [0, 1], row 0 at v = 1 (image top)."""
     from PIL import Image, UnidentifiedImageError
 
     try:
         with Image.open(path) as im:
+            w, h = im.size
+            if w * h > MAX_MAP_PIXELS:
+                raise FormatError(src, line, f"{what}: a PNG of at most {MAX_MAP_PIXELS} pixels (e.g. 4096 x 4096)",
+                                  f"{path.name} of {w} x {h}")
             return np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
     except FileNotFoundError:
         raise FormatError(src, line, f"{what}: an existing PNG file", str(path)) from None

@@ -94,6 +94,14 @@ class Params:
     organs: list = field(default_factory=list)
 
 
+#: the work a parameter file may ask for (formats/petal_grow.md, "Bounds"): keyframes, solver
+#: iterations a keyframe (and their product, the steps of the whole run), collision passes
+MAX_KEYFRAMES = 10_000
+MAX_ITERATIONS = 10_000
+MAX_STEPS = 5_000_000
+MAX_COLLISION_ITERATIONS = 1_000
+
+
 def _line(text: str, table: str, key: str | None, index: int = 0) -> int | None:
     """1-based line of ``key`` in the ``index``-th ``[table]``/``[[table]]`` header's body (or the
     header's own line when ``key`` is None or absent)."""
@@ -183,22 +191,26 @@ def parse_params(text: str, path="<params>") -> Params:
         return _line(text, "flower", key)
 
     flower = Flower(
-        keyframes=_num(g["keyframes"], path, L("keyframes"), "keyframes", lo=1, integer=True),
-        iterations=_num(g["iterations"], path, L("iterations"), "iterations", lo=0, integer=True),
-        match_every=_num(g["match_every"], path, L("match_every"), "match_every", lo=1, integer=True),
-        length_sweeps=_num(g["length_sweeps"], path, L("length_sweeps"), "length_sweeps", lo=0, integer=True),
+        keyframes=_num(g["keyframes"], path, L("keyframes"), "keyframes", lo=1, hi=MAX_KEYFRAMES, integer=True),
+        iterations=_num(g["iterations"], path, L("iterations"), "iterations", lo=0, hi=MAX_ITERATIONS, integer=True),
+        match_every=_num(g["match_every"], path, L("match_every"), "match_every", lo=1, hi=MAX_ITERATIONS, integer=True),
+        length_sweeps=_num(g["length_sweeps"], path, L("length_sweeps"), "length_sweeps", lo=0, hi=MAX_ITERATIONS,
+                           integer=True),
         collisions=bool(g["collisions"]) if isinstance(g["collisions"], bool) else
         _bad(path, L("collisions"), "collisions: true or false", g["collisions"]),
         collision_distance=_num(g["collision_distance"], path, L("collision_distance"), "collision_distance", lo=0.0),
         collision_iterations=_num(g["collision_iterations"], path, L("collision_iterations"),
-                                  "collision_iterations", lo=1, integer=True),
+                                  "collision_iterations", lo=1, hi=MAX_COLLISION_ITERATIONS, integer=True),
         collision_retries=_num(g["collision_retries"], path, L("collision_retries"), "collision_retries",
-                               lo=0, integer=True),
+                               lo=0, hi=MAX_COLLISION_ITERATIONS, integer=True),
         joint=[(s, _num(d, path, L("joint"), "joint angle (degrees)", lo=-180, hi=180))
                for s, d in _schedule(g["joint"], path, L("joint"), "joint", "degrees")],
         base_v=_num(g["base_v"], path, L("base_v"), "base_v", lo=0.0, hi=1.0),
         check_every=_num(g["check_every"], path, L("check_every"), "check_every", lo=0, integer=True),
     )
+    if flower.keyframes * max(flower.iterations, 1) > MAX_STEPS:
+        raise FormatError(path, L("iterations"), f"keyframes x iterations <= {MAX_STEPS} (the solver steps of the run)",
+                          f"{flower.keyframes} x {flower.iterations}")
     growth_raw = raw.get("growth", {})
     if not isinstance(growth_raw, dict) or not growth_raw:
         raise FormatError(path, None, "at least one [growth.NAME] table", "none")
