@@ -21,7 +21,7 @@ from inflo.formats.pc2 import encode_pc2, read_pc2  # noqa: E402
 from inflo.tools.canopy_export import cli as export_cli  # noqa: E402
 from inflo.tools.canopy_export.usd import points_extent, srgb_to_linear, vertex_normals  # noqa: E402
 
-# frame k: the quad's far corner rises; frame 2 adds vertex 5 and face (2, 5, 3), material mtl4
+# frame k: the quad's far corner rises; frame 2 adds face (2, 5, 3), material mtl4 (vertex 5 unused before)
 _BASE = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0)]
 
 
@@ -29,8 +29,8 @@ def _frame_text(k: int) -> str:
     verts = [list(v) for v in _BASE]
     verts[2][2] = 0.1234567 * k
     faces = [("mtl3", (1, 2, 3)), ("mtl4", (1, 3, 4))]
+    verts.append([0.5, 1.5, 0.3333333])  # in every frame (vertex k is one point throughout), used from frame 2
     if k == 2:
-        verts.append([0.5, 1.5, 0.3333333])
         faces.append(("mtl4", (3, 5, 4)))
     lines = [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in verts]
     current = None
@@ -137,7 +137,7 @@ def test_constant_topology_is_written_once_and_text_output(build):
     assert list(mesh.GetFaceVertexIndicesAttr().Get()) == [0, 1, 2, 0, 2, 3]
     assert mesh.GetPointsAttr().GetTimeSamples() == [0.0, 1.0, 2.0]
     nrm = np.asarray(mesh.GetNormalsAttr().Get(0.0))
-    np.testing.assert_allclose(nrm, [[0, 0, 1]] * 4, atol=1e-7)
+    np.testing.assert_allclose(nrm, [[0, 0, 1]] * 4 + [[0, 0, 0]], atol=1e-7)  # vertex 5: in no face yet
     assert mesh.GetNormalsAttr().GetTimeSamples() == [0.0, 1.0, 2.0]
 
 
@@ -149,7 +149,7 @@ def test_deterministic_and_pc2(build):
     assert _run(seq, "--colors", colors, "-o", b).exit_code == 0
     assert a.read_bytes() == b.read_bytes()
     pts, start, sampling = read_pc2(tmp / "pc2" / "canopy.pc2")
-    assert (start, sampling) == (1.0, 1.0) and pts.shape == (3, 4, 3)
+    assert (start, sampling) == (1.0, 1.0) and pts.shape == (3, 5, 3)
     for k in range(3):
         np.testing.assert_array_equal(pts[k], read_obj(seq / f"frame_{k:04d}.obj").vertices.astype(np.float32))
     assert encode_pc2(pts)[:12] == b"POINTCACHE2\x00"
@@ -173,11 +173,11 @@ def test_bad_input_exits_2_without_output(build):
     _assert_bad(_run(tmp / "nowhere", "-o", out), out, "nowhere", "no such file or folder")
     # a frame with the previous frame's faces but an extra vertex
     (seq / "frame_0001.obj").write_text(_frame_text(1) + "v 9 9 9\n")
-    _assert_bad(_run(seq, "-o", out), out, "frame_0001.obj", "expected 4 vertices", "found 5")
+    _assert_bad(_run(seq, "-o", out), out, "frame_0001.obj", "expected 5 vertices", "found 6")
     (seq / "frame_0001.obj").write_text(_frame_text(1))
     # faces that change, where the topology is declared constant (or needed by a PC2 cache)
-    _assert_bad(_run(seq, "--constant-topology", "-o", out), out, "frame_0002.obj", "expected 4 vertices",
-                "found 5")
+    _assert_bad(_run(seq, "--constant-topology", "-o", out), out, "frame_0002.obj", "expected the 2 faces",
+                "constant topology")
     _assert_bad(_run(seq, "--pc2", tmp / "pc2", "-o", out), out, "frame_0002.obj", "PC2")
     assert not (tmp / "pc2").exists()
     # a bad colour file line
@@ -195,6 +195,50 @@ def test_bad_input_exits_2_without_output(build):
     # two parts of one name
     (seq / "frame_0001.obj").write_text(_frame_text(1))
     _assert_bad(_run(f"a={seq}", f"a={static}", "-o", out), out, "'a'")
+
+
+@pytest.mark.parametrize("suffix", [".usdc", ".glb"])
+def test_sequence_rules_as_fccompose(build, suffix):
+    """A gap in the numbering, a 0-byte frame, a vertex count that changes: one line, exit 2, no file."""
+    tmp, seq, static, colors = build
+    out = tmp / f"flower{suffix}"
+    (seq / "frame_0003.obj").write_text(_frame_text(1))
+    (seq / "frame_0001.obj").rename(seq / "frame_0004.obj")  # 0, 2, 3, 4: frame_0001 missing
+    _assert_bad(_run(seq, "-o", out), out, "without a gap", "frame_0001.obj missing")
+    (seq / "frame_0004.obj").rename(seq / "frame_0001.obj")
+    (seq / "frame_0003.obj").write_bytes(b"")
+    _assert_bad(_run(seq, "-o", out), out, "frame_0003.obj", "empty (0-byte)")
+    (seq / "frame_0003.obj").unlink()
+    (seq / "frame_0002.obj").write_text(_frame_text(1) + "v 9 9 9\n")  # a vertex more, faces kept
+    _assert_bad(_run(seq, "-o", out), out, "frame_0002.obj", "expected 5 vertices", "found 6")
+    (seq / "frame_0002.obj").write_text(_frame_text(2) + "v 9 9 9\nf 1 2 6\n")  # a vertex and faces more
+    _assert_bad(_run(seq, "-o", out), out, "frame_0002.obj", "expected 5 vertices", "found 6")
+
+
+@pytest.mark.parametrize("suffix", [".usdc", ".glb"])
+def test_float32_range_and_fps(build, suffix):
+    tmp, seq, static, colors = build
+    out = tmp / f"flower{suffix}"
+    (seq / "frame_0001.obj").write_text(_frame_text(1).replace("v 1.000000 0.000000", "v 1e39 0.000000"))
+    _assert_bad(_run(seq, "-o", out), out, "frame_0001.obj", "float32", "1e+39")
+    (seq / "frame_0001.obj").write_text(_frame_text(1))
+    for fps in ("nan", "inf", "-inf", "0", "-3"):
+        res = _run(seq, "--fps", fps, "-o", out)
+        assert res.exit_code == 2 and "--fps" in res.output and "Traceback" not in res.output, res.output
+        assert not out.exists()
+
+
+def test_mtl_never_replaces_a_hand_written_materials_mtl(build):
+    tmp, seq, static, colors = build
+    hand = seq / "materials.mtl"
+    hand.write_text("# my own\nnewmtl mtl3\nKd 1 0 0\n")
+    out = tmp / "flower.usdc"
+    _assert_bad(_run(seq, "--mtl", "--colors", colors, "-o", out), out, "materials.mtl", "by hand")
+    assert hand.read_text() == "# my own\nnewmtl mtl3\nKd 1 0 0\n"
+    hand.unlink()
+    assert _run(seq, "--mtl", "--colors", colors, "-o", out).exit_code == 0  # its own: written,
+    assert hand.read_text().startswith("# canopy-export:")
+    assert _run(seq, "--mtl", "--colors", colors, "-o", out).exit_code == 0  # and replaced on a rerun
 
 
 def test_usage_errors_and_help():

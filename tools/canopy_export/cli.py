@@ -2,7 +2,7 @@
 
 Usage::
 
-    canopy-export [NAME=]IN_DIR|'GLOB'|IN.obj [...] -o OUT.usdc|OUT.usda [options]
+    canopy-export [NAME=]IN_DIR|'GLOB'|IN.obj [...] -o OUT.usdc|OUT.usda|OUT.glb [options]
 
 Each input is a part: a folder of OBJ frames, a quoted glob, or one OBJ file (static), named
 ``NAME`` or after its folder. Sequences exported together need the same number of frames;
@@ -22,10 +22,15 @@ Examples::
                                                              # build/yarrow/canopy/materials.mtl
 
 Open it in Blender: File > Import > Universal Scene Description, press play.
+
+``-o OUT.glb`` writes one binary glTF 2.0 instead (formats/gltf.md): the growth as morph targets,
+one per frame, for three.js, model-viewer, Babylon.js and Blender's glTF importer; ``--viewer``
+writes the viewer page beside it (``canopy-view DIR`` serves it).
 """
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import click
 
@@ -45,8 +50,14 @@ def _units(ctx, param, value):
 
 
 def _output(ctx, param, value):
-    if not value.lower().endswith((".usdc", ".usda", ".usd")):
-        raise click.BadParameter(f"expected a name ending .usdc, .usda or .usd, found {value!r}")
+    if not value.lower().endswith((".usdc", ".usda", ".usd", ".glb")):
+        raise click.BadParameter(f"expected a name ending .usdc, .usda, .usd or .glb, found {value!r}")
+    return value
+
+
+def _fps(ctx, param, value):
+    if not math.isfinite(value) or value <= 0:
+        raise click.BadParameter(f"expected a finite number of frames per second above 0, found {value!r}")
     return value
 
 
@@ -68,14 +79,14 @@ def _translate(ctx, param, values):
                epilog="Open it in Blender: File > Import > Universal Scene Description, press play.")
 @click.argument("inputs", nargs=-1, required=True, metavar="[NAME=]IN_DIR|GLOB|IN.obj...")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), callback=_output,
-              help="Output .usdc (binary), .usda (text) or .usd (binary).")
+              help="Output .usdc (binary), .usda (text), .usd (binary) or .glb (binary glTF 2.0, formats/gltf.md).")
 @click.option("--colors", "color_file", type=click.Path(), default=None,
               help="TOML colour file (canopy-render's): material -> colour, sRGB; written linear.")
 @click.option("--units", default="cm", show_default=True, callback=_units,
               help=f"What one unit of the OBJ files is: {', '.join(UNITS)} or metres per unit "
                    f"(the stage's metersPerUnit; the lily is about 15 units across).")
-@click.option("--fps", type=click.FloatRange(min=0.0, min_open=True), default=24.0, show_default=True,
-              help="Frames per second (timeCodesPerSecond).")
+@click.option("--fps", type=float, default=24.0, show_default=True, callback=_fps,
+              help="Frames per second (timeCodesPerSecond; the glTF animation's clock).")
 @click.option("--start-frame", type=int, default=1, show_default=True,
               help="Time code of the first frame.")
 @click.option("--normals", is_flag=True, help="Also write per-vertex normals (Blender computes its own).")
@@ -89,8 +100,15 @@ def _translate(ctx, param, values):
               help="Move part NAME by (X, Y, Z) (an xformOp on its prim; the points are kept). Repeatable.")
 @click.option("--pc2", "pc2_dir", type=click.Path(file_okay=False), default=None,
               help="Also write DIR/<part>.pc2 point caches (fixed topology; Blender's Mesh Cache modifier).")
+@click.option("--quantize/--no-quantize", default=True, show_default=True,
+              help=".glb: positions and morph deltas as 16-bit integers (KHR_mesh_quantization), else float32.")
+@click.option("--title", default=None, help=".glb: the title the viewer page shows (default: the file's stem).")
+@click.option("--figure", "figures", multiple=True, metavar="TEXT",
+              help=".glb: a line of figures the viewer page shows under the title. Repeatable.")
+@click.option("--viewer", is_flag=True,
+              help=".glb: also write the viewer page beside it (index.html and three.js; formats/gltf.md).")
 def main(inputs, output, color_file, units, fps, start_frame, normals, constant_topology, subsets, mtl, translate,
-         pc2_dir, quiet, debug):
+         pc2_dir, quantize, title, figures, viewer, quiet, debug):
     colors = None
     if color_file:
         from inflo.tools.canopy_render.colors import load_color_file
@@ -98,10 +116,19 @@ def main(inputs, output, color_file, units, fps, start_frame, normals, constant_
         colors = load_color_file(color_file)
     parts = resolve_parts(inputs)
     n_frames = frame_count(parts)
+    glb = output.lower().endswith(".glb")
+    if viewer and not glb:
+        raise click.BadParameter("--viewer needs a .glb output", param_hint="--viewer")
+    extras = {"title": title or Path(output).stem, "figures": list(figures)} if glb else {}
     options = ExportOptions(fps=fps, start_frame=start_frame, meters_per_unit=units, normals=normals,
-                            constant_topology=constant_topology, subsets=subsets, mtl=mtl, translate=translate)
+                            constant_topology=constant_topology, subsets=subsets, mtl=mtl, translate=translate,
+                            quantize=quantize, extras=extras)
     with progress(length=n_frames, label="canopy-export", quiet=quiet, unit="frames") as bar:
         report = export_canopy(parts, output, colors=colors, options=options, pc2_dir=pc2_dir,
                                on_frame=lambda k: bar.update(1))
+    if viewer:
+        from inflo.tools.canopy_view.page import write_viewer
+
+        write_viewer(Path(output).parent, Path(output).name, title=extras["title"])
     if not quiet:
         click.echo(f"canopy-export: {report.summary()}", err=True)

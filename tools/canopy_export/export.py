@@ -21,7 +21,7 @@ from inflo.formats.pc2 import write_pc2
 
 from .parts import Part, frame_count, iter_frames, prim_name
 
-__all__ = ["ExportOptions", "ExportReport", "export_canopy", "UNITS", "parse_units"]
+__all__ = ["ExportOptions", "ExportReport", "export_canopy", "check_mtl_targets", "UNITS", "parse_units"]
 
 UNITS: dict[str, float] = {"m": 1.0, "dm": 0.1, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048}
 """Unit names accepted by ``--units`` and their metres per unit."""
@@ -78,6 +78,32 @@ class ExportOptions:
     subsets: str = "material"
     mtl: bool = False
     translate: dict = field(default_factory=dict)
+    quantize: bool = True
+    """glTF only: positions and morph deltas as normalized 16-bit integers (KHR_mesh_quantization)."""
+    extras: dict = field(default_factory=dict)
+    """glTF only: written as the scene's extras (the viewer page's title and figures)."""
+
+
+MTL_HEADER = ("canopy-export: the materials of the OBJ files in this folder, Kd in linear RGB "
+              "(formats/obj.md)")
+
+
+def check_mtl_targets(folders) -> None:
+    """Refuse to replace a ``materials.mtl`` that canopy-export did not write (a hand-written one is
+    an input of the OBJ files, never an output); checked before anything is written."""
+    for folder in folders:
+        target = Path(folder) / MTL_NAME
+        if not target.exists():
+            continue
+        try:
+            with open(target, encoding="utf-8", errors="replace") as fh:
+                first = fh.readline()
+        except OSError as exc:
+            raise InputError(f"{target}: expected a materials.mtl canopy-export may replace, found it unreadable "
+                             f"({exc.strerror or exc})") from None
+        if not first.startswith("# " + MTL_HEADER.split(":")[0] + ":"):
+            raise InputError(f"{target}: expected no materials.mtl or one canopy-export wrote (--mtl), found one "
+                             f"written by hand or by another tool; it is kept: move it away or drop --mtl")
 
 
 @dataclass
@@ -152,27 +178,45 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
     """
     from inflo.tools.canopy_render.colors import INPUT_PALETTE, material_color
 
+    from .gltf import GLTF_SUFFIXES, GltfBuilder
     from .usd import USD_SUFFIXES, UsdBuilder, srgb_to_linear
 
     t0 = time.perf_counter()
     opts = options or ExportOptions()
     output = Path(output)
-    if output.suffix.lower() not in USD_SUFFIXES:
-        raise InputError(f"{output}: expected an output name ending {', '.join(USD_SUFFIXES)}, "
+    if output.suffix.lower() not in USD_SUFFIXES + GLTF_SUFFIXES:
+        raise InputError(f"{output}: expected an output name ending {', '.join(USD_SUFFIXES + GLTF_SUFFIXES)}, "
                          f"found {output.suffix or 'no suffix'!r}")
+    if opts.fps is None or not np.isfinite(opts.fps) or opts.fps <= 0:
+        raise InputError(f"--fps: expected a finite number above 0, found {opts.fps!r}")
     n_frames = frame_count(parts)
     table = dict(colors or {})
     unknown = sorted(set(opts.translate) - {p.name for p in parts})
     if unknown:
         raise InputError(f"--translate: no part named {unknown[0]!r}; expected one of {', '.join(p.name for p in parts)}")
-    builder = UsdBuilder(
-        prim_name(output.stem), [p.name for p in parts], [p.is_static for p in parts],
-        material_color=lambda name: material_color(name, table),
-        default_colors=[INPUT_PALETTE[i % len(INPUT_PALETTE)] for i in range(len(parts))],
-        n_frames=n_frames, start_frame=opts.start_frame, fps=opts.fps,
-        meters_per_unit=opts.meters_per_unit, normals=opts.normals, subsets=opts.subsets,
-        translate=opts.translate,
-    )
+    inputs = {os.path.realpath(q) for p in parts for q in p.paths}
+    if os.path.realpath(output) in inputs:
+        raise InputError(f"{output}: expected an output that is none of the inputs, found it among them")
+    if opts.mtl:
+        check_mtl_targets({p.paths[0].parent for p in parts})
+    if output.suffix.lower() in GLTF_SUFFIXES:
+        if opts.translate:
+            raise InputError("--translate: not supported for a .glb (move the parts in a USD export)")
+        builder = GltfBuilder(
+            prim_name(output.stem), [p.name for p in parts], [p.is_static for p in parts],
+            material_color=lambda name: material_color(name, table),
+            default_colors=[INPUT_PALETTE[i % len(INPUT_PALETTE)] for i in range(len(parts))],
+            n_frames=n_frames, fps=opts.fps, start_frame=opts.start_frame, meters_per_unit=opts.meters_per_unit,
+            quantize=opts.quantize, extras=opts.extras)
+    else:
+        builder = UsdBuilder(
+            prim_name(output.stem), [p.name for p in parts], [p.is_static for p in parts],
+            material_color=lambda name: material_color(name, table),
+            default_colors=[INPUT_PALETTE[i % len(INPUT_PALETTE)] for i in range(len(parts))],
+            n_frames=n_frames, start_frame=opts.start_frame, fps=opts.fps,
+            meters_per_unit=opts.meters_per_unit, normals=opts.normals, subsets=opts.subsets,
+            translate=opts.translate,
+        )
     caches = {p.name: [] for p in parts if not p.is_static} if pc2_dir is not None else {}
     topology = {p.name: 0 for p in parts}
     polylines = set()
@@ -206,8 +250,7 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
         for folder, names in _mtl_folders(parts, part_materials).items():
             target = folder / MTL_NAME
             write_mtl(target, {n: srgb_to_linear(material_color(n, table)) for n in names},
-                      header="canopy-export: the materials of the OBJ files in this folder, Kd in linear RGB "
-                             "(formats/obj.md)")
+                      header=MTL_HEADER)
             mtl_files.append(target)
     return ExportReport(
         output=output, parts=[p.name for p in parts], n_frames=n_frames, start_frame=opts.start_frame,

@@ -7,8 +7,9 @@ the file's stem). Every sequence exported together must have the same number of 
 called (``frame_0000.obj`` ... or ``1.obj`` ...).
 
 :func:`iter_frames` reads the frames one at a time and checks each part's topology as it goes: a
-frame may change the faces (florets emerging), but a frame with the previous frame's faces must
-also have its vertex count (vertex *k* is the same point in every frame, formats/obj.md).
+frame may change the faces (florets emerging), but not the vertex count (vertex *k* is the same
+point in every frame, formats/obj.md). Sequences follow fccompose's rules: numbered without a gap,
+no empty frame file; coordinates must fit float32.
 """
 from __future__ import annotations
 
@@ -20,10 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.formats.atomic import first_missing_frame
 from inflo.formats.errors import FormatError, InputError
 from inflo.formats.obj import ObjMesh, list_obj_sequence, read_obj
 
-__all__ = ["Part", "prim_name", "parse_part", "resolve_parts", "frame_count", "iter_frames"]
+__all__ = ["Part", "prim_name", "parse_part", "resolve_parts", "check_sequence", "check_coordinates",
+           "frame_count", "iter_frames"]
 
 
 @dataclass
@@ -91,6 +94,7 @@ def resolve_parts(specs: Sequence[str]) -> list[Part]:
     for spec in specs:
         name, source = parse_part(spec)
         paths = list_obj_sequence(source)
+        check_sequence(spec, paths)
         pname = prim_name(name if name is not None else _default_name(source))
         if pname in seen:
             raise InputError(f"{spec}: expected a part name of its own, found {pname!r} again (named after "
@@ -98,6 +102,42 @@ def resolve_parts(specs: Sequence[str]) -> list[Part]:
         seen[pname] = spec
         parts.append(Part(name=pname, source=source, paths=paths))
     return parts
+
+
+def check_sequence(spec: str, paths: Sequence[Path]) -> None:
+    """The sequence rules fccompose keeps for its OBJ sequences: numbered frames without a gap (a
+    missing frame would re-time the animation) and no empty (0-byte) frame file.
+
+    Raises
+    ------
+    InputError
+        Naming the first missing frame or the empty file.
+    """
+    gap = first_missing_frame(paths)
+    if gap is not None:
+        raise InputError(f"{spec}: expected an OBJ sequence without a gap (a missing frame would re-time the "
+                         f"animation), found {gap} missing")
+    for p in paths:
+        try:
+            empty = os.path.getsize(p) == 0
+        except OSError as exc:
+            raise InputError(f"{p}: expected a readable OBJ file, found {exc.strerror or exc}") from None
+        if empty:
+            raise InputError(f"{p}: expected an OBJ frame, found an empty (0-byte) file")
+
+
+_F32_MAX = float(np.finfo(np.float32).max)
+
+
+def check_coordinates(path, mesh: ObjMesh) -> None:
+    """Refuse coordinates that float32 (USD's points, glTF's positions) cannot hold: they would be
+    written as ``inf``."""
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    ok = np.isfinite(v).all(axis=1) & (np.abs(v) <= _F32_MAX).all(axis=1)
+    if not ok.all():
+        i = int(np.flatnonzero(~ok)[0])
+        raise FormatError(path, None, f"vertex coordinates within float32's range (|x| <= {_F32_MAX:.4g})",
+                          f"vertex {i + 1} at ({', '.join(f'{c:g}' for c in v[i])})")
 
 
 def frame_count(parts: Sequence[Part]) -> int:
@@ -131,8 +171,12 @@ def _check_topology(part: Part, frame: int, mesh: ObjMesh, prev: ObjMesh, first:
                 else f"the {first.n_faces} faces")
         found = str(mesh.n_vertices) if mesh.n_vertices != first.n_vertices else "other faces"
         raise FormatError(path, None, f"{what} of {part.paths[0].name} (constant topology)", found)
-    if same_faces and mesh.n_vertices != prev.n_vertices:
-        raise FormatError(path, None, f"{prev.n_vertices} vertices as in {part.path(frame - 1).name} (same faces)", str(mesh.n_vertices))
+    if mesh.n_vertices != prev.n_vertices:
+        # vertex k is the same point in every frame (formats/obj.md): faces may change (florets
+        # emerging), the vertices may not
+        raise FormatError(path, None, f"{prev.n_vertices} vertices as in {part.path(frame - 1).name} (vertex k is "
+                          "the same point in every frame; faces may change, the vertex count may not)",
+                          str(mesh.n_vertices))
     return not same_faces
 
 
@@ -167,6 +211,7 @@ def iter_frames(parts: Sequence[Part], n_frames: int, *, constant_topology: bool
                 changed.append(False)
                 continue
             mesh = read_obj(part.path(k))
+            check_coordinates(part.path(k), mesh)
             key = _face_materials(mesh)
             if prev[i] is None:
                 first[i] = mesh
