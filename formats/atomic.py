@@ -150,7 +150,6 @@ def remove_stale_frames(folder, keep, suffix: str, prefix: str = "frame_") -> li
 # ---------------------------------------------------------------------------------------------
 # outputs that never eat inputs, reruns that never mix, one writer per folder
 
-LOCK_NAME = ".inflo.lock"
 MANIFEST_PREFIX = ".inflo-"
 
 
@@ -197,20 +196,20 @@ def check_output_path(output, *, folder: bool) -> None:
 
 @contextlib.contextmanager
 def output_lock(folder, tool: str):
-    """Hold ``folder/.inflo.lock`` while a run writes ``folder``; a second run into the same folder
-    is refused (one line) instead of interleaving its frames with the first's. The lock is the
-    kernel's (``flock``): a killed run releases it."""
+    """Hold a lock on ``folder`` (the kernel's ``flock`` on the folder itself: no file is made, and a
+    killed run releases it) while a run writes it; a second run into the same folder is refused
+    (one line) instead of interleaving its frames with the first's."""
     import fcntl
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    fd = os.open(folder, os.O_RDONLY)
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             raise InputError(f"{folder}: expected an output folder no other run is writing, found another "
-                             f"run writing it now ({LOCK_NAME} is held)") from None
+                             f"run writing it now") from None
         yield folder
     finally:
         os.close(fd)
@@ -274,7 +273,6 @@ def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: st
             shutil.rmtree(staging, ignore_errors=True)
             if not existed:  # a failed first run leaves no folder behind
                 with contextlib.suppress(OSError):
-                    (folder / LOCK_NAME).unlink()
                     folder.rmdir()
             raise
         new = sorted(p.relative_to(staging) for p in staging.rglob("*") if p.is_file())

@@ -4,7 +4,13 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from inflo.formats.atomic import frame_name, remove_stale_frames
+from inflo.formats.atomic import (
+    check_output_path,
+    frame_name,
+    output_lock,
+    refuse_output_over_inputs,
+    remove_stale_frames,
+)
 from inflo.formats.errors import InputError
 from inflo.formats.floret import read_floret, write_floret
 from inflo.formats.func import read_func
@@ -21,10 +27,11 @@ def write_frames(frames, output, quiet: bool = True, n_frames: int | None = None
     """Write Floret frames as ``output/frame_0000.floret`` ... (atomic); returns the paths."""
     out = Path(output)
     out.mkdir(parents=True, exist_ok=True)
-    # an older run's frames go first: an interrupted run leaves a shorter sequence, never a mix
-    remove_stale_frames(out, [], ".floret")
     written = []
-    with progress(frames, length=n_frames, label="floret-animate", quiet=quiet) as bar:
+    with output_lock(out, "floret-animate"), \
+            progress(frames, length=n_frames, label="floret-animate", quiet=quiet) as bar:
+        # an older run's frames go first: an interrupted run leaves a shorter sequence, never a mix
+        remove_stale_frames(out, [], ".floret")
         for i, fr in enumerate(bar):
             p = out / frame_name(i, FRAME_PREFIX, ".floret")
             write_floret(p, fr)
@@ -36,6 +43,11 @@ def animate_files(key_poses, output, *, n_frames: int = 100, growth_path=None, l
                   seed: int = 0, quiet: bool = True) -> list[Path]:
     """Read key poses (and a growth function), write ``n_frames`` frames to ``output``."""
     paths = [os.fspath(p) for p in key_poses]
+    # the frames of an earlier run are removed from the output folder: never a key pose, growth or
+    # parameter file that lies there (frame_0005.floret may be a key pose)
+    check_output_path(output, folder=True)
+    refuse_output_over_inputs(output, [(p, "key pose") for p in paths]
+                              + [(f, "input") for f in (growth_path, lu_params) if f is not None])
     growth = None
     if growth_path is not None:
         growth = read_func(growth_path)

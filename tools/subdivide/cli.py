@@ -20,6 +20,7 @@ from pathlib import Path
 
 import click
 
+from inflo.formats.atomic import check_output_path, refuse_output_over_inputs
 from inflo.formats.obj import list_obj_sequence, read_obj, read_obj_sequence, write_obj
 from inflo.tools.common.cli import inflo_command, progress
 
@@ -38,6 +39,10 @@ def topology_runs(meshes) -> list[tuple[int, int]]:
             start = k
     runs.append((start, len(meshes)))
     return runs
+
+
+#: the most faces a subdivided frame may have (memory and time of every later stage)
+MAX_FACES = 20_000_000
 
 
 @inflo_command("subdivide", help="Loop subdivision that stays collision-free (thesis 4.4).")
@@ -59,6 +64,10 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
         raise InputError(f"--spacing must be a finite number > 0, found {spacing}")
     paths = list_obj_sequence(source)
     single = os.path.isfile(source)
+    # checked before reading: the output never overwrites the input (IN.obj -o IN.obj) and a
+    # sequence is not written into its own folder
+    check_output_path(output, folder=not single)
+    refuse_output_over_inputs(output, [(p, "input mesh") for p in paths], folder=not single)
     if single:
         meshes = [read_obj(paths[0])]
     else:  # a canopy whose florets emerge over time changes its faces between runs of frames
@@ -73,6 +82,10 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
         if len(m.vertices) != n0:
             raise InputError(f"{p}: expected {n0} vertices like {paths[0].name} (frames of one sequence keep "
                              f"their vertices), found {len(m.vertices)}")
+    faces = max(len(m.faces) for m in meshes) * 4 ** levels
+    if faces > MAX_FACES:
+        raise InputError(f"{paths[0]}: expected at most {MAX_FACES} faces a frame after {levels} levels "
+                         f"(--levels {levels} x 4 each), found {faces}")
     resolve = None
     if not no_collisions:
         from .collisions import collision_resolver, default_spacing
