@@ -23,6 +23,7 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet --upgrade pip setuptools wheel
 	$(PY) -m pip install --quiet -e '.[test]'
 	@sh tools/canopy_render/ensure_system_gl.sh
+	@sh tools/canopy_view/ensure_browser.sh
 	@touch $(STAMP)
 
 # the sources' bytecode, written ahead (0.1 s when nothing changed): where PYTHONDONTWRITEBYTECODE is

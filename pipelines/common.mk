@@ -8,6 +8,7 @@
 # - USD_DEPS: the last frames of its USD parts ([usd] parts of species.toml, USD_PARTS); `usd`
 #   writes $(B)/$(SPECIES).usdc with canopy-export (USD_FLAGS, `--mtl` unless set: materials.mtl
 #   beside each part's OBJ frames), coloured by colors.toml, its [usd] units and translate, 24 fps;
+#   and $(B)/viewer/ (`viewer`): the same parts as $(SPECIES).glb, index.html and three.js;
 # - $(B)/quality.txt, rewritten only when QUALITY changes, so a draft/final switch reruns what
 #   depends on it; clean; FORCE.
 
@@ -29,9 +30,15 @@ $(B)/check.txt: $(CHECK_DEPS) $(CHECK_SRC)
 		if [ $$status -eq 0 ]; then mv $@.tmp $@; else rm -f $@.tmp; exit 1; fi
 
 ifneq ($(strip $(USD_PARTS)),)
-usd: $(B)/$(SPECIES).usdc
+usd: $(B)/$(SPECIES).usdc $(B)/viewer/index.html
 $(B)/$(SPECIES).usdc: $(USD_DEPS) colors.toml $(EXPORT_SRC)
 	$(BIN)canopy-export -q $(USD_FLAGS) $(USD_PARTS) $(USD_TRANSLATE) --colors colors.toml --units $(USD_UNITS) --fps 24 -o $@
+# the same parts as one binary glTF (growth as morph targets) and the page that plays it, with
+# three.js beside it: open with `canopy-view $(B)` or any static server (formats/gltf.md)
+viewer: $(B)/viewer/index.html
+$(B)/viewer/index.html: $(USD_DEPS) colors.toml $(EXPORT_SRC) $(call SRC,canopy_view)
+	$(BIN)canopy-export -q $(USD_PARTS) $(USD_TRANSLATE) --colors colors.toml --units $(USD_UNITS) --fps 24 \
+		--title "$(TITLE)" --figure "$(QUALITY) build" --viewer -o $(B)/viewer/$(SPECIES).glb
 endif
 
 clean:
@@ -39,4 +46,4 @@ clean:
 
 FORCE:
 
-.PHONY: check usd clean FORCE
+.PHONY: check usd viewer clean FORCE

@@ -200,14 +200,12 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
     if opts.mtl:
         check_mtl_targets({p.paths[0].parent for p in parts})
     if output.suffix.lower() in GLTF_SUFFIXES:
-        if opts.translate:
-            raise InputError("--translate: not supported for a .glb (move the parts in a USD export)")
         builder = GltfBuilder(
             prim_name(output.stem), [p.name for p in parts], [p.is_static for p in parts],
             material_color=lambda name: material_color(name, table),
             default_colors=[INPUT_PALETTE[i % len(INPUT_PALETTE)] for i in range(len(parts))],
             n_frames=n_frames, fps=opts.fps, start_frame=opts.start_frame, meters_per_unit=opts.meters_per_unit,
-            quantize=opts.quantize, extras=opts.extras)
+            quantize=opts.quantize, extras=opts.extras, translate=opts.translate)
     else:
         builder = UsdBuilder(
             prim_name(output.stem), [p.name for p in parts], [p.is_static for p in parts],

@@ -91,10 +91,12 @@ class GltfBuilder:
         Normalized 16-bit positions and deltas (``KHR_mesh_quantization``) instead of float32.
     extras : dict
         Written as the scene's ``extras`` (title, figures: what the viewer page shows).
+    translate : dict
+        Part name -> (x, y, z) added to its node's translation (``--translate``).
     """
 
     def __init__(self, root_name, part_names, static, *, material_color, default_colors, n_frames, fps,
-                 start_frame=1, meters_per_unit=0.01, quantize=True, extras=None):
+                 start_frame=1, meters_per_unit=0.01, quantize=True, extras=None, translate=None):
         self.root_name = root_name
         self.parts = [_Part(n, s, tuple(c)) for n, s, c in zip(part_names, static, default_colors)]
         self.material_color = material_color
@@ -102,8 +104,10 @@ class GltfBuilder:
         self.meters_per_unit = meters_per_unit
         self.quantize = quantize
         self.extras = dict(extras or {})
+        self.translate = dict(translate or {})
         self.material_names: list[str] = []
-        self.hidden_faces_shown = 0
+        self.faces_not_hidden = 0
+        """The most faces of one frame that are not in it but share a vertex with one that is (shown)."""
 
     def add_frame(self, k: int, meshes, changed) -> None:
         for part, mesh, change in zip(self.parts, meshes, changed):
@@ -195,8 +199,26 @@ class GltfBuilder:
             n_triangles += len(faces)
             if len(faces) and (faces.min() < 0 or faces.max() >= nv):
                 raise InputError(f"{part.name}: a face refers to a vertex beyond the {nv} vertices")
-            # hide the faces a frame does not have: its unused vertices collapsed per piece
-            if len(part.samples) > 1 or (len(part.samples) == 1 and len(union) != len(part.samples[0][1])):
+            # hide the faces a frame does not have: its unused vertices collapsed per piece; a vertex
+            # that faces of every frame share with faces of some frames only is copied for the latter
+            present = np.zeros((len(part.samples), len(union)), bool)
+            for j, ids in enumerate(sample_ids):
+                present[j, ids] = True
+            if not present.all():
+                always = present.all(axis=0)
+                fixed = np.zeros(nv, bool)
+                fixed[faces[always].reshape(-1)] = True
+                some = ~always
+                shared = np.unique(faces[some][fixed[faces[some]]])
+                if len(shared):
+                    copy = np.full(nv, -1, np.int64)
+                    copy[shared] = nv + np.arange(len(shared))
+                    sub = faces[some]
+                    sub = np.where(fixed[sub], copy[sub], sub)
+                    faces = faces.copy()
+                    faces[some] = sub
+                    frames = np.concatenate([frames, frames[:, shared]], axis=1)
+                    nv = frames.shape[1]
                 comp = _components(nv, faces)
                 starts = [s[0] for s in part.samples]
                 for k in range(len(frames)):
@@ -206,9 +228,6 @@ class GltfBuilder:
                     absent = ~used
                     if not absent.any():
                         continue
-                    hidden = np.ones(len(faces), bool)
-                    hidden[sample_ids[j]] = False
-                    self.hidden_faces_shown += int((hidden & used[faces].any(axis=1)).sum()) if k == 0 else 0
                     idx = np.flatnonzero(absent)
                     labels = comp[idx]
                     cnt = np.bincount(labels, minlength=comp.max() + 1)
@@ -216,6 +235,8 @@ class GltfBuilder:
                                      for c in range(3)], axis=1)
                     centre = sums / np.maximum(cnt, 1)[:, None]
                     frames[k, idx] = centre[labels]
+                    shown = ~present[j] & used[faces].any(axis=1)
+                    self.faces_not_hidden = max(self.faces_not_hidden, int(shown.sum()))
             base = frames[0]
             deltas = frames[1:] - base[None] if not part.static else frames[:0]
             scale = offset = None
@@ -246,9 +267,12 @@ class GltfBuilder:
                 n_targets_max = max(n_targets_max, len(targets))
             meshes.append(mesh)
             node = {"name": part.name, "mesh": len(meshes) - 1}
+            move = np.asarray(self.translate.get(part.name, (0.0, 0.0, 0.0)), dtype=np.float64)
             if scale is not None:
-                node["translation"] = [float(x) for x in offset]
+                node["translation"] = [float(x) for x in offset + move]
                 node["scale"] = [scale] * 3
+            elif move.any():
+                node["translation"] = [float(x) for x in move]
             nodes.append(node)
             if targets:
                 samplers.append(len(targets))
