@@ -177,6 +177,7 @@ class GltfBuilder:
         meshes, nodes, channels, samplers = [], [], [], []
         n_targets_max = 0
         n_triangles = 0
+        bounds = []  # per part (min, max) over every frame, moved by --translate
         for part in self.parts:
             frames = np.stack(part.positions)  # (F, n, 3)
             nv = frames.shape[1]
@@ -237,6 +238,10 @@ class GltfBuilder:
                     frames[k, idx] = centre[labels]
                     shown = ~present[j] & used[faces].any(axis=1)
                     self.faces_not_hidden = max(self.faces_not_hidden, int(shown.sum()))
+            move = np.asarray(self.translate.get(part.name, (0.0, 0.0, 0.0)), dtype=np.float64)
+            if nv:
+                flat = frames.reshape(-1, 3)
+                bounds.append((flat.min(axis=0) + move, flat.max(axis=0) + move))
             base = frames[0]
             deltas = frames[1:] - base[None] if not part.static else frames[:0]
             scale = offset = None
@@ -267,7 +272,6 @@ class GltfBuilder:
                 n_targets_max = max(n_targets_max, len(targets))
             meshes.append(mesh)
             node = {"name": part.name, "mesh": len(meshes) - 1}
-            move = np.asarray(self.translate.get(part.name, (0.0, 0.0, 0.0)), dtype=np.float64)
             if scale is not None:
                 node["translation"] = [float(x) for x in offset + move]
                 node["scale"] = [scale] * 3
@@ -307,6 +311,10 @@ class GltfBuilder:
         extras = {"frames": self.n_frames, "fps": self.fps, "start_frame": self.start_frame,
                   "meters_per_unit": self.meters_per_unit, "triangles": n_triangles,
                   "parts": ", ".join(p.name for p in self.parts), **self.extras}
+        if bounds:
+            lo = np.min([b[0] for b in bounds], axis=0)
+            hi = np.max([b[1] for b in bounds], axis=0)
+            extras["bounds"] = [[float(round(x, 6)) for x in lo], [float(round(x, 6)) for x in hi]]
         doc = {"asset": {"version": "2.0", "generator": "inflo canopy-export"},
                "scene": 0, "scenes": [{"name": self.root_name, "nodes": [len(nodes) - 1], "extras": extras}],
                "nodes": nodes, "meshes": meshes, "materials": materials, "accessors": accessors,

@@ -68,3 +68,4 @@ def main(build_dir, port, frame, no_browser, quiet, debug):
         threading.Event().wait()
     finally:
         server.shutdown()
+        server.server_close()

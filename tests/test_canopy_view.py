@@ -1,0 +1,138 @@
+"""The viewer page in a real browser, and canopy-view.
+
+A synthetic flower of six petals opening over 100 frames is exported with ``--viewer``; the folder
+is served by canopy-view's server on 127.0.0.1 and headless Chromium (Debian's
+``chromium-headless-shell`` or ``chromium``, software WebGL) takes screenshots of ``?frame=1`` and
+``?frame=100``: the flower is drawn (pixels differ from the page's background) and the two frames
+differ. The screenshots are kept in ``build/test-artefacts/`` (``INFLO_ARTEFACTS`` elsewhere).
+Skipped, saying what to install, where no such browser is found.
+"""
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import subprocess
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from inflo.tools.canopy_export import cli as export_cli
+from inflo.tools.canopy_view import cli as view_cli
+
+BROWSERS = ("chromium-headless-shell", "chromium", "chromium-browser")
+BACKGROUND = (0xF2, 0xF1, 0xEC)  # the page's background colour
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _browser() -> str | None:
+    for name in BROWSERS:
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def _flower_frames(folder: Path, n_frames: int = 100) -> None:
+    """Six petals (strips of quads) on a short stem, opening from upright to spread out."""
+    folder.mkdir(parents=True)
+    rows, width = 8, 0.35
+    for k in range(n_frames):
+        t = k / (n_frames - 1)
+        lines, faces = ["mtllib materials.mtl"], []
+        nv = 0
+        for p in range(6):
+            phi = p * math.pi / 3
+            tilt = math.radians(8 + 72 * t)
+            for i in range(rows + 1):
+                s = i / rows
+                bend = tilt * (0.6 + 0.8 * s)
+                r, y = s * math.sin(bend) * 3.0, s * math.cos(bend) * 3.0
+                for side in (-1, 1):
+                    w = side * width * math.sin(math.pi * min(s + 0.1, 1.0)) * (0.5 + t)
+                    x = r * math.cos(phi) - w * math.sin(phi)
+                    z = r * math.sin(phi) + w * math.cos(phi)
+                    lines.append(f"v {x:.6f} {y:.6f} {z:.6f}")
+            for i in range(rows):
+                a = nv + 2 * i + 1
+                faces += [(a, a + 1, a + 3), (a, a + 3, a + 2)]
+            nv += 2 * (rows + 1)
+        lines.append("usemtl petal")
+        lines += [f"f {a} {b} {c}" for a, b, c in faces]
+        lines += ["v 0 0 0.08", "v 0 -2 0.08", "v 0 0 -0.08", "v 0 -2 -0.08", "usemtl stem"]
+        lines += [f"f {nv + 1} {nv + 2} {nv + 4}", f"f {nv + 1} {nv + 4} {nv + 3}"]
+        (folder / f"frame_{k:04d}.obj").write_text("\n".join(lines) + "\n")
+
+
+@pytest.fixture(scope="module")
+def viewer(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("viewer")
+    _flower_frames(tmp / "canopy")
+    colors = tmp / "colors.toml"
+    colors.write_text('petal = [0.95, 0.45, 0.1]\nstem = [0.3, 0.5, 0.2]\n')
+    out = tmp / "build" / "viewer" / "flower.glb"
+    res = CliRunner().invoke(export_cli.main, ["-q", str(tmp / "canopy"), "--colors", str(colors), "--viewer",
+                                               "--title", "Test flower", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    return tmp / "build"
+
+
+def _artefacts() -> Path:
+    folder = Path(os.environ.get("INFLO_ARTEFACTS", ROOT / "build" / "test-artefacts"))
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+def _screenshot(browser: str, url: str, target: Path) -> np.ndarray:
+    from PIL import Image
+
+    target.unlink(missing_ok=True)
+    cmd = [browser, "--headless", "--no-sandbox", "--disable-gpu-sandbox", "--use-angle=swiftshader",
+           "--enable-unsafe-swiftshader", "--hide-scrollbars", "--window-size=640,480",
+           "--virtual-time-budget=15000", f"--screenshot={target}", url]
+    if os.path.basename(browser) != "chromium-headless-shell":
+        cmd.insert(1, "--headless=new")
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert target.is_file(), f"no screenshot from {browser}: {proc.stderr[-2000:]}"
+    return np.asarray(Image.open(target).convert("RGB"), dtype=np.int16)
+
+
+def test_the_page_draws_the_flower_and_its_frames_differ(viewer):
+    browser = _browser()
+    if browser is None:
+        pytest.skip("no headless Chromium found (looked for " + ", ".join(BROWSERS) + "): install it as root with "
+                    "'apt-get install -y chromium-headless-shell' (make's set-up does where it can)")
+    server = view_cli.serve(view_cli.viewer_folder(viewer))
+    try:
+        base = f"http://127.0.0.1:{server.server_address[1]}/index.html"
+        with urllib.request.urlopen(base, timeout=10) as r:
+            assert r.status == 200 and b"Test flower" in r.read()
+        with urllib.request.urlopen(base.replace("index.html", "flower.glb"), timeout=10) as r:
+            assert r.headers["Content-Type"] == "model/gltf-binary" and r.read(4) == b"glTF"
+        out = _artefacts()
+        first = _screenshot(browser, base + "?frame=1", out / "canopy_view_frame_1.png")
+        last = _screenshot(browser, base + "?frame=100", out / "canopy_view_frame_100.png")
+    finally:
+        server.shutdown()
+        server.server_close()
+    h, w, _ = first.shape
+    # the model's area: below the title, above the frame bar
+    body = (slice(int(0.15 * h), int(0.85 * h)), slice(0, w))
+    for shot in (first, last):
+        drawn = np.abs(shot[body] - np.array(BACKGROUND)).sum(axis=2) > 30
+        assert drawn.mean() > 0.005, f"the flower is not drawn ({drawn.mean():.4f} of the pixels differ)"
+    changed = np.abs(first[body] - last[body]).sum(axis=2) > 30
+    assert changed.mean() > 0.01, f"frames 1 and 100 look the same ({changed.mean():.4f} of the pixels differ)"
+    # the petals' orange is on screen
+    orange = (last[..., 0] > 180) & (last[..., 1] > 60) & (last[..., 1] < 170) & (last[..., 2] < 90)
+    assert orange.sum() > 200
+
+
+def test_canopy_view_finds_the_page_or_exits_2(viewer, tmp_path):
+    assert view_cli.viewer_folder(viewer) == viewer / "viewer"
+    assert view_cli.viewer_folder(viewer / "viewer") == viewer / "viewer"
+    res = CliRunner().invoke(view_cli.main, [str(tmp_path), "--no-browser"])
+    assert res.exit_code == 2 and "viewer/index.html" in res.output and "Traceback" not in res.output
