@@ -202,6 +202,7 @@ def output_lock(folder, tool: str):
     import fcntl
 
     folder = Path(folder)
+    existed = folder.is_dir()
     folder.mkdir(parents=True, exist_ok=True)
     fd = os.open(folder, os.O_RDONLY)
     try:
@@ -211,6 +212,11 @@ def output_lock(folder, tool: str):
             raise InputError(f"{folder}: expected an output folder no other run is writing, found another "
                              f"run writing it now") from None
         yield folder
+    except BaseException:
+        if not existed:  # a run that failed before writing leaves no folder behind
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        raise
     finally:
         os.close(fd)
 
@@ -261,7 +267,6 @@ def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: st
     folder = Path(folder)
     check_output_path(folder, folder=True)
     refuse_output_over_inputs(folder, inputs, folder=True, option=option)
-    existed = folder.exists()
     with output_lock(folder, tool):
         staging = folder / f".staging-{tool}"
         if staging.exists():
@@ -271,9 +276,6 @@ def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: st
             yield staging
         except BaseException:
             shutil.rmtree(staging, ignore_errors=True)
-            if not existed:  # a failed first run leaves no folder behind
-                with contextlib.suppress(OSError):
-                    folder.rmdir()
             raise
         new = sorted(p.relative_to(staging) for p in staging.rglob("*") if p.is_file())
         new_names = {p.as_posix() for p in new}

@@ -49,6 +49,7 @@ PLACEMENT_KINDS = {
     "ra": ("frame_start", "frame_end", "ax", "ay", "az", "angle"),
     "rba": ("frame_start", "frame_end"),
 }
+MAX_FRAME = 10_000_000  # frameStart / frameEnd: a frame number a run can reach (shifts of nested scenes add up)
 MAX_MATERIAL = 255  # C.2: 256 material definitions in the material map
 
 
@@ -181,6 +182,8 @@ def _parse_placement(kind, toks, path, lineno) -> Placement:
     if "frame_start" in names:
         fs = parse_int(rest[0], path, lineno, "an integer frameStart")
         fe = parse_int(rest[1], path, lineno, "an integer frameEnd")
+        if not 0 <= fe <= MAX_FRAME:
+            raise FormatError(path, lineno, f"frames in 0..{MAX_FRAME}", f"{fs} {fe}")
         if fs < 0 or fe < fs:
             raise FormatError(path, lineno, "0 <= frameStart <= frameEnd", f"{fs} {fe}")
         p.frame_start, p.frame_end = fs, fe

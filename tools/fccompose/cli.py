@@ -6,6 +6,7 @@ import os
 
 import click
 
+from inflo.formats.atomic import output_lock
 from inflo.formats.fcc import read_fcc
 from inflo.tools.common.cli import inflo_command, progress
 
@@ -35,10 +36,11 @@ def main(params, output, resume, strict, allow_initial_intersections, frames, up
         p = dataclasses.replace(p, updates_per_frame=int(updates))
     _refuse_output_holding_inputs(params, p, output)
     warn = (lambda msg: None) if quiet else (lambda msg: click.echo(f"fccompose: warning: {msg}", err=True))
-    res = compose_canopy(
-        p, output, resume=resume, strict=strict, allow_initial_intersections=allow_initial_intersections,
-        progress=lambda total: progress(length=total, label="fccompose", quiet=quiet, unit="frames"), warn=warn,
-    )
+    with output_lock(output, "fccompose"):  # a second run into the folder is refused
+        res = compose_canopy(
+            p, output, resume=resume, strict=strict, allow_initial_intersections=allow_initial_intersections,
+            progress=lambda total: progress(length=total, label="fccompose", quiet=quiet, unit="frames"), warn=warn,
+        )
     if not quiet:
         click.echo(f"fccompose: {len(res.frames_written)} frames written to {output} "
                    f"({res.n_triangles} triangles, {res.steps} steps, {res.seconds:.1f} s)", err=True)
@@ -50,16 +52,19 @@ def _refuse_output_holding_inputs(source, p, output) -> None:
     where ``anim`` is an input animation would delete its own inputs."""
     from pathlib import Path
 
+    from inflo.formats.atomic import check_output_path
     from inflo.formats.errors import InputError
 
-    out = Path(os.path.abspath(output))
+    check_output_path(output, folder=True)
+    out = Path(os.path.realpath(output))
     inputs = [(e.path, "animation" if e.kind == "animation" else "obj") for e in p.animations]
     inputs += [(r.rba_folder, "rigid body animation") for r in p.rigid_body_animations]
     inputs += [(r.scene_path, "rigid body animation") for r in p.rigid_body_animations]
     inputs += [(f, "scene file path") for f in p.scene_files]
     inputs += [(f, "weight") for f in p.weights.values()]
+    inputs += [(f, "petal weight") for f in p.petal_weights.values()]
     for fp, key in inputs:
-        path = Path(os.path.abspath(fp.resolved))
+        path = Path(os.path.realpath(fp.resolved))
         if path == out or out in path.parents:
             where = f"{source}:{fp.line}: " if fp.line else f"{source}: "
             raise InputError(f"{where}expected an output folder that holds none of the inputs, found -o {output} "

@@ -734,8 +734,53 @@ def load_inputs(params: CanopyParams) -> Inputs:
         if gap is not None:
             raise FormatError(params.source, r.line, f"RBA files numbered from 0 without a gap (file NNNN is frame "
                               f"NNNN) in {r.rba_folder.raw}", f"{gap} missing")
+        for k in range(1, len(frames)):
+            # placements do not vanish: an empty (0-byte) file after a frame with placements is a
+            # truncated frame, which would make its florets emerge a frame late
+            if len(frames[k]) == 0 and len(frames[k - 1]) > 0 and paths[k].stat().st_size == 0:
+                raise FormatError(paths[k], None, f"the placements of the frame before ({len(frames[k - 1])}) "
+                                  "or more", "an empty file (a truncated frame?)")
         rbas[sp] = RbaSequence(paths, frames, np.asarray(r.scale, float))
     return Inputs(scenes, _TemplateFiles(params), rbas)
+
+
+#: nested scenes: the deepest nesting and the most florets they may expand to (formats/fcc.md,
+#: "Nested scenes"), checked by counting before any floret is made
+MAX_NEST_DEPTH = 6
+MAX_FLORETS = 200_000
+
+
+def _check_nesting(scenes, top, templates, nested, source) -> None:
+    """Bad input (one line) when nested scenes go deeper than :data:`MAX_NEST_DEPTH` or expand to
+    more than :data:`MAX_FLORETS` florets (ten placements of a scene of ten, seven levels deep, is
+    ten million florets from a few small files)."""
+    memo: dict = {}
+
+    def count(sp, depth, chain):
+        """(florets, nesting height) of scene ``sp`` reached ``depth`` levels down."""
+        if sp not in memo:
+            n, h = 0, 0
+            for p in scenes[sp].placements:
+                if p.id in templates:
+                    n += 1
+                elif p.id in nested and nested[p.id] not in chain and nested[p.id] in scenes:
+                    m, g = count(nested[p.id], depth + 1, chain + [nested[p.id]])
+                    n, h = n + m, max(h, g + 1)
+                if n > MAX_FLORETS:
+                    raise InputError(f"{source}: expected nested scenes of at most {MAX_FLORETS} florets in all, "
+                                     f"found more in {Path(sp).name}")
+            memo[sp] = (n, h)
+        n, h = memo[sp]
+        if depth + h > MAX_NEST_DEPTH:
+            raise InputError(f"{sp}: expected scenes nested at most {MAX_NEST_DEPTH} deep, found {depth + h} "
+                             f"(through {' > '.join(Path(c).name for c in chain)})")
+        return n, h
+
+    total = 0
+    for sp in top:
+        total += count(sp, 0, [sp])[0]
+        if total > MAX_FLORETS:
+            raise InputError(f"{source}: expected scenes of at most {MAX_FLORETS} florets in all, found more")
 
 
 def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rbas: Mapping | None = None) -> Model:
@@ -798,6 +843,9 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
             t += lv.shift
         for k, p in enumerate(scenes[sp].placements):
             if p.id in templates:
+                if p.petal is not None and templates[p.id].petal_weight is None:
+                    raise InputError(f"{sp}: expected a 'petal weight' line in {params.source} for id {p.id} "
+                                     f"(placement {k} has '#@ petal: {p.petal:g}'), found none")
                 # a placement's '#@ petal: f' grows the petals of its own copy of the template
                 # (one copy per distinct factor; fig. 6.4c)
                 key = (p.id, 1.0 if p.petal is None else float(p.petal))
@@ -829,6 +877,7 @@ def assemble_model(params: CanopyParams, scenes: Mapping, templates: Mapping, rb
                 raise FormatError(sp, None, f"placement ids naming an 'animation', 'obj' or 'rigid body "
                                   f"animation' entry of {params.source}", f"id {p.id} (placement {k}, '{p.kind}:')")
 
+    _check_nesting(scenes, top, templates, nested, params.source)
     for sp in top:
         instance(sp, [], [sp])
     if not florets:

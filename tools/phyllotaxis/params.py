@@ -169,6 +169,15 @@ SCHEMA: dict[str, dict[str, tuple]] = {name: _schema(cls) for name, cls in _SECT
 _OPTIONAL = ("dynamics", "compound", "hierarchy")
 # work limits (issue 14: beyond them a run hangs or exhausts memory instead of saying so)
 MAX_SAMPLES = 10_000_000
+# the receptacle mesh and the room passes a frame (formats/phyllotaxis.md, "Bounds")
+MAX_SEGMENTS = 4096
+MAX_RINGS = 1024
+MAX_RECEPTACLE_VERTICES = 1_000_000
+MAX_ROOM_ITERATIONS = 1000
+MAX_COUNT = 10_000_000  # primordia (count and the max_count guards)
+MAX_FRAME = 10_000_000  # a frame number (frame_end)
+MAX_SUBSTEPS = 10_000
+MAX_LEVELS = 10  # levels of a recursive hierarchy
 MAX_FRAMES = 100_000
 MIN_INTERVAL = 1e-3
 # sections present in the result only when the file has them (besides the exclusive ones)
@@ -299,8 +308,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
                           shorten(repr(p[section][key])))
 
     s, pr = p["surface"], p["primordia"]
-    if s["radius"] <= 0:
-        fail("surface", "radius", "> 0")
+    if not 0 < s["radius"] <= 1e6:
+        fail("surface", "radius", "in (0, 1e6] (coordinates stay far from overflow)")
     if s["curve"] == "sphere_cap" and not 0 < s["angle"] <= 180:
         fail("surface", "angle", "in (0, 180] degrees")
     if not 16 <= s["samples"] <= MAX_SAMPLES:
@@ -311,6 +320,12 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("primordia", "area", "> 0 (A(s) is a primordium area)")
     if pr["count"] < 0:
         fail("primordia", "count", ">= 0 (0: fill the surface)")
+    for section, key, high in (("primordia", "count", MAX_COUNT), ("primordia", "max_count", MAX_COUNT),
+                               ("primordia", "frame_end", MAX_FRAME), ("dynamics", "max_count", MAX_COUNT),
+                               ("dynamics", "substeps", MAX_SUBSTEPS), ("hierarchy", "levels", MAX_LEVELS),
+                               ("hierarchy", "max_count", MAX_COUNT), ("hierarchy", "frames", MAX_FRAMES)):
+        if section in p and isinstance(p[section].get(key), (int, float)) and not p[section][key] <= high:
+            fail(section, key, f"<= {high}")
     if not 0 <= pr["start"] < 1:
         fail("primordia", "start", "in [0, 1) (fraction of the curve length)")
     if pr["floret_id"] < 0:
@@ -354,6 +369,12 @@ def _check_ranges(p: dict, text: str, path) -> None:
                                ("material", 0, ">= 0")):
             if rc[key] < low:
                 fail("receptacle", key, what)
+        for key, high in (("segments", MAX_SEGMENTS), ("rings", MAX_RINGS), ("underside_rings", MAX_RINGS)):
+            if rc[key] > high:
+                fail("receptacle", key, f"<= {high}")
+        if rc["segments"] * (rc["rings"] + rc["underside_rings"]) > MAX_RECEPTACLE_VERTICES:
+            fail("receptacle", "segments", f"x (rings + underside_rings) <= {MAX_RECEPTACLE_VERTICES} "
+                 "(the receptacle's vertices a frame)")
         if rc["depth"] <= 0:
             fail("receptacle", "depth", "> 0 (a fraction of the rim radius)")
         if not 0 <= rc["stem"] < 1:
@@ -392,8 +413,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
                      "only with dynamic = true (static files: [primordia] development_order/_frames)")
         if h["room_margin"] < 0:
             fail("hierarchy", "room_margin", ">= 0 (element radii)")
-        if h["room_iterations"] < 1:
-            fail("hierarchy", "room_iterations", ">= 1")
+        if not 1 <= h["room_iterations"] <= MAX_ROOM_ITERATIONS:
+            fail("hierarchy", "room_iterations", f"in [1, {MAX_ROOM_ITERATIONS}]")
         rs = h["room_scale"]
         if len(rs) != 2 or not 0 < rs[0] <= rs[1]:
             fail("hierarchy", "room_scale", "[lo, hi] with 0 < lo <= hi")

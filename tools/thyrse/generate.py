@@ -283,8 +283,56 @@ def grow_thyrse(p: Params) -> ThyrseLayout:
     return lay
 
 
+#: the most nodes (axes' nodes, pedicels and florets) a layout may have, checked by counting before
+#: any is placed (formats/thyrse.md, "Bounds")
+MAX_NODES = 1_000_000
+
+
+def estimate_nodes(p, limit: int = MAX_NODES) -> int:
+    """An upper bound of the nodes :func:`_layout` makes (two directions a node pair, a pedicel two
+    nodes), counted without geometry; stops counting past ``limit``."""
+    tp, f = p.thyrse, p.functions
+    count = [1]
+
+    def add(n):
+        count[0] += n
+        if count[0] > limit:
+            raise OverflowError
+
+    def axis(length, order, x, n_pairs, node_t=None, main=False):
+        ts = node_t if node_t is not None else [(j + 1) / (n_pairs + 1) for j in range(n_pairs)]
+        for t in ts:
+            xj = t if main else x
+            add(1)
+            if main:
+                child_order = int(round(f["order"](xj)))
+                child_len = length * f["lateral_length"](xj)
+            else:
+                child_order = order - 1
+                child_len = length * f["lateral_length"](t)
+            if child_order < 0 or (not main and child_len < 2.0 * tp.pedicel_length):
+                add(4)
+            else:
+                dens = f["branch_density"] if child_order > 0 and "branch_density" in f else f["density"]
+                n = int(round(child_len * dens(xj)))
+                for _ in range(2):
+                    axis(child_len, child_order, xj, n)
+        add(2)
+
+    ts = [tp.first_node + (1 - tp.first_node) * j / max(tp.nodes, 1) for j in range(tp.nodes)]
+    try:
+        axis(tp.length, 99, 0.0, tp.nodes, node_t=ts, main=True)
+    except OverflowError:
+        return limit + 1
+    return count[0]
+
+
 def _layout(b: _Builder) -> ThyrseLayout:
     tp = b.p.thyrse
+    n = estimate_nodes(b.p)
+    if n > MAX_NODES:
+        raise InputError(f"{b.p.source or 'thyrse'}: expected a thyrse of at most {MAX_NODES} nodes (thyrse.nodes, "
+                         f"order, density and lateral_length together), found more than {MAX_NODES} implied")
     base = b.node(np.asarray(b.p.base, float), -1, 0.0)
     ts = [tp.first_node + (1 - tp.first_node) * j / max(tp.nodes, 1) for j in range(tp.nodes)]
     b.axis(base, Y.copy(), tp.length, 99, 0.0, 0.0, tp.nodes, node_t=ts, main=True)

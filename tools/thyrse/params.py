@@ -96,6 +96,8 @@ class Params:
 
 #: the longest development a thyrse lays out (frames)
 MAX_FRAMES = 100000
+MAX_LENGTH = 1e6  # lengths (thyrse.length, pedicel_length): coordinates stay far from overflow
+MAX_AXIS_NODES = 10_000  # node pairs on the main axis
 
 _OWN = {"thyrse": ThyrseParams, "development": DevelopmentParams, "obstacle": ObstacleParams}
 _BRANCH = ("pipe", "cylinder")
@@ -170,10 +172,13 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
         if not ok:
             raise w.error(sec, key, expected, repr(found))
 
-    need(t.length > 0, "thyrse", "length", "a length > 0", t.length)
-    need(t.nodes >= 0, "thyrse", "nodes", "an integer >= 0", t.nodes)
+    need(all(math.isfinite(c) and abs(c) <= 1e12 for c in p.base), None, "base",
+         "coordinates within +-1e+12", p.base)
+    need(0 < t.length <= MAX_LENGTH, "thyrse", "length", f"a length in (0, {MAX_LENGTH:g}]", t.length)
+    need(0 <= t.nodes <= MAX_AXIS_NODES, "thyrse", "nodes", f"an integer in [0, {MAX_AXIS_NODES}]", t.nodes)
     need(0 <= t.first_node < 1, "thyrse", "first_node", "a relative height in [0, 1)", t.first_node)
-    need(t.pedicel_length > 0, "thyrse", "pedicel_length", "a length > 0", t.pedicel_length)
+    need(0 < t.pedicel_length <= MAX_LENGTH, "thyrse", "pedicel_length", f"a length in (0, {MAX_LENGTH:g}]",
+         t.pedicel_length)
     need(0 < t.pedicel_angle < 180, "thyrse", "pedicel_angle", "an angle in (0, 180) degrees", t.pedicel_angle)
     need(t.tropism >= 0, "thyrse", "tropism", "a weight >= 0", t.tropism)
     need(t.floret_id >= 0, "thyrse", "floret_id", "an id >= 0", t.floret_id)
