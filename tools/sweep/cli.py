@@ -33,6 +33,7 @@ from .sweep import check_runnable, run_sweep
 def main(sweep_file, output, scheduler, workers, force, dry_run, dashboard, quiet, debug):
     sweep = read_sweep(sweep_file)
     check_runnable(sweep)
+    _refuse_output_inside_inputs(sweep, sweep_file, output)
 
     def echo(msg):
         click.echo(msg, err=True)
@@ -52,3 +53,21 @@ def main(sweep_file, output, scheduler, workers, force, dry_run, dashboard, quie
             label = ", ".join(f"{k}={v}" for k, v in r["params"])
             echo(f"  {r['id']} ({label}): {r['error']} (exit {r['exit_code']})")
         sys.exit(1)
+
+
+def _refuse_output_inside_inputs(sweep, sweep_file, output) -> None:
+    """Bad input (one line) when OUT_DIR lies inside a folder every variant copies (the pipeline
+    folder or an input folder): each variant would copy the earlier variants' folders, growing the
+    disk used with every run."""
+    import os
+    from pathlib import Path
+
+    from inflo.formats.errors import InputError
+
+    out = Path(os.path.realpath(output))
+    copied = [sweep.pipeline.path] if sweep.pipeline is not None else [sweep.folder / rel for rel in sweep.inputs]
+    for src in copied:
+        real = Path(os.path.realpath(src))
+        if real.is_dir() and (out == real or real in out.parents):
+            raise InputError(f"{sweep_file}: expected an output folder outside the folders each variant copies, "
+                             f"found -o {output} inside {src}")
