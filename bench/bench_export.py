@@ -9,6 +9,10 @@
   (10; 2 with ``--quick``): export seconds against writing the same OBJ frames, and the size
   against the OBJ frames'. The note extrapolates both to 100 frames (points are per frame, the
   faces once, so both grow linearly).
+- ``export_glb_lily``, ``export_glb_head``, ``export_glb_350k``: the same as one binary glTF
+  (``.glb``, morph targets, 16-bit quantized; formats/gltf.md): the draft lily, a draft head (the
+  gaillardia's canopy, ``make -C pipelines/gaillardia canopy`` when missing) and the synthetic
+  350k canopy; seconds and the file's size against the goals (lily 4 MB, a draft head 20 MB).
 - ``blender_import_*``: when a Python with ``bpy`` is found (``make test-blender`` makes
   ``.venv-blender``), the seconds Blender 4.5 takes to import each USD file
   (``bpy.ops.wm.usd_import``) and, in the note, to evaluate every frame through its Mesh
@@ -81,7 +85,8 @@ def export_lily(ctx: BenchContext) -> list[Result]:
     ]
 
 
-def export_350k(ctx: BenchContext) -> list[Result]:
+def _synthetic_350k(ctx: BenchContext):
+    """The synthetic yarrow-sized canopy's OBJ frames; returns (folder, seconds writing them, triangles)."""
     n_frames = 2 if ctx.quick else FRAMES_350K
     n_fl = 60 if ctx.quick else N_FLORETS
     frames, faces, _ = opening_floret(n_frames, nu=12, nv=4)
@@ -101,12 +106,17 @@ def export_350k(ctx: BenchContext) -> list[Result]:
         t0 = time.perf_counter()
         write_obj(seq / f"frame_{k:04d}.obj", mesh)
         t_obj += time.perf_counter() - t0
+    return seq, t_obj, len(all_faces)
+
+
+def export_350k(ctx: BenchContext) -> list[Result]:
+    n_frames = 2 if ctx.quick else FRAMES_350K
+    seq, t_obj, tris = _synthetic_350k(ctx)
     parts = resolve_parts([str(seq)])
     out = ctx.workdir / "canopy_350k.usdc"
     seconds, report = ctx.timed(export_canopy, parts, out, options=ExportOptions())
     obj_bytes = _size(parts[0].paths)
     scale = 100 / n_frames
-    tris = len(all_faces)
     note = (f"{tris:,} triangles x {n_frames} frames; OBJ {obj_bytes / 1e6:.0f} MB, USD {report.n_bytes / 1e6:.1f} MB; "
             f"at 100 frames about: export {seconds * scale:.0f} s, USD {report.n_bytes * scale / 1e9:.2f} GB, "
             f"OBJ {obj_bytes * scale / 1e9:.2f} GB")
@@ -118,4 +128,37 @@ def export_350k(ctx: BenchContext) -> list[Result]:
     ]
 
 
-BENCHMARKS = [export_lily, export_350k]
+def _glb(ctx: BenchContext, name: str, specs: list[str], goal_mb: float | None, what: str) -> list[Result]:
+    parts = resolve_parts(specs)
+    out = ctx.workdir / f"{name}.glb"
+    seconds, report = ctx.timed(export_canopy, parts, out, options=ExportOptions(), repeat=2 if goal_mb else 1)
+    obj_bytes = _size(p for part in parts for p in part.paths)
+    note = (f"{what}: {report.n_frames} frames; OBJ {obj_bytes / 1e6:.1f} MB, .glb {report.n_bytes / 1e6:.2f} MB "
+            f"(16-bit quantized morph targets)")
+    size = Result(f"export_glb_{name}_size", report.n_bytes / 1e6, "MB", "the goal" if goal_mb else "", goal_mb, note)
+    return [Result(f"export_glb_{name}", seconds, "s", "", None, note), size]
+
+
+def export_glb_lily(ctx: BenchContext) -> list[Result]:
+    build = REPO / "build" / "lily"
+    if not (build / "column_obj").is_dir() or not list_obj_sequence(build / "canopy"):
+        subprocess.run(["make", "-C", str(REPO / "pipelines" / "lily"), "QUALITY=draft", "canopy", "column"],
+                       check=True, capture_output=True)
+    return _glb(ctx, "lily", [f"tepals={build / 'canopy'}", f"column={build / 'column_obj'}"], 4.0, "draft lily")
+
+
+def export_glb_head(ctx: BenchContext) -> list[Result]:
+    build = REPO / "build" / "gaillardia"
+    quality = (build / "quality.txt").read_text().strip() if (build / "quality.txt").exists() else ""
+    if quality != "draft" or not (build / "canopy").is_dir():
+        subprocess.run(["make", "-C", str(REPO / "pipelines" / "gaillardia"), "QUALITY=draft", "canopy"],
+                       check=True, capture_output=True)
+    return _glb(ctx, "head", [f"florets={build / 'canopy'}"], 20.0, "draft gaillardia head")
+
+
+def export_glb_350k(ctx: BenchContext) -> list[Result]:
+    seq, _, tris = _synthetic_350k(ctx)
+    return _glb(ctx, "350k" if not ctx.quick else "quick", [str(seq)], None, f"synthetic canopy, {tris:,} triangles")
+
+
+BENCHMARKS = [export_lily, export_350k, export_glb_lily, export_glb_head, export_glb_350k]

@@ -184,3 +184,17 @@ def test_translate_moves_the_node(build):
     doc, binary = glb_chunks(out.read_bytes())
     frames, _, _ = _frames(doc, binary, 1)
     np.testing.assert_allclose(frames[0], read_obj(static).vertices + [2, 0, 0], atol=1e-4)
+
+
+def test_every_nth_frame_keeps_the_last_and_the_duration(build):
+    tmp, seq, static, colors = build
+    out = tmp / "e.glb"
+    assert _run(seq, "--every", 2, "--fps", 10, "-o", out).exit_code == 0
+    doc, binary = glb_chunks(out.read_bytes())
+    frames, faces, mesh = _frames(doc, binary, 0)
+    assert len(frames) == 2 and doc["scenes"][0]["extras"]["fps"] == 5.0  # frames 0 and 2, same duration
+    obj = read_obj(seq / "frame_0002.obj")
+    step = doc["nodes"][0]["scale"][0] / 32767
+    np.testing.assert_allclose(frames[1][faces], obj.vertices[obj.faces], atol=1.01 * step)
+    res = _run(seq, "--every", 2, "-o", tmp / "e.usdc")
+    assert res.exit_code == 2 and "--every" in res.output

@@ -105,20 +105,30 @@ def _translate(ctx, param, values):
 @click.option("--title", default=None, help=".glb: the title the viewer page shows (default: the file's stem).")
 @click.option("--figure", "figures", multiple=True, metavar="TEXT",
               help=".glb: a line of figures the viewer page shows under the title. Repeatable.")
+@click.option("--every", type=click.IntRange(min=1), default=1, show_default=True,
+              help=".glb: keep every Nth frame (and the last), played at fps/N: a lighter file of a long or large build.")
 @click.option("--viewer", is_flag=True,
               help=".glb: also write the viewer page beside it (index.html and three.js; formats/gltf.md).")
 def main(inputs, output, color_file, units, fps, start_frame, normals, constant_topology, subsets, mtl, translate,
-         pc2_dir, quantize, title, figures, viewer, quiet, debug):
+         pc2_dir, quantize, title, figures, every, viewer, quiet, debug):
     colors = None
     if color_file:
         from inflo.tools.canopy_render.colors import load_color_file
 
         colors = load_color_file(color_file)
-    parts = resolve_parts(inputs)
-    n_frames = frame_count(parts)
     glb = output.lower().endswith(".glb")
     if viewer and not glb:
         raise click.BadParameter("--viewer needs a .glb output", param_hint="--viewer")
+    if every > 1 and not glb:
+        raise click.BadParameter("--every needs a .glb output", param_hint="--every")
+    parts = resolve_parts(inputs)
+    n_frames = frame_count(parts)
+    if every > 1 and n_frames > 1:
+        keep = sorted(set(range(0, n_frames, every)) | {n_frames - 1})
+        for part in parts:
+            if not part.is_static:
+                part.paths = [part.paths[k] for k in keep]
+        n_frames, fps = len(keep), fps / every
     extras = {"title": title or Path(output).stem, "figures": list(figures)} if glb else {}
     options = ExportOptions(fps=fps, start_frame=start_frame, meters_per_unit=units, normals=normals,
                             constant_topology=constant_topology, subsets=subsets, mtl=mtl, translate=translate,
