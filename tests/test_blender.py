@@ -218,12 +218,12 @@ def test_species_usd_in_blender(bpy_python, species, tmp_path):
 
 
 def _frame(k: int) -> str:
-    """Frame k of a two-floret build: floret_1 emerges at frame 2 (vertex 5, faces of mtl4 and of
-    no material); floret_0's first face has no usemtl."""
-    v = [[0, 0, 0], [1, 0, 0], [1, 1, 0.1234567 * k], [0, 1, 0]]
+    """Frame k of a two-floret build: floret_1 emerges at frame 2 (faces of mtl4 and of no material
+    on vertices 5 and 6, which every frame has, as fccompose writes them); floret_0's first face
+    has no usemtl."""
+    v = [[0, 0, 0], [1, 0, 0], [1, 1, 0.1234567 * k], [0, 1, 0], [0.5, 1.5, 0.3333333 * k], [1.5, 1.5, 0.25]]
     text = ["g floret_0", "f 1 2 3", "usemtl mtl4", "f 1 3 4"]
     if k >= 2:
-        v += [[0.5, 1.5, 0.3333333 * k], [1.5, 1.5, 0.25]]
         text += ["g floret_1", "usemtl mtl3", "f 3 5 4", "f 3 6 5"]
     return "\n".join([*(f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in v), *text]) + "\n"
 
