@@ -26,6 +26,7 @@ CLI_NAMES = [
     "thyrse",
     "canopy-render",
     "canopy-export",
+    "canopy-view",
     "venation",
     "inflo-sweep",
     "petal-grow",
