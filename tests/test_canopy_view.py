@@ -136,3 +136,17 @@ def test_canopy_view_finds_the_page_or_exits_2(viewer, tmp_path):
     assert view_cli.viewer_folder(viewer / "viewer") == viewer / "viewer"
     res = CliRunner().invoke(view_cli.main, [str(tmp_path), "--no-browser"])
     assert res.exit_code == 2 and "viewer/index.html" in res.output and "Traceback" not in res.output
+
+
+def test_notebook_embeds_the_served_page(viewer):
+    from inflo.tools.canopy_view import notebook
+
+    frame = notebook.show(viewer, frame=7)
+    try:
+        markup = frame._repr_html_()
+        assert markup.startswith('<iframe src="http://127.0.0.1:') and "?frame=7" in markup
+        with urllib.request.urlopen(frame.url, timeout=10) as r:
+            assert r.status == 200 and b"Test flower" in r.read()
+        assert notebook.show(viewer).url.split("/index")[0] == frame.url.split("/index")[0]  # one server
+    finally:
+        notebook._shutdown_all()

@@ -1,1 +1,2 @@
-"""``canopy-view``: the viewer page of a build (``page.py`` writes it, ``cli.py`` serves it); formats/gltf.md."""
+"""``canopy-view``: the viewer page of a build (``page.py`` writes it, ``cli.py`` serves it,
+``notebook.py`` embeds it in Jupyter); formats/gltf.md."""
