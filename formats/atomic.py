@@ -157,21 +157,23 @@ def _real(p) -> Path:
     return Path(os.path.realpath(os.fspath(p)))
 
 
-def refuse_output_over_inputs(output, inputs, *, folder: bool = True, option: str = "-o") -> None:
+def refuse_output_over_inputs(output, inputs, *, folder: bool = True, option: str = "-o", writes=None) -> None:
     """Bad input (:class:`InputError`, one line) when ``output`` would delete or overwrite an input.
 
     ``inputs``: paths, or ``(path, label)`` pairs (every input, weight, map and key pose the run
     reads). Real paths are compared (links and ``..`` resolved): a file output must not be an
     input; a folder output (``folder=True``) must be none of them and hold none of them, since a
-    sequence writer replaces or removes the frame files in its folder. Call it before the first
-    write."""
+    sequence writer replaces or removes the frame files in its folder. ``writes``: when given, a
+    test of a path relative to the folder (is it a file this run writes or may remove?); only such
+    inputs in the folder are refused. Call it before the first write."""
     out = _real(output)
     for item in inputs:
         path, label = item if isinstance(item, tuple) else (item, "input")
         if path is None:
             continue
         p = _real(path)
-        if p == out or (folder and out in p.parents):
+        inside = folder and out in p.parents and (writes is None or writes(p.relative_to(out).as_posix()))
+        if p == out or inside:
             how = "is" if p == out else "holds"
             raise InputError(f"{output}: expected an output that is no input, found {option} {output} that {how} "
                              f"the {label} {path}")
@@ -261,12 +263,16 @@ def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: st
     or ``stale_patterns`` for a folder from before manifests) are removed, the new files moved into
     ``folder`` and a manifest written. A failed or killed run leaves the earlier output as it was
     (no mix of two runs); its staging folder is removed by the next run. Refuses (one line) an
-    output that is or holds an input, a folder that is a file, and a second concurrent run."""
+    output folder that is an input or holds one this run would replace or remove (named like its
+    output, or listed by its manifest), a folder that is a file, and a second concurrent run."""
     import shutil
 
     folder = Path(folder)
     check_output_path(folder, folder=True)
-    refuse_output_over_inputs(folder, inputs, folder=True, option=option)
+    pats = [re.compile(p + "$") for p in stale_patterns]
+    listed = set(read_manifest(folder, tool) or ())
+    refuse_output_over_inputs(folder, inputs, folder=True, option=option,
+                              writes=lambda rel: rel in listed or any(r.match(rel) for r in pats))
     with output_lock(folder, tool):
         staging = folder / f".staging-{tool}"
         if staging.exists():

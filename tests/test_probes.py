@@ -108,3 +108,264 @@ def test_bad_number_is_a_one_line_error(inputs, cli, args, fragment, absent):
     assert not Path(absent.format(d=inputs)).exists()
     if cli == "fccompose":  # the input frames it would have removed as stale are still there
         assert (inputs / "fcc" / "anim" / "frame_0000.obj").exists()
+
+
+# ---------------------------------------------------------------------------------------------
+# the newer tools and keys as a hostile user would use them: bounds on the work implied, outputs
+# that never eat inputs, paths that cannot be written, seeds, nested scenes
+
+PETAL_FLOWER = """
+[flower]
+keyframes = 3
+iterations = 5
+base_v = 0.2
+
+[growth.g]
+dg = 0.05
+e = 1
+w = 0.5
+e_in = "{e_in}"
+
+[[organ]]
+name = "a"
+mesh = "petal.obj"
+material = "petal"
+growth = [[0, "g"]]
+"""
+
+VENATION = """seed = 1
+[blade]
+polygon = [[0, 0], [1, 0], [1, 1], [0, 1]]
+size = {size}
+[growth]
+type = "uniform"
+initial = 0.5
+final = 1.0
+rate = {rate}
+[veins]
+step = {step}
+kill_distance = {kill}
+[sources]
+birth_source = {kill}
+birth_vein = {kill}
+darts = {darts}
+[texture]
+size = {tex}
+supersample = {ss}
+"""
+
+
+def _venation(d, name, size=100.0, rate=0.01, step=1.0, kill=4.0, darts=0.01, tex=256, ss=1):
+    (d / name).write_text(VENATION.format(size=size, rate=rate, step=step, kill=kill, darts=darts, tex=tex, ss=ss))
+
+
+def _scn_line(kind, pid, extra=""):
+    return f"{kind}: {pid} 0 0 0 1 1 1 0 1 0 1 0 0{extra}\n"
+
+
+@pytest.fixture()
+def hostile(tmp_path):
+    import shutil
+
+    import numpy as np
+    from PIL import Image
+
+    from inflo.tools.petal_grow.bud import grid_bud, write_bud_obj
+
+    d = tmp_path
+    # venation
+    (d / "ven").mkdir()
+    _venation(d / "ven", "ok.toml")
+    _venation(d / "ven", "step.toml", step=1e-5, kill=4e-5)
+    _venation(d / "ven", "darts.toml", darts=1e9)
+    _venation(d / "ven", "tex.toml", tex=16384, ss=8)
+    _venation(d / "ven", "slow.toml", rate=1e-300)
+    # petal-grow: a small petal, its bud named like a frame in one folder
+    pg = d / "pg"
+    pg.mkdir()
+    s, t = np.meshgrid(np.linspace(0, 1, 4), np.linspace(0, 1, 5))
+    s, t = s.ravel(), t.ravel()
+    x = np.stack([2.0 + 0.5 * s, 6.0 * t, 0.3 * s], axis=1)
+    write_bud_obj(pg / "petal.obj", grid_bud(x, s, t, 4, 5))
+    (pg / "ok.toml").write_text(PETAL_FLOWER.format(e_in="1 + 0.5 * v"))
+    (pg / "pow.toml").write_text(PETAL_FLOWER.format(e_in="9**9**9"))
+    (pg / "iters.toml").write_text(PETAL_FLOWER.format(e_in="1").replace("iterations = 5", "iterations = 1000000000000"))
+    (pg / "keys.toml").write_text(PETAL_FLOWER.format(e_in="1").replace("keyframes = 3", "keyframes = 1000000000000"))
+    Image.new("L", (5000, 5000)).save(pg / "big.png")
+    (pg / "png.toml").write_text(PETAL_FLOWER.format(e_in="big.png"))
+    framed = d / "pgf"
+    framed.mkdir()
+    write_bud_obj(framed / "frame_0000.obj", grid_bud(x, s, t, 4, 5))
+    (framed / "f.toml").write_text(PETAL_FLOWER.format(e_in="1").replace('"petal.obj"', '"frame_0000.obj"'))
+    # thyrse
+    (d / "thyrse_nodes.toml").write_text("[thyrse]\nnodes = 1000000000000\n")
+    (d / "thyrse_dense.toml").write_text("[thyrse]\nnodes = 40\norder = 5.0\ndensity = 900000.0\n"
+                                         "lateral_length = 0.9\n")
+    (d / "thyrse_long.toml").write_text("[thyrse]\nlength = 1e300\n")
+    # phyllotaxis
+    (d / "rings.toml").write_text("[receptacle]\nsegments = 100000\nrings = 100000\n")
+    (d / "radius.toml").write_text("[surface]\nradius = 1e300\n")
+    (d / "room.toml").write_text("[hierarchy]\nroom_iterations = 1000000000000\n")
+    # fccompose: nested scenes, frame numbers, RBA frames, petal factors, petal weights
+    f = d / "fcc"
+    shutil.copytree(REPO / "pipelines" / "examples" / "fccompose", f)
+    base = (f / "dense.fcc").read_text()
+    lines = (f / "scene.scn").read_text()
+    (f / "far.scn").write_text(lines.replace(" 0 19", " 1000000000000 1000000000001"))
+    (f / "far.fcc").write_text(base.replace("scene.scn", "far.scn"))
+    (f / "petal.scn").write_text(lines + "#@ petal: 1.5\n")
+    (f / "petal.fcc").write_text(base.replace("scene.scn", "petal.scn"))
+    (f / "pw").mkdir()
+    (f / "pw" / "petal.weights").write_text("# petal weights\n" + "0\n" * 10)
+    (f / "pw.fcc").write_text(base + "petal weight: 0 pw/petal.weights\n")
+    (f / "rba_e").mkdir()
+    (f / "rba_e" / "0000.rba").write_text("")
+    for depth, width, name in ((7, 2, "deep"), (5, 20, "wide")):
+        rbas = ""
+        for k in range(depth):
+            (f / f"{name}{k}.scn").write_text(_scn_line("o", 10 + k) * width)
+            rbas += f"rigid body animation: {10 + k} 1 1 1 rba_e {name}{k + 1}.scn\n"
+        (f / f"{name}{depth}.scn").write_text(_scn_line("ca", 0, " 0 19") * width)
+        (f / f"{name}.fcc").write_text(base.replace("scene.scn", f"{name}0.scn") + rbas)
+    (f / "rbaseq").mkdir()
+    row = "0 0 0 0 1 1 1 0 1 0 1 0 0\n"
+    for k, text in enumerate([row, "", row]):
+        (f / "rbaseq" / f"{k:04d}.rba").write_text(text)
+    (f / "rb.scn").write_text(_scn_line("rba", 0, " 0 2"))
+    (f / "rb.fcc").write_text(base.replace("scene file path: scene.scn\n", "")
+                              + "rigid body animation: 5 1 1 1 rbaseq rb.scn\n")
+    # floret-animate: a key pose named like a frame in the output folder
+    keys = d / "keys"
+    keys.mkdir()
+    shutil.copy(FLORET, keys / "frame_0005.floret")
+    # subdivide
+    seq = d / "sub"
+    seq.mkdir()
+    from inflo.formats.obj import ObjMesh, write_obj
+    tri = ObjMesh(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.2]]), np.array([[0, 1, 2], [1, 3, 2]], np.int32))
+    write_obj(seq / "frame_0000.obj", tri)
+    write_obj(d / "one.obj", tri)
+    (d / "afile").write_text("x\n")
+    # inflo-sweep with its output inside the folder every variant copies
+    sw = d / "sw"
+    (sw / "inp").mkdir(parents=True)
+    shutil.copy(REPO / "pipelines" / "examples" / "sweeps" / "vogel.toml", sw / "inp" / "vogel.toml")
+    (sw / "in.toml").write_text('[sweep]\nname = "x"\ninputs = ["inp"]\n[axes]\n'
+                                'n = { target = "inp/vogel.toml:primordia.count", values = [20] }\n'
+                                '[[stage]]\ncli = "phyllotaxis"\nargs = ["{inputs}/inp/vogel.toml", "-o", "{out}/h"]\n')
+    return d
+
+
+KEY_OPEN = REPO / "pipelines" / "sunflower" / "draft" / "ray_open.floret"
+
+# (command, arguments with {d} the inputs folder, message fragment, path that must not exist)
+HOSTILE = [
+    ("venation", ["{d}/ven/step.toml", "-o", "{d}/v1"], "veins.step >= the final blade's extent", "{d}/v1"),
+    ("venation", ["{d}/ven/darts.toml", "-o", "{d}/v2"], "at most 1000000 darts a step", "{d}/v2"),
+    ("venation", ["{d}/ven/tex.toml", "-o", "{d}/v3"], "texture.size x texture.supersample <= 16384", "{d}/v3"),
+    ("venation", ["{d}/ven/slow.toml", "-o", "{d}/v4"], "growth that reaches its final size", "{d}/v4"),
+    ("venation", ["{d}/ven/ok.toml", "--seed", "-1", "-o", "{d}/v5"], "--seed", "{d}/v5"),
+    ("venation", ["{d}/ven/ok.toml", "-o", "{d}/afile"], "expected an output folder, found a file", "{d}/afile/x"),
+    ("venation", ["{d}/ven/ok.toml", "-o", "{d}/ven/ok.toml"], "expected an output folder, found a file",
+     "{d}/ven/veins.obj"),
+    ("venation", ["{d}/ven/ok.toml", "-o", "{d}/afile/sub"], "whose parents are folders", "{d}/afile/sub"),
+    ("petal-grow", ["{d}/pg/pow.toml", "-o", "{d}/p1"], "constant exponents within +-1024", "{d}/p1"),
+    ("petal-grow", ["{d}/pg/iters.toml", "-o", "{d}/p2"], "iterations: an integer in [0, 10000]", "{d}/p2"),
+    ("petal-grow", ["{d}/pg/keys.toml", "-o", "{d}/p3"], "keyframes: an integer in [1, 10000]", "{d}/p3"),
+    ("petal-grow", ["{d}/pg/png.toml", "-o", "{d}/p4"], "a PNG of at most 16777216 pixels", "{d}/p4"),
+    ("petal-grow", ["{d}/pg/ok.toml", "--keyframes", "1000000000000", "-o", "{d}/p5"], "--keyframes", "{d}/p5"),
+    ("petal-grow", ["{d}/pgf/f.toml", "-o", "{d}/pgf"], "holds the bud mesh of organ 'a'", "{d}/pgf/log.csv"),
+    ("petal-grow", ["{d}/pgf/f.toml", "-o", "{d}/pgf/frame_0000.obj"], "expected an output folder, found a file",
+     "{d}/pgf/log.csv"),
+    ("thyrse", ["{d}/thyrse_nodes.toml", "-o", "{d}/t1"], "an integer in [0, 10000]", "{d}/t1"),
+    ("thyrse", ["{d}/thyrse_dense.toml", "-o", "{d}/t2"], "at most 1000000 nodes", "{d}/t2"),
+    ("thyrse", ["{d}/thyrse_long.toml", "-o", "{d}/t3"], "a length in (0, 1e+06]", "{d}/t3"),
+    ("phyllotaxis", ["{d}/rings.toml", "-o", "{d}/h1"], "receptacle.segments <= 4096", "{d}/h1"),
+    ("phyllotaxis", ["{d}/radius.toml", "-o", "{d}/h2"], "surface.radius in (0, 1e6]", "{d}/h2"),
+    ("phyllotaxis", ["{d}/room.toml", "-o", "{d}/h3"], "hierarchy.room_iterations in [1, 1000]", "{d}/h3"),
+    ("phyllotaxis", [REPO / "pipelines" / "examples" / "sweeps" / "vogel.toml", "-o", "{d}/afile/h"],
+     "expected a", "{d}/afile/h"),
+    ("fccompose", ["{d}/fcc/deep.fcc", "-o", "{d}/fcc/o1"], "nested at most 6 deep", "{d}/fcc/o1"),
+    ("fccompose", ["{d}/fcc/wide.fcc", "-o", "{d}/fcc/o2"], "at most 200000 florets", "{d}/fcc/o2"),
+    ("fccompose", ["{d}/fcc/far.fcc", "-o", "{d}/fcc/o3"], "frames in 0..10000000", "{d}/fcc/o3"),
+    ("fccompose", ["{d}/fcc/petal.fcc", "-o", "{d}/fcc/o4"], "expected a 'petal weight' line", "{d}/fcc/o4"),
+    ("fccompose", ["{d}/fcc/pw.fcc", "-o", "{d}/fcc/pw"], "holding the 'petal weight' input", "{d}/fcc/pw/log.csv"),
+    ("fccompose", ["{d}/fcc/rb.fcc", "-o", "{d}/fcc/o5"], "an empty file (a truncated frame?)", "{d}/fcc/o5"),
+    ("fccompose", ["{d}/fcc/dense.fcc", "-o", "{d}/afile"], "expected an output folder, found a file",
+     "{d}/afile/log.csv"),
+    ("floret-animate", ["{d}/keys/frame_0005.floret", KEY_OPEN, "-o", "{d}/keys"], "holds the key pose",
+     "{d}/keys/frame_0000.floret"),
+    ("floret-animate", [FLORET, KEY_OPEN, "--seed", "-1", "-o", "{d}/fa1"], "--seed", "{d}/fa1"),
+    ("floret-animate", [FLORET, KEY_OPEN, "-o", "{d}/afile"], "is a file",
+     "{d}/afile/frame_0000.floret"),
+    ("subdivide", ["{d}/one.obj", "-o", "{d}/one.obj"], "that is the input mesh", "{d}/one.obj.bak"),
+    ("subdivide", ["{d}/sub", "-o", "{d}/sub"], "that holds the input mesh", "{d}/sub/frame_0001.obj"),
+    ("subdivide", ["{d}/one.obj", "-o", "{d}/afile/s.obj"], "whose parents are folders", "{d}/afile/s.obj"),
+    ("branch-gen", ["{d}/one.obj", "--seed", "-5", "-o", "{d}/b1"], "--seed", "{d}/b1"),
+    ("inflo-sweep", ["{d}/sw/in.toml", "-o", "{d}/sw/inp/out"], "outside the folders each variant copies",
+     "{d}/sw/inp/out"),
+]
+
+
+@pytest.mark.parametrize("cli,args,fragment,absent", HOSTILE, ids=[f"{p[0]}-{i}" for i, p in enumerate(HOSTILE)])
+def test_hostile_input_is_a_one_line_error(hostile, cli, args, fragment, absent):
+    import hashlib
+    from pathlib import Path
+
+    def snapshot():
+        return {p: hashlib.sha1(p.read_bytes()).hexdigest() for p in hostile.rglob("*") if p.is_file()}
+
+    before = snapshot()
+    args = [str(a).format(d=hostile) for a in args]
+    r = run_cli(cli, *args)
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert fragment in r.stderr, r.stderr
+    lines = [l for l in r.stderr.splitlines() if l.strip()]
+    assert len(lines) <= 3 and "Traceback" not in r.stderr  # click's usage errors take 3 lines
+    assert not Path(absent.format(d=hostile)).exists()
+    assert snapshot() == before  # nothing written, nothing removed, no input changed
+
+
+def test_a_second_run_into_a_folder_being_written_is_refused(hostile):
+    from inflo.formats.atomic import output_lock
+
+    out = hostile / "locked"
+    with output_lock(out, "test"):
+        r = run_cli("venation", hostile / "ven" / "ok.toml", "-o", out)
+    assert r.returncode == 2, r.stderr
+    assert "found another run writing it now" in r.stderr
+    assert list(out.iterdir()) == []
+
+
+def test_a_failed_rerun_leaves_the_earlier_output_whole(hostile):
+    """A run through the staging folder that fails (or is killed) leaves the earlier run's files
+    as they were; the next complete run replaces only its own files (by manifest), never a user's."""
+    from inflo.formats.atomic import read_manifest, staged_output
+
+    out = hostile / "staged"
+    with staged_output(out, "tool", stale_patterns=(r"frame_\d+\.obj",)) as st:
+        for k in range(3):
+            (st / f"frame_{k:04d}.obj").write_text(f"first {k}\n")
+    (out / "notes.txt").write_text("mine\n")
+    with pytest.raises(RuntimeError), staged_output(out, "tool") as st:
+        (st / "frame_0000.obj").write_text("second 0\n")
+        raise RuntimeError("killed")
+    assert sorted(p.name for p in out.iterdir()) == [".inflo-tool.manifest", "frame_0000.obj", "frame_0001.obj",
+                                                     "frame_0002.obj", "notes.txt"]
+    assert (out / "frame_0000.obj").read_text() == "first 0\n"
+    with staged_output(out, "tool") as st:
+        (st / "frame_0000.obj").write_text("third 0\n")
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["frame_0000.obj", "notes.txt"]
+    assert read_manifest(out, "tool") == ["frame_0000.obj"]
+
+
+def test_petal_grow_rerun_replaces_its_own_frames_only(hostile):
+    out = hostile / "pgo"
+    r = run_cli("petal-grow", "-q", hostile / "pg" / "ok.toml", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in out.glob("*.obj")) == ["frame_0000.obj", "frame_0001.obj", "frame_0002.obj"]
+    (out / "mine.obj").write_text("# a user's file\n")
+    r = run_cli("petal-grow", "-q", hostile / "pg" / "ok.toml", "--keyframes", "2", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in out.glob("*.obj")) == ["frame_0000.obj", "frame_0001.obj", "mine.obj"]
+    assert not any(p.name.startswith(".staging") for p in out.iterdir())
