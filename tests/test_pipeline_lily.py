@@ -16,6 +16,12 @@ What is checked (Ijiri et al. 2008, sec. 6.1 and 6.3):
 - fccompose on the pipeline's own lily.fcc / lily.scn, run for the first 12 frames (where the
   petals press on the sepals in the key-pose animation), finds and resolves collisions and writes
   frames with no intersecting triangle pairs;
+- the column (three key poses, timed by column_growth.func): receptacle, pistil, a three-lobed
+  stigma, six stamens with versatile anthers -- each anther attached near its middle on its
+  filament's tip, along the filament in the bud and turned crosswise (a T) in the open flower,
+  tilting steadily between, never flattened -- and none of them touching a tepal in the keyframes;
+- the tepals are joined to the receptacle: seen from above and from the side, no background shows
+  between the tepal bases and the receptacle (coverage of vertical and horizontal lines there);
 - the pipeline Makefile chains the stages in order;
 - if `make lily` has been run, its canopy and smoothed frames are collision-free, and no tepal
   touches the pistil, stamens or receptacle.
@@ -36,10 +42,11 @@ from conftest import REPO, run_cli
 
 from inflo.formats.floret import check_compatible, read_floret
 from inflo.formats.obj import list_obj_sequence, read_obj
-from inflo.tools.collide import intersecting_pairs
+from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
 
 LILY = REPO / "pipelines" / "lily"
 KEYS = [LILY / f"key_{k}.floret" for k in ("bud", "early", "mid", "open")]
+COLUMN_KEYS = [LILY / f"column_{k}.floret" for k in ("bud", "mid", "open")]
 BUILD = REPO / "build" / "lily"
 
 # polygonize's vertex order: organ by organ, copy by copy, row by row from the base
@@ -86,8 +93,7 @@ def test_inputs_are_what_make_keys_writes(tmp_path):
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     written = sorted(p.name for p in tmp_path.iterdir())
-    assert written == sorted([p.name for p in KEYS] + ["column_bud.floret", "column_open.floret",
-                                                      "lily.weights"])
+    assert written == sorted([p.name for p in KEYS] + [p.name for p in COLUMN_KEYS] + ["lily.weights"])
     for name in written:
         assert (tmp_path / name).read_text() == (LILY / name).read_text(), \
             f"pipelines/lily/{name} differs from what make_keys.py writes: rerun it"
@@ -237,6 +243,154 @@ def test_fccompose_resolves_the_tepal_contacts(tepal_obj, tmp_path):
         rows = list(csv.DictReader(fh))
     assert sum(int(r["collisions_found"]) for r in rows) > 0
     assert all(int(r["remaining_pairs"]) == 0 for r in rows)
+
+
+@pytest.fixture(scope="module")
+def column_obj(tmp_path_factory):
+    """The column OBJ sequence (receptacle, pistil, stigma, stamens, anthers): 100 frames."""
+    out = tmp_path_factory.mktemp("lily_column")
+    r = run_cli("floret-animate", "-q", *COLUMN_KEYS, "--growth", LILY / "column_growth.func",
+                "-o", out / "frames")
+    assert r.returncode == 0, r.stderr
+    r = run_cli("polygonize", "-q", out / "frames", "-o", out / "obj")
+    assert r.returncode == 0, r.stderr
+    paths = list_obj_sequence(out / "obj")
+    assert len(paths) == 100
+    return paths
+
+
+def _part(mesh, name):
+    """Vertices and faces (indices into mesh.vertices) of one group."""
+    g = mesh.groups.index(name)
+    faces = mesh.faces[np.asarray(mesh.face_group) == g]
+    return mesh.vertices[np.unique(faces)], faces
+
+
+def _axis(points):
+    """Centre, unit principal axis and extents (largest first) of a point cloud."""
+    c = points.mean(axis=0)
+    _, _, vt = np.linalg.svd(points - c)
+    ext = np.ptp((points - c) @ vt.T, axis=0)
+    return c, vt[0], ext
+
+
+def test_column_organs_present(column_obj):
+    for n in (1, 40, 60, 100):
+        mesh = read_obj(column_obj[n - 1])
+        want = (["receptacle_0", "pistil_0"] + [f"stigma_{c}" for c in range(3)]
+                + [f"stamens_{c}" for c in range(6)] + [f"anthers_{c}" for c in range(6)])
+        assert sorted(mesh.groups) == sorted(want)
+        # five organ materials: receptacle, pistil, stigma, filaments, anthers
+        assert len(set(np.asarray(mesh.face_material).tolist())) == 5
+
+
+def test_anthers_are_versatile(column_obj):
+    """Each anther sits on its filament's tip near its own middle (dorsifixed), lies along the
+    filament in the bud and turns steadily to crosswise (a T) by the open flower, keeping its
+    length and slender shape while it turns."""
+    turns = []
+    for n in (1, 20, 40, 50, 60, 75, 100):
+        mesh = read_obj(column_obj[n - 1])
+        per = []
+        for c in range(6):
+            fil, _ = _part(mesh, f"stamens_{c}")
+            anth, _ = _part(mesh, f"anthers_{c}")
+            tip = fil[np.argmax(fil[:, 1])]
+            near = fil[np.linalg.norm(fil - tip, axis=1) < 0.3]
+            fc, fd, _ = _axis(near)
+            ac, aa, ext = _axis(anth)
+            length, width = ext[0], ext[1]
+            # attached near its middle: the filament's tip lies inside the anther, within 15 % of
+            # its length from the centre along its axis
+            assert np.linalg.norm(tip - ac) < 0.6 * width, (n, c)
+            assert abs(np.dot(tip - ac, aa)) < 0.15 * length, (n, c)
+            assert length > 2.5 * width, (n, c, length, width)  # still a slender capsule
+            per.append(math.degrees(math.acos(min(1.0, abs(float(np.dot(fd, aa)))))))
+        assert np.ptp(per) < 1.0  # the six stamens alike
+        turns.append(float(np.mean(per)))
+    assert turns[0] < 15.0, turns       # bud: along the filament
+    assert turns[-1] > 75.0, turns      # open: crosswise
+    assert all(b >= a - 1.0 for a, b in zip(turns, turns[1:])), turns  # tilting steadily
+
+
+def test_stigma_has_three_lobes_on_the_style(column_obj):
+    for n in (1, 100):
+        mesh = read_obj(column_obj[n - 1])
+        style, _ = _part(mesh, "pistil_0")
+        top = style[:, 1].max()
+        azimuths = []
+        for c in range(3):
+            lobe, _ = _part(mesh, f"stigma_{c}")
+            lc, la, ext = _axis(lobe)
+            inner = lobe[np.argmin(np.hypot(lobe[:, 0], lobe[:, 2]))]
+            # attached: the lobe's inner pole near the axis, at the style's tip
+            assert np.hypot(inner[0], inner[2]) < 0.03, (n, c)
+            assert abs(inner[1] - top) < 0.15, (n, c)
+            assert lc[1] > top - 0.05  # on top of the style, spreading outward
+            azimuths.append(math.degrees(math.atan2(lc[2], lc[0])) % 360.0)
+        gaps = np.diff(sorted(azimuths + [min(azimuths) + 360.0]))
+        assert np.allclose(gaps, 120.0, atol=2.0), azimuths
+
+
+def test_column_clear_of_the_tepals(tepal_obj, column_obj):
+    """No tepal (key-pose template; fccompose keeps the claws on it and stays within about 0.04)
+    touches the receptacle, pistil, stigma, filaments or anthers in the keyframes."""
+    _, paths = tepal_obj
+    for n in (1, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100):
+        tep = _frame(paths, n)
+        col = read_obj(column_obj[n - 1])
+        assert len(intersecting_pairs_between(tep.vertices, tep.faces, col.vertices, col.faces)) == 0, n
+
+
+def uncovered(meshes, points, axes):
+    """Which 2-D points (in the coordinates ``axes`` of 3-D space) no triangle of ``meshes``
+    covers in that projection: a line through the point along the third axis misses them all, so
+    a view along it shows the background there."""
+    tris = np.concatenate([m.vertices[m.faces][:, :, list(axes)] for m in meshes])
+    a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
+    v0, v1 = b - a, c - a
+    den = v0[:, 0] * v1[:, 1] - v0[:, 1] * v1[:, 0]
+    keep = np.abs(den) > 1e-12
+    a, v0, v1, den = a[keep], v0[keep], v1[keep], den[keep]
+    out = np.zeros(len(points), bool)
+    for i, p in enumerate(points):
+        w = p - a
+        s = (w[:, 0] * v1[:, 1] - w[:, 1] * v1[:, 0]) / den
+        t = (v0[:, 0] * w[:, 1] - v0[:, 1] * w[:, 0]) / den
+        out[i] = not np.any((s >= -1e-9) & (t >= -1e-9) & (s + t <= 1 + 1e-9))
+    return out
+
+
+def see_through(meshes, rows, axes):
+    """Background points inside the silhouette: ``rows`` is a list of (k, 2) point rows across the
+    view (coordinates ``axes``); in each row, the points between the first and the last covered one
+    that no triangle covers (holes a view along the third axis would show)."""
+    n = 0
+    for row in rows:
+        miss = uncovered(meshes, row, axes)
+        hit = np.flatnonzero(~miss)
+        if len(hit):
+            n += int(miss[hit[0]:hit[-1] + 1].sum())
+    return n
+
+
+def test_tepals_joined_to_the_receptacle(tepal_obj, column_obj):
+    """Seen from above (lines along the axis through every point within r = 0.45, the claws lying
+    at r = 0.27-0.30) and from two sides (horizontal lines along X and along Z, rows where the
+    claws meet the receptacle, y = -0.05 .. 0.04), tepals and receptacle leave no background
+    showing between them. (Higher up, y = 0.05 - 0.15, the open flower seen along Z still shows a
+    slit about 0.01 wide between a sepal's claw and the neighbouring petal's: tepal against tepal,
+    from the key poses' claws; see README.md.)"""
+    _, paths = tepal_obj
+    r, a = np.meshgrid(np.linspace(0.02, 0.45, 24), np.radians(np.arange(0.0, 360.0, 2.0)))
+    top = np.stack([(r * np.cos(a)).ravel(), (r * np.sin(a)).ravel()], axis=1)   # (x, z)
+    zs = np.linspace(-0.6, 0.6, 121)
+    side = [np.stack([zs, np.full_like(zs, y)], axis=1) for y in np.linspace(-0.05, 0.04, 10)]  # (z, y)
+    for n in (1, 40, 60, 100):
+        meshes = [_frame(paths, n), read_obj(column_obj[n - 1])]
+        assert uncovered(meshes, top, (0, 2)).sum() == 0, n
+        assert see_through(meshes, side, (2, 1)) == 0, n
+        assert see_through(meshes, side, (0, 1)) == 0, n
 
 
 def test_makefile_chains_the_stages():

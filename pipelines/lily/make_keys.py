@@ -170,40 +170,92 @@ def capsule(centre, axis, length, radius, across=(1.0, 0.0, 0.0)):
     return pts
 
 
-# the receptacle and a stub of the pedicel under the tepals' claws (the same in both poses), closed
-# on top (a pole on the axis) and under the stub
-RECEPTACLE = tube([(0, 0.2), (0, 0.17), (0, -0.08), (0, -0.45), (0, -1.1), (0, -1.2)],
-                  [0.0, 0.24, 0.33, 0.15, 0.09, 0.09], base_cap=False)
+# the receptacle and a stub of the pedicel under the tepals' claws (the same in every pose), closed
+# on top (a pole on the axis) and under the stub. Its top lies just inside the claws (a sepal's row 0
+# on r = 0.30 at y = 0, a petal's on r = 0.28 at y = 0.06), and a collar just under them (r up to
+# 0.39 at y = -0.07, below every claw) fills the view between the claws and the receptacle from above
+# and from the side: the tepals grow out of it, with no background showing between them.
+RECEPTACLE = tube([(0, 0.21), (0, 0.20), (0, 0.15), (0, 0.08), (0, 0.03), (0, -0.02), (0, -0.05),
+                   (0, -0.08), (0, -0.12), (0, -0.16), (0, -0.26), (0, -0.45), (0, -1.1), (0, -1.2)],
+                  [0.0, 0.12, 0.215, 0.25, 0.265, 0.27, 0.33, 0.40, 0.40, 0.34, 0.20, 0.13, 0.09, 0.09],
+                  base_cap=False)
 
-COLUMN = {
-    # pistil on the axis: style and a club-shaped stigma; stamens (filaments) lean outward, each
-    # carrying an anther on its tip, along the filament's tip direction in both poses. (A lily's
-    # anther turns across its filament as the flower opens; floret-animate blends each control
-    # column's own frame, which keeps a capsule's shape for small turns only: a quarter turn
-    # between two key poses flattened the anthers half-way.)
-    "bud": dict(time=0.0,
-                pistil=tube([(0, 0.10), (0, 0.8), (0, 1.5), (0, 1.8), (0, 1.95)], [0.05, 0.045, 0.045, 0.08, 0.08]),
-                stamens=tube([(0.12, 0.10), (0.14, 0.7), (0.16, 1.3), (0.17, 1.6)],
-                             [0.025, 0.022, 0.022, 0.025]),
-                anthers=capsule((0.175, 1.7, 0.0), (0.03, 1.0, 0.0), 0.45, 0.05)),
-    "open": dict(time=1.0,
-                 pistil=tube([(0, 0.10), (0, 1.6), (0, 3.2), (0, 3.9), (0, 4.1)], [0.06, 0.05, 0.05, 0.12, 0.12]),
-                 stamens=tube([(0.12, 0.10), (0.3, 1.4), (0.6, 2.7), (0.85, 3.6)],
-                              [0.03, 0.025, 0.025, 0.03]),
-                 anthers=capsule((0.905, 3.79, 0.0), (0.27, 0.96, 0.0), 0.8, 0.08)),
-}
+# versatile anthers (lily anthers are dorsifixed: the filament's tip enters the anther's back near
+# its middle, and the anther swings on it): the anther's axis, in the stamen's radial plane, is turned
+# from the filament's tip direction by this many degrees (outward and downward) at the column's key
+# times 0, 0.5 and 1: along the filament in the bud, crosswise (a T) in the open flower. Three poses
+# keep each turn to 45 degrees, which floret-animate's per-column blending carries with the capsule
+# shortened by cos 22.5 deg = 0.92 at most half-way (two poses, a quarter turn: cos 45 deg).
+ANTHER_TURN = {"bud": 5.0, "mid": 50.0, "open": 95.0}
+# a three-lobed stigma (Lilium: three carpels, three stigma lobes): three capsules (symmetry 3)
+# spreading from the top of the style, each lobe's inner pole inside the style's tip
+STIGMA = {"bud": dict(centre=(0.035, 1.93), axis=(0.45, 0.89), length=0.20, radius=0.05),
+          "open": dict(centre=(0.075, 4.02), axis=(0.62, 0.78), length=0.34, radius=0.085)}
+
+
+def filament_tip(stamens):
+    """Tip (x, y) of a filament tube and the unit direction of its last segment."""
+    c = stamens[:, :-1, :2].mean(axis=1)  # ring centres (a ring's last point repeats its first)
+    tip, prev = c[-1], c[-3]
+    d = tip - prev
+    return tip, d / np.linalg.norm(d)
+
+
+def anther(stamens, turn_deg, length, radius):
+    """A versatile anther on the filament's tip: its centre a little beyond the tip (the tip ends
+    inside it, near its middle, on its back), its axis turned by ``turn_deg`` from the filament's
+    direction about the tangential axis (z), so the anther stays in the stamen's radial plane."""
+    tip, d = filament_tip(stamens)
+    t = math.radians(-turn_deg)
+    a = np.array([d[0] * math.cos(t) - d[1] * math.sin(t), d[0] * math.sin(t) + d[1] * math.cos(t), 0.0])
+    # the centre lies off the tip along the anther's normal in the radial plane, on the side the
+    # filament points to, so the tip sits 0.4 radius inside the anther's back, near its middle
+    n = np.array([-a[1], a[0], 0.0])
+    if np.dot(n[:2], d) < 0:
+        n = -n
+    centre = np.array([tip[0], tip[1], 0.0]) + 0.4 * radius * n
+    return capsule(centre, a, length, radius, across=(0.0, 0.0, 1.0))
+
+
+def stigma(p):
+    return capsule((p["centre"][0], p["centre"][1], 0.0), (*p["axis"], 0.0), p["length"], p["radius"],
+                   across=(0.0, 0.0, 1.0))
+
+
+def _column_poses():
+    bud = dict(time=0.0,
+               pistil=tube([(0, 0.10), (0, 0.8), (0, 1.5), (0, 1.8), (0, 1.9)], [0.05, 0.045, 0.045, 0.06, 0.06]),
+               stamens=tube([(0.12, 0.10), (0.14, 0.7), (0.16, 1.3), (0.17, 1.6)],
+                            [0.025, 0.022, 0.022, 0.025]),
+               stigma=stigma(STIGMA["bud"]))
+    opn = dict(time=1.0,
+               pistil=tube([(0, 0.10), (0, 1.6), (0, 3.2), (0, 3.85), (0, 3.98)], [0.06, 0.05, 0.05, 0.085, 0.085]),
+               stamens=tube([(0.12, 0.10), (0.3, 1.4), (0.6, 2.7), (0.85, 3.6)],
+                            [0.03, 0.025, 0.025, 0.03]),
+               stigma=stigma(STIGMA["open"]))
+    # the pose half-way (key time 0.5): tubes half-way, the anther half-turned
+    mid = dict(time=0.5, **{k: 0.5 * (bud[k] + opn[k]) for k in ("pistil", "stamens", "stigma")})
+    for pose, key, length, radius in ((bud, "bud", 0.45, 0.05), (mid, "mid", 0.625, 0.065),
+                                      (opn, "open", 0.8, 0.08)):
+        pose["anthers"] = anther(pose["stamens"], ANTHER_TURN[key], length, radius)
+    return {"bud": bud, "mid": mid, "open": opn}
+
+
+# pistil on the axis (style, a three-lobed stigma), six stamens (filaments) leaning outward, each
+# carrying a versatile anther; three poses at key times 0, 0.5, 1 (column_growth.func times them)
+COLUMN = _column_poses()
 
 
 def write_column():
     for key, p in COLUMN.items():
         blocks = []
         p = dict(p, receptacle=RECEPTACLE)
-        for name, mat, n, phase in (("receptacle", 7, 1, 0), ("pistil", 5, 1, 0), ("stamens", 6, 6, 30),
-                                    ("anthers", 8, 6, 30)):
+        for name, mat, n, phase in (("receptacle", 7, 1, 0), ("pistil", 5, 1, 0), ("stigma", 9, 3, 0),
+                                    ("stamens", 6, 6, 30), ("anthers", 8, 6, 30)):
             nv = len(p[name])
             blocks.append(f"organ: {name}\nmaterial: {mat}\ndegree: 1 3\ngrid: 9 {nv}\n"
                           f"symmetry: {n} {phase}\nlambda: 0.1\neta: 9\npoints:\n{fmt_rows(p[name])}\n")
-        text = (f"# receptacle, pistil, stamens and anthers, pose '{key}'; written by make_keys.py\n"
+        text = (f"# receptacle, pistil, stigma, stamens and anthers, pose '{key}'; written by make_keys.py\n"
                 f"floret 1\nname: column\ntime: {p['time']}\n\n" + "\n".join(blocks))
         (OUT / f"column_{key}.floret").write_text(text)
 
