@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_write, frame_name, list_sequence
-from .errors import FormatError, decode_lines, read_bytes, shorten
+from .errors import FormatError, InputError, decode_lines, read_bytes, shorten
 
 __all__ = [
     "ObjMesh",
@@ -575,7 +575,9 @@ def write_mtl(path, colors, *, header: str | None = None, fmt: str = "%.6f") -> 
 def _check_mesh(mesh: ObjMesh, path) -> None:
     n = mesh.n_vertices
     if not np.isfinite(mesh.vertices).all():
-        raise ValueError(f"{path}: refusing to write non-finite vertex coordinates")
+        # coordinates that overflowed (inputs far beyond the floating point range) are bad input
+        raise InputError(f"{path}: expected finite vertex coordinates to write (inputs whose values stay within "
+                         f"floating point range), found inf or nan")
     if mesh.faces.size and (mesh.faces.min() < 0 or mesh.faces.max() >= n):
         raise ValueError(f"{path}: face index out of range 0..{n - 1}")
     for pl in mesh.lines:
