@@ -180,6 +180,7 @@ class GltfBuilder:
         bounds = []  # per part (min, max) over every frame, moved by --translate
         for part in self.parts:
             frames = np.stack(part.positions)  # (F, n, 3)
+            part.positions = []
             nv = frames.shape[1]
             # the union of every sample's faces, each with its material, in order of first appearance
             rows, sample_ids = [], []
@@ -239,21 +240,22 @@ class GltfBuilder:
                     shown = ~present[j] & used[faces].any(axis=1)
                     self.faces_not_hidden = max(self.faces_not_hidden, int(shown.sum()))
             move = np.asarray(self.translate.get(part.name, (0.0, 0.0, 0.0)), dtype=np.float64)
-            if nv:
-                flat = frames.reshape(-1, 3)
-                bounds.append((flat.min(axis=0) + move, flat.max(axis=0) + move))
+            # frame by frame, so no (frames, vertices, 3) temporary beside the frames themselves
+            n_fr = 1 if part.static else len(frames)
             base = frames[0]
-            deltas = frames[1:] - base[None] if not part.static else frames[:0]
             scale = offset = None
-            if self.quantize and nv:
-                lo, hi = frames.reshape(-1, 3).min(axis=0), frames.reshape(-1, 3).max(axis=0)
-                offset = (lo + hi) / 2.0
-                reach = float(np.abs(frames - offset).max())
-                if len(deltas):
-                    reach = max(reach, float(np.abs(deltas).max()))
-                scale = reach if reach > 0 else 1.0
+            if nv:
+                lo = np.min([frames[k].min(axis=0) for k in range(n_fr)], axis=0)
+                hi = np.max([frames[k].max(axis=0) for k in range(n_fr)], axis=0)
+                bounds.append((lo + move, hi + move))
+                if self.quantize:
+                    offset = (lo + hi) / 2.0
+                    reach = float(np.max(hi - lo)) / 2.0
+                    for k in range(1, n_fr):
+                        reach = max(reach, float(np.abs(frames[k] - base).max()))
+                    scale = reach if reach > 0 else 1.0
             position = vec3(base - offset if offset is not None else base, scale)
-            targets = [{"POSITION": vec3(d, scale)} for d in deltas]
+            targets = [{"POSITION": vec3(frames[k] - base, scale)} for k in range(1, n_fr)]
             # one primitive per material, sharing the positions and targets
             prims = []
             index_type = _USHORT if nv < 65535 else _UINT
