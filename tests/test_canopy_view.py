@@ -4,7 +4,7 @@ A synthetic flower of six petals opening over 100 frames is exported with ``--vi
 is served by canopy-view's server on 127.0.0.1 and headless Chromium (Debian's
 ``chromium-headless-shell`` or ``chromium``, software WebGL) takes screenshots of ``?frame=1`` and
 ``?frame=100``: the flower is drawn (pixels differ from the page's background) and the two frames
-differ. The screenshots are kept in ``build/test-artefacts/`` (``INFLO_ARTEFACTS`` elsewhere).
+differ; opened without ``?frame`` it plays. The screenshots are kept in ``build/test-artefacts/`` (``INFLO_ARTEFACTS`` elsewhere).
 Skipped, saying what to install, where no such browser is found.
 """
 from __future__ import annotations
@@ -100,6 +100,16 @@ def _screenshot(browser: str, url: str, target: Path) -> np.ndarray:
     return np.asarray(Image.open(target).convert("RGB"), dtype=np.int16)
 
 
+def _body(browser: str, url: str) -> str:
+    """The page's <body> tag after some seconds of (virtual) time."""
+    cmd = [browser, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+           "--window-size=400,300", "--virtual-time-budget=3000", "--dump-dom", url]
+    if os.path.basename(browser) != "chromium-headless-shell":
+        cmd.insert(1, "--headless=new")
+    dom = subprocess.run(cmd, capture_output=True, text=True, timeout=120).stdout
+    return dom[dom.find("<body"):dom.find(">", dom.find("<body")) + 1]
+
+
 def test_the_page_draws_the_flower_and_its_frames_differ(viewer):
     browser = _browser()
     if browser is None:
@@ -115,6 +125,10 @@ def test_the_page_draws_the_flower_and_its_frames_differ(viewer):
         out = _artefacts()
         first = _screenshot(browser, base + "?frame=1", out / "canopy_view_frame_1.png")
         last = _screenshot(browser, base + "?frame=100", out / "canopy_view_frame_100.png")
+        # opened without ?frame it plays: some frames on, the slider's frame is past the first
+        body = _body(browser, base)
+        assert 'data-ready="1"' in body and int(body.split('data-frame="')[1].split('"')[0]) > 1, body
+        assert 'data-frame="40"' in _body(browser, base + "?frame=40")
     finally:
         server.shutdown()
         server.server_close()
