@@ -246,6 +246,9 @@ def hostile(tmp_path):
     write_obj(seq / "frame_0000.obj", tri)
     write_obj(d / "one.obj", tri)
     (d / "afile").write_text("x\n")
+    write_scn(d / "head.scn", Scene(placements=[Placement("o", 0, q, [0.1] * 3, [0, 1, 0], [1, 0, 0])
+                                                for q in simple_head(20)]))
+    (d / "bgseed.toml").write_text("seed = -3\n")
     # inflo-sweep with its output inside the folder every variant copies
     sw = d / "sw"
     (sw / "inp").mkdir(parents=True)
@@ -301,7 +304,8 @@ HOSTILE = [
     ("subdivide", ["{d}/one.obj", "-o", "{d}/one.obj"], "that is the input mesh", "{d}/one.obj.bak"),
     ("subdivide", ["{d}/sub", "-o", "{d}/sub"], "that holds the input mesh", "{d}/sub/frame_0001.obj"),
     ("subdivide", ["{d}/one.obj", "-o", "{d}/afile/s.obj"], "whose parents are folders", "{d}/afile/s.obj"),
-    ("branch-gen", ["{d}/one.obj", "--seed", "-5", "-o", "{d}/b1"], "--seed", "{d}/b1"),
+    ("branch-gen", ["{d}/head.scn", "--seed", "-5", "-o", "{d}/b1"], "--seed", "{d}/b1"),
+    ("branch-gen", ["{d}/head.scn", "{d}/bgseed.toml", "-o", "{d}/b2"], "a seed in [0, 4294967295]", "{d}/b2"),
     ("inflo-sweep", ["{d}/sw/in.toml", "-o", "{d}/sw/inp/out"], "outside the folders each variant copies",
      "{d}/sw/inp/out"),
 ]

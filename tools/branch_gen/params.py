@@ -245,6 +245,8 @@ def params_from_dict(data: dict, *, path="<params>", lines=None, folder=None) ->
             p.algorithm = v
         elif key == "seed":
             p.seed = _num(w, None, key, v, integer=True)
+            if not 0 <= p.seed <= 2**32 - 1:
+                raise w.error(None, key, "a seed in [0, 4294967295]", repr(v))
         elif key == "base":
             p.base = _vec(w, None, key, v)
     _validate(p, w)
