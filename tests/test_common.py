@@ -115,3 +115,21 @@ def test_progress_bar_shows_the_rate_on_a_terminal(monkeypatch, capsys):
             bar.update(1)
     text = err.getvalue()
     assert "frames/s" in text and "3/3" in text
+
+
+def test_a_quiet_progress_still_reports_a_stall(monkeypatch, capsys):
+    """--quiet silences the bar, not a stall: no step for STALL_SECONDS prints one line."""
+    import time
+
+    from inflo.tools.common import cli
+
+    monkeypatch.setattr(cli, "STALL_SECONDS", 0.2)
+    with cli.progress(length=5, label="tool", quiet=True) as bar:
+        bar.update(1)
+        time.sleep(0.6)
+    err = capsys.readouterr().err
+    assert "tool: still running, 1 of 5 steps done, none in the last" in err
+    with cli.progress(length=5, label="tool", quiet=True) as bar:
+        for _ in range(5):
+            bar.update(1)
+    assert capsys.readouterr().err == ""

@@ -106,7 +106,11 @@ def progress(iterable=None, *, length: int | None = None, label: str = "", quiet
     Yields an object that iterates like ``iterable`` and has ``update(n)``.
     """
     if quiet or not sys.stderr.isatty():
-        yield _Silent(iterable)
+        silent = _Silent(iterable, label, length)
+        try:
+            yield silent
+        finally:
+            silent.stop()
         return
     with click.progressbar(
         iterable, length=length, label=label, file=sys.stderr, show_eta=True, show_pos=True,
@@ -153,15 +157,48 @@ class _Rate:
         self._bar.update(n_steps, f"{rate:.2f} {self._unit}/s")
 
 
+#: a silent progress (``--quiet`` or no terminal) still reports a stall: no step done for this long
+STALL_SECONDS = 120.0
+
+
 class _Silent:
-    def __init__(self, iterable):
+    """No bar; but when no step has been done for :data:`STALL_SECONDS`, one line on stderr says
+    where the run stands (a watcher thread), so a run that hangs is never silent."""
+
+    def __init__(self, iterable, label: str = "", length: int | None = None):
         self._it = iterable
+        self._label = label
+        self._length = length
+        self._done = 0
+        self._last = time.monotonic()
+        self._stop = None
+        if label:
+            import threading
+
+            self._stop = threading.Event()
+            threading.Thread(target=self._watch, daemon=True).start()
 
     def __iter__(self):
-        return iter(self._it if self._it is not None else ())
+        for item in (self._it if self._it is not None else ()):
+            yield item
+            self.update(1)
 
     def update(self, n_steps: int, current_item=None) -> None:
-        pass
+        self._done += n_steps
+        self._last = time.monotonic()
+
+    def _watch(self) -> None:
+        while not self._stop.wait(min(10.0, STALL_SECONDS / 4)):
+            idle = time.monotonic() - self._last
+            if idle >= STALL_SECONDS:
+                of = f" of {self._length}" if self._length else ""
+                click.echo(f"{self._label}: still running, {self._done}{of} steps done, none in the last "
+                           f"{idle:.0f} s", err=True)
+                self._last = time.monotonic()
+
+    def stop(self) -> None:
+        if self._stop is not None:
+            self._stop.set()
 
 
 def portable_path(path) -> str:
