@@ -357,3 +357,18 @@ def test_translate_moves_a_part_by_an_xform_op_and_keeps_its_points(build):
         res = _run(f"petals={seq}", f"stem={static}", "--translate", bad, "-o", tmp / "bad.usda")
         assert res.exit_code == 2 and what in res.output, (bad, res.output)
         assert not (tmp / "bad.usda").exists()
+
+
+def test_outputs_never_overwrite_inputs(build):
+    """--viewer writes index.html and three/ beside the .glb: never over an input of that name."""
+    tmp, seq, static, colors = build
+    page = tmp / "page"
+    (page / "three").mkdir(parents=True)
+    (page / "index.html").write_text((seq / "frame_0000.obj").read_text())  # an OBJ input named index.html
+    res = _run(f"a={page / 'index.html'}", "--viewer", "-o", page / "x.glb")
+    assert res.exit_code == 2 and "--viewer" in res.output and "index.html" in res.output, res.output
+    assert (page / "index.html").read_text() == (seq / "frame_0000.obj").read_text()
+    assert not (page / "x.glb").exists()
+    (page / "three" / "petal.obj").write_text((seq / "frame_0000.obj").read_text())
+    res = _run(f"a={page / 'three' / 'petal.obj'}", "--viewer", "-o", page / "x.glb")
+    assert res.exit_code == 2 and "petal.obj" in res.output and not (page / "x.glb").exists()

@@ -123,6 +123,13 @@ def main(inputs, output, color_file, units, fps, start_frame, normals, constant_
         raise click.BadParameter("--every needs a .glb output", param_hint="--every")
     parts = resolve_parts(inputs)
     n_frames = frame_count(parts)
+    if viewer:
+        from inflo.formats.atomic import refuse_output_over_inputs
+
+        page = {"index.html"}
+        refuse_output_over_inputs(Path(output).parent, [(q, "OBJ frame") for p in parts for q in p.paths]
+                                  + ([(color_file, "colour file")] if color_file else []), option="--viewer",
+                                  writes=lambda rel: rel in page or rel.startswith("three/"))
     if every > 1 and n_frames > 1:
         keep = sorted(set(range(0, n_frames, every)) | {n_frames - 1})
         for part in parts:

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.formats.atomic import check_output_path, refuse_output_over_inputs
 from inflo.formats.errors import InputError
 from inflo.formats.obj import MTL_NAME, write_mtl
 from inflo.formats.pc2 import write_pc2
@@ -194,9 +195,13 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
     unknown = sorted(set(opts.translate) - {p.name for p in parts})
     if unknown:
         raise InputError(f"--translate: no part named {unknown[0]!r}; expected one of {', '.join(p.name for p in parts)}")
-    inputs = {os.path.realpath(q) for p in parts for q in p.paths}
-    if os.path.realpath(output) in inputs:
-        raise InputError(f"{output}: expected an output that is none of the inputs, found it among them")
+    inputs = [(q, "OBJ frame") for p in parts for q in p.paths]
+    check_output_path(output, folder=False)
+    refuse_output_over_inputs(output, inputs, folder=False)
+    if pc2_dir is not None:
+        names = {f"{p.name}.pc2" for p in parts if not p.is_static}
+        check_output_path(pc2_dir, folder=True)
+        refuse_output_over_inputs(pc2_dir, inputs, option="--pc2", writes=lambda rel: rel in names)
     if opts.mtl:
         check_mtl_targets({p.paths[0].parent for p in parts})
     if output.suffix.lower() in GLTF_SUFFIXES:
