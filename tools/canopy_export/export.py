@@ -125,6 +125,8 @@ class ExportReport:
     mtl: list[Path] = field(default_factory=list)
     polyline_parts: list[str] = field(default_factory=list)
     """Parts whose OBJ files have ``l`` polylines, which are not exported."""
+    faces_not_hidden: int = 0
+    """.glb: the most faces of one frame that are not in it yet could not be hidden (formats/gltf.md)."""
 
     def summary(self) -> str:
         topo = ", ".join(f"{p} {n} face list{'s' if n != 1 else ''}" for p, n in self.topology_samples.items())
@@ -138,6 +140,9 @@ class ExportReport:
             line += f"; MTL: {', '.join(str(p) for p in self.mtl)}"
         if self.polyline_parts:
             line += f"; polylines not exported ({', '.join(self.polyline_parts)})"
+        if self.faces_not_hidden:
+            line += (f"; up to {self.faces_not_hidden} faces a frame shown before they appear (they share every "
+                     f"vertex with faces of that frame)")
         return line
 
 
@@ -260,4 +265,5 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
         fps=opts.fps, topology_samples=topology, materials=builder.material_names,
         n_bytes=os.path.getsize(output), seconds=time.perf_counter() - t0, pc2=written, mtl=mtl_files,
         polyline_parts=[p.name for p in parts if p.name in polylines],
+        faces_not_hidden=getattr(builder, "faces_not_hidden", 0),
     )
