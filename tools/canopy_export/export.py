@@ -141,8 +141,8 @@ class ExportReport:
         if self.polyline_parts:
             line += f"; polylines not exported ({', '.join(self.polyline_parts)})"
         if self.faces_not_hidden:
-            line += (f"; up to {self.faces_not_hidden} faces a frame shown before they appear (they share every "
-                     f"vertex with faces of that frame)")
+            line += (f"; up to {self.faces_not_hidden} faces a frame shown before they appear (they share vertices "
+                     f"with faces of that frame)")
         return line
 
 
