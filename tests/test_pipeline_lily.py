@@ -22,6 +22,8 @@ What is checked (Ijiri et al. 2008, sec. 6.1 and 6.3):
   tilting steadily between, never flattened -- and none of them touching a tepal in the keyframes;
 - the tepals are joined to the receptacle: seen from above and from the side, no background shows
   between the tepal bases and the receptacle (coverage of vertical and horizontal lines there);
+- the tepal markings (paint_tepals.py): a green nectary furrow along the midrib at the claw and
+  dark spots on the lower half of every tepal, none near the tip, fading in with the opening;
 - the pipeline Makefile chains the stages in order;
 - if `make lily` has been run, its canopy and smoothed frames are collision-free, and no tepal
   touches the pistil, stamens or receptacle.
@@ -393,6 +395,35 @@ def test_tepals_joined_to_the_receptacle(tepal_obj, column_obj):
         assert see_through(meshes, side, (0, 1)) == 0, n
 
 
+def _load_paint_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("paint_tepals", LILY / "paint_tepals.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_tepal_markings(tepal_obj):
+    """Painted on the unsmoothed open frame (smooth and canopy the same mesh: every vertex takes its
+    own tepal coordinates): furrow, spots where an Asiatic lily has them, fading in."""
+    paint = _load_paint_module()
+    mesh = _frame(tepal_obj[1], 100)
+    col = paint.paint(mesh, mesh, 1.0)
+    for org, off in _tepals():
+        rows, per_row = org["rows"], org["per_row"]
+        grid = col[off:off + rows * per_row].reshape(rows, per_row, 3)
+        mid = per_row // 2
+        # nectary furrow: the midrib at the claw is green-yellow (green above red)
+        assert grid[1, mid, 1] > grid[1, mid, 0] - 0.05, grid[1, mid]
+        dark = grid.sum(axis=2) < 0.9  # spot pixels (the ground colour sums over 1.5)
+        assert dark[: rows // 2].sum() >= 3, "no spots on the lower half"
+        assert not dark[int(0.6 * rows):].any(), "spots near the tip"
+        assert not dark[:, 0].any() and not dark[:, -1].any(), "spots on the margins"
+    bud = paint.paint(mesh, mesh, 0.0)
+    assert (bud.sum(axis=1) > 1.2).all()  # no markings before the inner face shows
+
+
 def test_makefile_chains_the_stages():
     make = shutil.which("make")
     if make is None:
@@ -400,7 +431,8 @@ def test_makefile_chains_the_stages():
     r = subprocess.run([make, "-n", "-B", "-C", str(LILY), "all"], capture_output=True, text=True,
                        timeout=60)
     assert r.returncode == 0, r.stderr
-    order = ["floret-animate", "polygonize", "fccompose", "subdivide", "canopy-render", "check_lily.py"]
+    order = ["floret-animate", "polygonize", "fccompose", "subdivide", "paint_tepals.py", "canopy-render",
+             "check_lily.py"]
     pos = [r.stdout.find(word) for word in order]
     assert all(p >= 0 for p in pos), dict(zip(order, pos))
     assert pos == sorted(pos)
