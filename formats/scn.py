@@ -30,12 +30,13 @@ skips them as comments:
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .atomic import atomic_write
-from .errors import FormatError, parse_float, parse_int, read_lines, shorten
+from .errors import FormatError, InputError, parse_float, parse_int, read_lines, shorten
 from .placement import FLOAT_FMT, PREAMBLE_FIELDS, format_preamble, parse_preamble, placement_matrix
 
 __all__ = ["Placement", "Group", "Scene", "read_scn", "write_scn", "PLACEMENT_KINDS"]
@@ -321,6 +322,10 @@ def write_scn(path, scene: Scene, *, header: str | None = None, fmt: str = FLOAT
                 raise ValueError("a placement without material after one with a material cannot be written")
             out.append(f"mtl: {p.material}\n")
             material = p.material
+        if not all(math.isfinite(float(x)) for v in (p.pos, p.scale, p.up, p.right) for x in v):
+            # values that overflowed (inputs far beyond the floating point range) are bad input
+            raise InputError(f"{path}: expected finite placements to write (inputs whose values stay within "
+                             f"floating point range), found inf or nan in placement id {p.id}")
         line = f"{p.kind}: {format_preamble(p.id, p.pos, p.scale, p.up, p.right, fmt)}"
         if p.kind in ("ca", "ta", "ra", "rba"):
             line += f" {p.frame_start} {p.frame_end}"
