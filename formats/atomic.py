@@ -16,7 +16,7 @@ from .errors import InputError
 
 __all__ = ["atomic_path", "atomic_write", "write_text_atomic", "write_bytes_atomic", "list_sequence", "frame_name",
            "remove_stale_frames", "refuse_output_over_inputs", "check_output_path", "output_lock",
-           "staged_output", "own_stale", "read_manifest"]
+           "staged_output", "own_stale", "read_manifest", "begin_sequence"]
 
 
 @contextlib.contextmanager
@@ -297,3 +297,32 @@ def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: st
         write_text_atomic(_manifest(folder, tool),
                           f"# the files {tool}'s last complete run wrote here\n"
                           + "".join(f"{p.as_posix()}\n" for p in new))
+
+
+def begin_sequence(folder, tool: str, planned, suffix: str, prefix: str = "frame_") -> list[Path]:
+    """Start writing a frame sequence into ``folder`` (held by :func:`output_lock`): remove
+    ``tool``'s own earlier frames -- those its manifest lists, or for a folder from before manifests
+    ``prefix<digits>suffix`` files -- and dead writers' ``.part`` files, then record ``planned``
+    (the names this run will write) as its manifest before the first frame, so an interrupted run
+    leaves only its own frames and the next run knows them. A file of the same pattern that no run
+    of ``tool`` wrote (named in no manifest) is left alone once a manifest exists. Returns the
+    removed paths."""
+    folder = Path(folder)
+    listed = read_manifest(folder, tool)
+    if listed is None:
+        removed = remove_stale_frames(folder, [], suffix, prefix=prefix)
+    else:
+        removed = []
+        for n in listed:
+            p = folder / n
+            if p.is_file():
+                p.unlink()
+                removed.append(p)
+        part = re.compile(r"\." + re.escape(prefix) + r"\d+" + re.escape(suffix) + r"\..+\.part$")
+        for p in sorted(folder.iterdir()):
+            if part.match(p.name):
+                p.unlink()
+                removed.append(p)
+    write_text_atomic(_manifest(folder, tool), f"# the files {tool}'s last run wrote here\n"
+                      + "".join(f"{Path(n).name}\n" for n in planned))
+    return removed

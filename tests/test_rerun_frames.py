@@ -32,7 +32,7 @@ def test_floret_animate_interrupted_rerun_leaves_no_older_frames(tmp_path):
 
     with pytest.raises(KeyboardInterrupt):
         write_frames(interrupted(), out, n_frames=10)
-    assert sorted(p.name for p in out.iterdir()) == ["frame_0000.floret", "frame_0001.floret"]
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["frame_0000.floret", "frame_0001.floret"]
     assert "old run" not in (out / "frame_0001.floret").read_text()
 
 
@@ -58,3 +58,18 @@ def test_a_killed_writers_part_files_go_with_the_older_run(tmp_path):
     removed = remove_stale_frames(tmp_path, ["frame_0000.obj"], ".obj")
     assert sorted(p.name for p in removed) == [".frame_0002.obj.x1y2z3.part", "frame_0001.obj", "frame_0002.obj"]
     assert sorted(p.name for p in tmp_path.iterdir()) == [".notes.txt.abc.part", "frame_0000.obj", "log.csv"]
+
+
+def test_a_sequence_rerun_removes_its_own_frames_only(tmp_path):
+    """Once a run has recorded its frames (a manifest), a later run removes those and no other file
+    named like a frame: a user's frame_0009.obj beside polygonize's frames stays."""
+    frames = tmp_path / "frames"
+    r = run_cli("floret-animate", "-q", *KEYS, "--frames", "3", "-o", frames)
+    assert r.returncode == 0, r.stderr
+    obj = tmp_path / "obj"
+    assert run_cli("polygonize", "-q", frames, "-o", obj).returncode == 0
+    (obj / "frame_0009.obj").write_text("# mine\n")
+    r = run_cli("floret-animate", "-q", *KEYS, "--frames", "2", "-o", frames)
+    assert sorted(p.name for p in frames.glob("*.floret")) == ["frame_0000.floret", "frame_0001.floret"]
+    assert run_cli("polygonize", "-q", frames, "-o", obj).returncode == 0
+    assert sorted(p.name for p in obj.glob("*.obj")) == ["frame_0000.obj", "frame_0001.obj", "frame_0009.obj"]

@@ -5,6 +5,7 @@ import os
 from pathlib import Path
 
 from inflo.formats.atomic import (
+    begin_sequence,
     check_output_path,
     frame_name,
     output_lock,
@@ -31,7 +32,11 @@ def write_frames(frames, output, quiet: bool = True, n_frames: int | None = None
     with output_lock(out, "floret-animate"), \
             progress(frames, length=n_frames, label="floret-animate", quiet=quiet) as bar:
         # an older run's frames go first: an interrupted run leaves a shorter sequence, never a mix
-        remove_stale_frames(out, [], ".floret")
+        if n_frames is not None:
+            begin_sequence(out, "floret-animate", [frame_name(i, FRAME_PREFIX, ".floret") for i in range(n_frames)],
+                           ".floret", prefix=FRAME_PREFIX)
+        else:
+            remove_stale_frames(out, [], ".floret")
         for i, fr in enumerate(bar):
             p = out / frame_name(i, FRAME_PREFIX, ".floret")
             write_floret(p, fr)

@@ -7,7 +7,14 @@ from pathlib import Path
 
 import numpy as np
 
-from inflo.formats.atomic import frame_name, list_sequence, remove_stale_frames
+from inflo.formats.atomic import (
+    begin_sequence,
+    check_output_path,
+    frame_name,
+    list_sequence,
+    output_lock,
+    refuse_output_over_inputs,
+)
 from inflo.formats.errors import InputError
 from inflo.formats.floret import check_compatible, full_petal, read_floret
 from inflo.formats.obj import write_obj
@@ -148,12 +155,16 @@ def polygonize_files(source, output, *, lam=None, eta=None, aspect=None, quiet: 
     paths = list_sequence(os.fspath(source), ".floret")
     frames = [read_floret(p) for p in paths]
     mesher, report = build_mesher(frames, paths, lam=lam, eta=eta, aspect=aspect)
+    check_output_path(output, folder=True)
+    refuse_output_over_inputs(output, [(p, "floret frame") for p in paths]
+                              + [(f, "input") for f in (lam, eta) if isinstance(f, (str, os.PathLike))],
+                              writes=lambda rel: rel.endswith(".obj"))
     out = Path(output)
-    out.mkdir(parents=True, exist_ok=True)
-    # an older run's frames go first: an interrupted run leaves a shorter sequence, never a mix
-    remove_stale_frames(out, [], ".obj")
     written = []
-    with progress(list(enumerate(frames)), label="polygonize", quiet=quiet) as bar:
+    with output_lock(out, "polygonize"), \
+            progress(list(enumerate(frames)), label="polygonize", quiet=quiet) as bar:
+        # an older run's frames go first: an interrupted run leaves a shorter sequence, never a mix
+        begin_sequence(out, "polygonize", [frame_name(i, "frame_", ".obj") for i in range(len(frames))], ".obj")
         for i, f in bar:
             m = mesher.mesh(f)
             report.add_frame(i, quality(m.vertices, m.faces))
