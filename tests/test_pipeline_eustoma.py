@@ -6,6 +6,10 @@
 - the bud is intersection-free and contorted: each petal's right side lies beneath its neighbour
   (rays from a petal's right half outwards hit the next petal; none from the next petal hits it);
 - the three cultivars differ in their growth maps only (same bud, placement, joint schedule);
+- the calyx and column (``make_column.py``, committed key poses): receptacle, five narrow sepals
+  standing on it, a pistil with a two-lobed stigma on the style's tip, five stamens alternating
+  with the petals, each anther on its filament's tip; at least three organ materials in every
+  keyframe; the check (if built) finds no petal touching any of them in any keyframe;
 - if the draft has been built (``make eustoma`` or the golden test): every keyframe passed the
   exact check, the joint angle reached 15 degrees, and the open shapes differ as the cultivars'
   groups do: bell and funnel flare out at the rim, the funnel widest and flattest, the shallow
@@ -20,8 +24,9 @@ import tomllib
 
 import numpy as np
 import pytest
-from conftest import REPO
+from conftest import REPO, run_cli
 
+from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.tools.collide import intersecting_pairs
 from inflo.tools.pbd import mesh_edges
 from inflo.tools.petal_grow.bud import read_bud_obj
@@ -101,6 +106,73 @@ def test_cultivars_differ_in_growth_maps_only():
     assert data["maite_lady"]["growth"]["early"]["direction"] != ref["growth"]["early"]["direction"]
 
 
+COLUMN_KEYS = [EUSTOMA / f"column_{n:03d}.floret" for n in (1, 21, 41, 61, 81, 100)]
+
+
+def test_column_files_are_what_make_column_writes(tmp_path):
+    subprocess.run([sys.executable, str(EUSTOMA / "make_column.py"), str(tmp_path)], check=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in COLUMN_KEYS)
+    for p in COLUMN_KEYS:
+        assert (tmp_path / p.name).read_text() == p.read_text(), f"{p.name}: rerun make_column.py"
+
+
+@pytest.fixture(scope="module")
+def column_obj(tmp_path_factory):
+    out = tmp_path_factory.mktemp("eustoma_column")
+    r = run_cli("floret-animate", "-q", *COLUMN_KEYS, "--frames", "100", "-o", out / "frames")
+    assert r.returncode == 0, r.stderr
+    r = run_cli("polygonize", "-q", out / "frames", "-o", out / "obj")
+    assert r.returncode == 0, r.stderr
+    paths = list_obj_sequence(out / "obj")
+    assert len(paths) == 100
+    return paths
+
+
+def _part(mesh, name):
+    g = mesh.groups.index(name)
+    return mesh.vertices[np.unique(mesh.faces[np.asarray(mesh.face_group) == g])]
+
+
+def test_calyx_pistil_and_stamens_present_and_attached(column_obj):
+    for n in (1, 30, 50, 70, 100):
+        mesh = read_obj(column_obj[n - 1])
+        want = (["receptacle_0", "pistil_0"] + [f"sepals_{k}" for k in range(5)] + ["stigma_0", "stigma_1"]
+                + [f"stamens_{k}" for k in range(5)] + [f"anthers_{k}" for k in range(5)])
+        assert sorted(mesh.groups) == sorted(want), n
+        assert len({mesh.materials[k] for k in np.unique(mesh.face_material)}) >= 3
+        rec = _part(mesh, "receptacle_0")
+        rec_r = np.hypot(rec[:, 0], rec[:, 2]).max()
+        for k in range(5):
+            sep = _part(mesh, f"sepals_{k}")
+            base = sep[np.argmin(sep[:, 1])]
+            # standing on the receptacle: the base inside it, below the petals (y < 0)
+            assert np.hypot(base[0], base[2]) < rec_r and base[1] < 0.0, (n, k)
+            # narrow: far longer than wide
+            ext = np.ptp(sep, axis=0)
+            assert np.linalg.norm(ext) > 5.0 * 2 * 0.9, (n, k)
+            # alternating with the petals (petal k at 72 k degrees): sepals at 36 + 72 k
+            az = np.degrees(np.arctan2(-sep[:, 2].mean(), sep[:, 0].mean())) % 72.0
+            assert abs(az - 36.0) < 3.0, (n, k, az)
+            fil = _part(mesh, f"stamens_{k}")
+            anth = _part(mesh, f"anthers_{k}")
+            tip = fil[np.argmax(fil[:, 1])]
+            c = anth.mean(axis=0)
+            ax = np.linalg.svd(anth - c)[2][0]
+            off = tip - c
+            # the filament's tip inside the anther (within its half-width of the anther's axis)
+            assert np.linalg.norm(off - np.dot(off, ax) * ax) < 0.5, (n, k)
+            assert abs(np.dot(off, ax)) < 0.5 * np.ptp((anth - c) @ ax), (n, k)
+        style = _part(mesh, "pistil_0")
+        top = style[:, 1].max()
+        lobes = [_part(mesh, f"stigma_{k}") for k in range(2)]
+        for lobe in lobes:
+            low = lobe[np.argmin(lobe[:, 1])]  # its inner pole, sunk in the style's tip
+            assert np.hypot(low[0], low[2]) < 0.6 and top - 0.6 < low[1] < top, n
+        # two lobes spreading to opposite sides
+        d0, d1 = (lb[:, [0, 2]].mean(axis=0) for lb in lobes)
+        assert np.dot(d0, d1) < 0, n
+
+
 def test_draft_build_checks_and_cultivar_shapes_if_built():
     check = BUILD / "check.txt"
     if not check.is_file() or (BUILD / "quality.txt").read_text().strip() != "draft":
@@ -111,6 +183,8 @@ def test_draft_build_checks_and_cultivar_shapes_if_built():
     for c in CULTIVARS:
         block = text.split(f"{c}:", 1)[1]
         assert re.search(r"intersecting pairs: 0 \(max per frame 0\)", block.splitlines()[0])
+        assert "petals against the calyx and column: 0 intersecting pairs in 100 keyframes" in block
+        assert int(re.search(r"organ materials per keyframe \(petals included\): at least (\d+)", block)[1]) >= 3
         assert "frame 100 15.00" in block
         m = re.search(r"open: rim radius ([\d.]+), widest ([\d.]+), height ([\d.]+), radius at half height "
                       r"([\d.]+), flare ([\d.]+)", block)

@@ -8,7 +8,10 @@ the topology must be that of the bud in every frame; the joint angle (the rotati
 base particles from the bud, by shape matching) is listed at frames 1, 50 and 100 (15 deg from
 step 50 on); and the open flower's shape is summarized (rim radius, widest radius, height; the
 flare = rim radius / radius at half height: a bell and a funnel flare out, a shallow ball curls
-in). Exits 1 on any intersection or changed topology.
+in). The calyx and column (BUILD_DIR/column_obj/: receptacle, five sepals, pistil and two-lobed
+stigma, five stamens) are tested against every cultivar's petals in every keyframe by the same
+exact test (zero pairs), and each of its keyframes must hold at least three organ materials.
+Exits 1 on any intersection, changed topology or missing organ.
 """
 from __future__ import annotations
 
@@ -21,7 +24,7 @@ import numba
 import numpy as np
 
 from inflo.formats.obj import list_obj_sequence, read_obj
-from inflo.tools.collide import intersecting_pairs
+from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
 from inflo.tools.petal_grow.simulate import shape_match
 
 CULTIVARS = ("mellow_yellow", "maite_lady", "pinocchio")
@@ -57,12 +60,21 @@ def shape(x: np.ndarray, blocks, per_row: int) -> dict:
 def main(build: Path) -> int:
     numba.set_num_threads(1)  # small meshes: one thread is faster (tools/petal_grow/simulate.py, run)
     bad = 0
+    column = list_obj_sequence(build / "column_obj")
+    organs = read_obj(column[0]).groups
+    print(f"column: {len(column)} keyframes, organs "
+          + ", ".join(sorted({g.rsplit('_', 1)[0] for g in organs})))
     for name in CULTIVARS:
         paths = list_obj_sequence(build / name)
+        if len(column) != len(paths):
+            print(f"  {name}: {len(paths)} keyframes, the column {len(column)}")
+            bad += 1
         first = read_obj(paths[0])
         blocks = petal_blocks(first)
         per_row = int(np.sum(np.isclose(first.vertices[blocks[0], 1], first.vertices[blocks[0], 1].min())))
         pairs = []
+        col_pairs = []
+        min_mats = 99
         angles = {}
         for i, p in enumerate(paths):
             m = read_obj(p)
@@ -72,6 +84,17 @@ def main(build: Path) -> int:
             n = len(intersecting_pairs(m.vertices, m.faces, tri_part=m.face_group))
             pairs.append(n)
             bad += n
+            if i < len(column):
+                col = read_obj(column[i])
+                c = len(intersecting_pairs_between(m.vertices, m.faces, col.vertices, col.faces))
+                col_pairs.append(c)
+                bad += c
+                col_mats = {col.materials[k] for k in np.unique(col.face_material)}
+                mats = len(col_mats | {m.materials[k] for k in np.unique(m.face_material)})
+                if len(col_mats) < 3:
+                    print(f"  {name} {p.name}: the column has fewer than three organ materials")
+                    bad += 1
+                min_mats = min(min_mats, mats)
             if i + 1 in (1, 50, len(paths)):
                 angles[i + 1] = np.mean([joint_angle(first.vertices, m.vertices, b, per_row) for b in blocks])
             last = m
@@ -79,6 +102,8 @@ def main(build: Path) -> int:
         s0 = shape(first.vertices, blocks, per_row)
         print(f"{name}: {len(paths)} keyframes, {len(first.faces)} triangles ({len(blocks)} petals), "
               f"intersecting pairs: {sum(pairs)} (max per frame {max(pairs)})")
+        print(f"  petals against the calyx and column: {sum(col_pairs)} intersecting pairs in {len(col_pairs)} "
+              f"keyframes; organ materials per keyframe (petals included): at least {min_mats}")
         print("  joint angle (deg): " + ", ".join(f"frame {k} {v:.2f}" for k, v in angles.items()))
         print(f"  bud: rim radius {s0['rim']:.2f}, widest {s0['widest']:.2f}, height {s0['height']:.2f}")
         print(f"  open: rim radius {s['rim']:.2f}, widest {s['widest']:.2f}, height {s['height']:.2f}, "

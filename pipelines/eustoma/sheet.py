@@ -2,8 +2,9 @@
 
 Usage: python sheet.py BUILD_DIR --frames 1,10,...,100 [--tile WxH] [--elevation DEG] -o OUT.png
 
-Each row is canopy-render's sheet of one cultivar's keyframes (BUILD_DIR/<cultivar>/), in the
-cultivar's colour from colors.toml, framed on all its frames; the rows are stacked with a title.
+Each row is canopy-render's sheet of one cultivar's keyframes (BUILD_DIR/<cultivar>/) with the
+calyx and column (BUILD_DIR/column_obj/), coloured by colors.toml (the petals' material is the
+cultivar's name), framed on all its frames; the rows are stacked with a title.
 """
 from __future__ import annotations
 
@@ -11,7 +12,6 @@ import argparse
 import subprocess
 import sys
 import tempfile
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -32,14 +32,14 @@ def main() -> int:
     ap.add_argument("--elevation", default="15")
     ap.add_argument("-o", "--output", required=True, type=Path)
     a = ap.parse_args()
-    colors = tomllib.loads((HERE / "colors.toml").read_text())
     render = Path(sys.executable).parent / "canopy-render"
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, title in CULTIVARS.items():
             out = Path(tmp) / f"{name}.png"
             frames = a.frames.split(",")
-            cmd = [str(render), "-q", str(a.build / name), "--color", colors[name], "--elevation", a.elevation,
+            cmd = [str(render), "-q", str(a.build / name), str(a.build / "column_obj"),
+                   "--colors", str(HERE / "colors.toml"), "--elevation", a.elevation,
                    "--size", a.tile, "--fit-all", "-o", str(out), "--label", "" if len(frames) == 1 else "frame {n}"]
             cmd += ["--frame", frames[0]] if len(frames) == 1 else ["--sheet", a.frames, "--columns", str(len(frames))]
             subprocess.run(cmd, check=True)
