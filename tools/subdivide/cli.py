@@ -14,13 +14,14 @@ of each output frame.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 from pathlib import Path
 
 import click
 
-from inflo.formats.atomic import check_output_path, refuse_output_over_inputs
+from inflo.formats.atomic import check_output_path, output_lock, refuse_output_over_inputs
 from inflo.formats.obj import list_obj_sequence, read_obj, read_obj_sequence, write_obj
 from inflo.tools.common.cli import inflo_command, progress
 
@@ -101,8 +102,9 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
             out.extend(o)
             reports.extend(r)
     targets = [Path(output)] if single else [Path(output) / p.name for p in paths]
-    for t, m in zip(targets, out):
-        write_obj(t, m)
+    with contextlib.nullcontext() if single else output_lock(output, "subdivide"):
+        for t, m in zip(targets, out):
+            write_obj(t, m)
     if not quiet:
         for note in notes:
             click.echo(f"subdivide: {note}", err=True)
