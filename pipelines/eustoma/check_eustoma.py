@@ -11,6 +11,11 @@ flare = rim radius / radius at half height: a bell and a funnel flare out, a sha
 in). The calyx and column (BUILD_DIR/column_obj/: receptacle, five sepals, pistil and two-lobed
 stigma, five stamens) are tested against every cultivar's petals in every keyframe by the same
 exact test (zero pairs), and each of its keyframes must hold at least three organ materials.
+The open corolla's slits are measured as background seen through it: lines along the axis (a view
+from above) through a 201 x 41 grid 0.5 apart, and horizontal lines (a view from the side) through
+201 x 30 points; in each row of the grid, the points between the first and the last covered one
+that no petal covers (the gaps between the petals, and between the lobes' tips, inside the
+flower's outline) are counted.
 Exits 1 on any intersection, changed topology or missing organ.
 """
 from __future__ import annotations
@@ -55,6 +60,40 @@ def shape(x: np.ndarray, blocks, per_row: int) -> dict:
     mid = np.abs(x[:, 1] - (x[:, 1].min() + 0.5 * h)) < 0.08 * h
     r_mid = float(rad[mid].max()) if mid.any() else float("nan")
     return {"rim": float(rad[tips].mean()), "widest": float(rad.max()), "height": float(h), "mid": r_mid}
+
+
+def uncovered(mesh, points, axes) -> np.ndarray:
+    """Which 2-D points (coordinates ``axes`` of 3-D space) no triangle covers in that projection."""
+    tri = mesh.vertices[mesh.faces][:, :, list(axes)]
+    a, v0, v1 = tri[:, 0], tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    den = v0[:, 0] * v1[:, 1] - v0[:, 1] * v1[:, 0]
+    keep = np.abs(den) > 1e-12
+    a, v0, v1, den = a[keep], v0[keep], v1[keep], den[keep]
+    w = points[:, None, :] - a[None]
+    s = (w[..., 0] * v1[:, 1] - w[..., 1] * v1[:, 0]) / den
+    t = (v0[:, 0] * w[..., 1] - v0[:, 1] * w[..., 0]) / den
+    return ~np.any((s >= -1e-9) & (t >= -1e-9) & (s + t <= 1 + 1e-9), axis=1)
+
+
+def see_through(mesh, rows, axes) -> int:
+    """Background points inside the outline: per row, the uncovered points between the first and
+    the last covered one."""
+    n = 0
+    for row in rows:
+        miss = uncovered(mesh, row, axes)
+        hit = np.flatnonzero(~miss)
+        if len(hit):
+            n += int(miss[hit[0]:hit[-1] + 1].sum())
+    return n
+
+
+def slits(mesh) -> tuple[int, int]:
+    """(from above, from the side) background points seen through the corolla."""
+    xs = np.linspace(-50.0, 50.0, 201)
+    top = [np.stack([xs, np.full_like(xs, z)], axis=1) for z in np.linspace(-40.0, 40.0, 41)]
+    ys = np.linspace(0.5, mesh.vertices[:, 1].max() - 0.5, 30)
+    side = [np.stack([xs, np.full_like(xs, y)], axis=1) for y in ys]
+    return see_through(mesh, top, (0, 2)), see_through(mesh, side, (0, 1))
 
 
 def main(build: Path) -> int:
@@ -108,6 +147,8 @@ def main(build: Path) -> int:
         print(f"  bud: rim radius {s0['rim']:.2f}, widest {s0['widest']:.2f}, height {s0['height']:.2f}")
         print(f"  open: rim radius {s['rim']:.2f}, widest {s['widest']:.2f}, height {s['height']:.2f}, "
               f"radius at half height {s['mid']:.2f}, flare {s['rim'] / s['mid']:.2f}")
+        top, side = slits(last)
+        print(f"  open: background seen through the corolla: {top} points from above, {side} from the side")
     if bad:
         print(f"FAILED: {bad} intersecting pairs or changes")
         return 1

@@ -68,26 +68,26 @@ CULTIVARS = {
     # inner side a little more than the outer: the tube widens upwards)
     "mellow_yellow": {
         "title": "Mellow Yellow (bell)",
-        "early": dict(direction="0, 1", e="0.6", w="0.5", e_in="0.6 + 0.017", w_in="0.5 + 0.042"),
-        "late": dict(direction="0, 1", e="0.8", w="0.7",
+        "early": dict(direction="0, 1", e="0.6", w="1.2", e_in="0.6 + 0.017", w_in="1.2 + 0.042"),
+        "late": dict(direction="0, 1", e="0.8", w="1.8",
                      e_in="0.8 + 0.25 * smoothstep(0.55, 0.9, v) + 0.03 * (1 - smoothstep(0.2, 0.45, v))",
-                     w_in="0.7 + 0.017 + 0.125 * smoothstep(0.5, 0.85, v)"),
+                     w_in="1.8 + 0.017 + 0.125 * smoothstep(0.5, 0.85, v)"),
     },
     # funnel: uniform rates, greater early; the veins fan out from the base (another venation)
     "maite_lady": {
         "title": "Maite Lady (funnel)",
-        "early": dict(direction="(u - 0.5) * 0.8, 1", e="1.2", w="1.0", e_in="1.2 + 0.025", w_in="1.0 + 0.075"),
-        "late": dict(direction="(u - 0.5) * 0.8, 1", e="0.6", w="0.5", e_in="0.6", w_in="0.5 + 0.008"),
+        "early": dict(direction="(u - 0.5) * 0.8, 1", e="1.2", w="1.5", e_in="1.2 + 0.025", w_in="1.5 + 0.075"),
+        "late": dict(direction="(u - 0.5) * 0.8, 1", e="0.6", w="0.8", e_in="0.6", w_in="0.8 + 0.008"),
     },
     # shallow ball: uniform; the inner lower/middle regions elongate slightly more
     "pinocchio": {
         "title": "Pinocchio (shallow ball)",
-        "early": dict(direction="0, 1", e="1.0", w="0.9",
+        "early": dict(direction="0, 1", e="1.0", w="1.3",
                       e_in="1.0 + 0.037 * (1 - smoothstep(0.25, 0.45, v)) - 0.042 * smoothstep(0.5, 0.9, v)",
-                      w_in="0.9 + 0.025"),
-        "late": dict(direction="0, 1", e="1.0", w="0.9",
+                      w_in="1.3 + 0.025"),
+        "late": dict(direction="0, 1", e="1.0", w="1.3",
                      e_in="1.0 + 0.008 * (1 - smoothstep(0.25, 0.45, v)) - 0.025 * smoothstep(0.5, 0.9, v)",
-                     w_in="0.9 + 0.008"),
+                     w_in="1.3 + 0.008"),
     },
 }
 
