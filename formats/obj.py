@@ -38,6 +38,7 @@ __all__ = [
 
 FLOAT_FMT = "%.6f"
 """Coordinates are written with six decimals: stable text for diffs (docs/architecture.md)."""
+MAX_WRITTEN = 1e12  # the largest coordinate a writer puts in an OBJ file
 
 MTL_NAME = "materials.mtl"
 """The material library a written OBJ with ``usemtl`` names (``mtllib``), beside it in its folder;
@@ -574,10 +575,11 @@ def write_mtl(path, colors, *, header: str | None = None, fmt: str = "%.6f") -> 
 
 def _check_mesh(mesh: ObjMesh, path) -> None:
     n = mesh.n_vertices
-    if not np.isfinite(mesh.vertices).all():
-        # coordinates that overflowed (inputs far beyond the floating point range) are bad input
-        raise InputError(f"{path}: expected finite vertex coordinates to write (inputs whose values stay within "
-                         f"floating point range), found inf or nan")
+    big = float(np.abs(mesh.vertices).max()) if mesh.vertices.size else 0.0
+    if not big <= MAX_WRITTEN:
+        # coordinates that overflowed, or nearly (inputs far beyond any scene's size), are bad input
+        raise InputError(f"{path}: expected vertex coordinates to write within +-{MAX_WRITTEN:g} (inputs of a "
+                         f"sensible size), found {big:g}")
     if mesh.faces.size and (mesh.faces.min() < 0 or mesh.faces.max() >= n):
         raise ValueError(f"{path}: face index out of range 0..{n - 1}")
     for pl in mesh.lines:

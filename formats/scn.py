@@ -30,7 +30,6 @@ skips them as comments:
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -50,6 +49,7 @@ PLACEMENT_KINDS = {
     "ra": ("frame_start", "frame_end", "ax", "ay", "az", "angle"),
     "rba": ("frame_start", "frame_end"),
 }
+MAX_WRITTEN = 1e12  # the largest position or scale a writer puts in a scene file
 MAX_FRAME = 10_000_000  # frameStart / frameEnd: a frame number a run can reach (shifts of nested scenes add up)
 MAX_MATERIAL = 255  # C.2: 256 material definitions in the material map
 
@@ -322,10 +322,11 @@ def write_scn(path, scene: Scene, *, header: str | None = None, fmt: str = FLOAT
                 raise ValueError("a placement without material after one with a material cannot be written")
             out.append(f"mtl: {p.material}\n")
             material = p.material
-        if not all(math.isfinite(float(x)) for v in (p.pos, p.scale, p.up, p.right) for x in v):
-            # values that overflowed (inputs far beyond the floating point range) are bad input
-            raise InputError(f"{path}: expected finite placements to write (inputs whose values stay within "
-                             f"floating point range), found inf or nan in placement id {p.id}")
+        big = max((abs(float(x)) for v in (p.pos, p.scale, p.up, p.right) for x in v), default=0.0)
+        if not big <= MAX_WRITTEN:
+            # values that overflowed, or nearly (inputs far beyond any scene's size), are bad input
+            raise InputError(f"{path}: expected placements to write with positions and scales within "
+                             f"+-{MAX_WRITTEN:g} (inputs of a sensible size), found {big:g} in placement id {p.id}")
         line = f"{p.kind}: {format_preamble(p.id, p.pos, p.scale, p.up, p.right, fmt)}"
         if p.kind in ("ca", "ta", "ra", "rba"):
             line += f" {p.frame_start} {p.frame_end}"

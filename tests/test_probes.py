@@ -55,8 +55,8 @@ def inputs(tmp_path):
         (dup / f.name).write_text("\n".join(lines) + "\n")
     (tmp_path / "fcc" / "dup.fcc").write_text(fcc.replace(" anim\n", " dup\n"))
     (tmp_path / "step.toml").write_text("[rodkaew]\nstep = 1e-9\n")
-    far = Scene(placements=[Placement("o", 0, [1e300, 0, 0], [0.1] * 3, [0, 1, 0], [1, 0, 0])] + scene.placements[1:])
-    write_scn(tmp_path / "far.scn", far)
+    write_scn(tmp_path / "far.scn", Scene(placements=scene.placements[1:]))  # the writer refuses 1e300: by hand
+    (tmp_path / "far.scn").write_text("o: 0 1e300 0 0 0.1 0.1 0.1 0 1 0 1 0 0\n" + (tmp_path / "far.scn").read_text())
     return tmp_path
 
 
@@ -206,6 +206,9 @@ def hostile(tmp_path):
     (d / "rings.toml").write_text("[receptacle]\nsegments = 100000\nrings = 100000\n")
     (d / "radius.toml").write_text("[surface]\nradius = 1e300\n")
     (d / "room.toml").write_text("[hierarchy]\nroom_iterations = 1000000000000\n")
+    (d / "area.toml").write_text("[primordia]\narea = 1e300\n")
+    (d / "size.toml").write_text("[primordia]\nsize_factor = 1e300\n")
+    (d / "tiny.toml").write_text("[primordia]\narea = 1e-300\n")
     # fccompose: nested scenes, frame numbers, RBA frames, petal factors, petal weights
     f = d / "fcc"
     shutil.copytree(REPO / "pipelines" / "examples" / "fccompose", f)
@@ -286,6 +289,9 @@ HOSTILE = [
     ("phyllotaxis", ["{d}/rings.toml", "-o", "{d}/h1"], "receptacle.segments <= 4096", "{d}/h1"),
     ("phyllotaxis", ["{d}/radius.toml", "-o", "{d}/h2"], "surface.radius in (0, 1e6]", "{d}/h2"),
     ("phyllotaxis", ["{d}/room.toml", "-o", "{d}/h3"], "hierarchy.room_iterations in [1, 1000]", "{d}/h3"),
+    ("phyllotaxis", ["{d}/area.toml", "-o", "{d}/h4"], "scales within +-1e+12", "{d}/h4"),
+    ("phyllotaxis", ["{d}/size.toml", "-o", "{d}/h5"], "primordia.size_factor in (0, 1e6]", "{d}/h5"),
+    ("phyllotaxis", ["{d}/tiny.toml", "-o", "{d}/h6"], "about 1e", "{d}/h6"),
     ("phyllotaxis", [REPO / "pipelines" / "examples" / "sweeps" / "vogel.toml", "-o", "{d}/afile/h"],
      "expected a", "{d}/afile/h"),
     ("fccompose", ["{d}/fcc/deep.fcc", "-o", "{d}/fcc/o1"], "nested at most 6 deep", "{d}/fcc/o1"),

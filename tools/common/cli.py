@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import os
 import sys
 import time
 
@@ -52,8 +53,17 @@ def inflo_command(name: str, **command_kwargs):
         @functools.wraps(fn)
         def guarded(*args, **kwargs):
             debug = kwargs.get("debug", False)
+            out = kwargs.get("output")
+            fresh = isinstance(out, str) and not os.path.lexists(out)
             try:
-                return fn(*args, **kwargs)
+                try:
+                    return fn(*args, **kwargs)
+                except (Exception, KeyboardInterrupt):
+                    # a run that fails leaves no empty output folder it made (no partial output)
+                    if fresh and os.path.isdir(out):
+                        with contextlib.suppress(OSError):
+                            os.rmdir(out)
+                    raise
             except KeyboardInterrupt:
                 if debug:
                     raise

@@ -330,8 +330,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("primordia", "start", "in [0, 1) (fraction of the curve length)")
     if pr["floret_id"] < 0:
         fail("primordia", "floret_id", ">= 0")
-    if pr["size_factor"] <= 0:
-        fail("primordia", "size_factor", "> 0")
+    if not 0 < pr["size_factor"] <= 1e6:
+        fail("primordia", "size_factor", "in (0, 1e6]")
     if not 0 <= pr["frame_start"] <= pr["frame_end"]:
         fail("primordia", "frame_end", ">= frame_start >= 0")
     if pr["development_offset"] < 0:

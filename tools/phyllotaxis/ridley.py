@@ -96,7 +96,8 @@ def ridley_positions(profile: Profile, area: AreaFunction, *, start: float = 0.0
         raise InputError(f"primordia.count = {count} primordia do not fit on the curve: "
                          f"{fits} fit between s_0 and the rim (make A(s) smaller or the surface larger)")
     if n > max_count:
-        raise InputError(f"{n} primordia would be placed, more than primordia.max_count = {max_count}")
+        many = str(n) if n < 10**12 else f"about 1e{len(str(n)) - 1}"
+        raise InputError(f"{many} primordia would be placed, more than primordia.max_count = {max_count}")
     targets = g0 + np.arange(n, dtype=np.float64)
     return np.interp(targets, G, profile.s)
 
