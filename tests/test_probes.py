@@ -163,6 +163,21 @@ def _scn_line(kind, pid, extra=""):
     return f"{kind}: {pid} 0 0 0 1 1 1 0 1 0 1 0 0{extra}\n"
 
 
+def _bilevel_png(path, w, h):
+    """A black 1-bit PNG of w x h written row by row (no image in memory)."""
+    import struct
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    z = zlib.compressobj(9)
+    row = b"\x00" * (1 + (w + 7) // 8)
+    idat = b"".join(z.compress(row) for _ in range(h)) + z.flush()
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 1, 0, 0, 0, 0))
+                     + chunk(b"IDAT", idat) + chunk(b"IEND", b""))
+
+
 @pytest.fixture()
 def hostile(tmp_path):
     import shutil
@@ -193,6 +208,8 @@ def hostile(tmp_path):
     (pg / "keys.toml").write_text(PETAL_FLOWER.format(e_in="1").replace("keyframes = 3", "keyframes = 1000000000000"))
     Image.new("L", (5000, 5000)).save(pg / "big.png")
     (pg / "png.toml").write_text(PETAL_FLOWER.format(e_in="big.png"))
+    _bilevel_png(pg / "bomb.png", 20000, 20000)  # 400 M pixels in a few kB: beyond what PIL opens
+    (pg / "bomb.toml").write_text(PETAL_FLOWER.format(e_in="bomb.png"))
     framed = d / "pgf"
     framed.mkdir()
     write_bud_obj(framed / "frame_0000.obj", grid_bud(x, s, t, 4, 5))
@@ -280,6 +297,7 @@ HOSTILE = [
     ("petal-grow", ["{d}/pg/keys.toml", "-o", "{d}/p3"], "keyframes: an integer in [1, 10000]", "{d}/p3"),
     ("petal-grow", ["{d}/pg/png.toml", "-o", "{d}/p4"], "a PNG of at most 16777216 pixels", "{d}/p4"),
     ("petal-grow", ["{d}/pg/ok.toml", "--keyframes", "1000000000000", "-o", "{d}/p5"], "--keyframes", "{d}/p5"),
+    ("petal-grow", ["{d}/pg/bomb.toml", "-o", "{d}/p6"], "a PNG of at most 16777216 pixels", "{d}/p6"),
     ("petal-grow", ["{d}/pgf/f.toml", "-o", "{d}/pgf"], "holds the bud mesh of organ 'a'", "{d}/pgf/log.csv"),
     ("petal-grow", ["{d}/pgf/f.toml", "-o", "{d}/pgf/frame_0000.obj"], "expected an output folder, found a file",
      "{d}/pgf/log.csv"),

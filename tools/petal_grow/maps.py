@@ -122,6 +122,9 @@ def _read_png(path: Path, src, line, what: str) -> np.ndarray:
             return np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
     except FileNotFoundError:
         raise FormatError(src, line, f"{what}: an existing PNG file", str(path)) from None
+    except Image.DecompressionBombError:
+        raise FormatError(src, line, f"{what}: a PNG of at most {MAX_MAP_PIXELS} pixels (e.g. 4096 x 4096)",
+                          f"{path.name}, larger than PIL opens") from None
     except (UnidentifiedImageError, OSError) as exc:
         raise FormatError(src, line, f"{what}: a readable PNG image", f"{path.name} ({exc})") from None
 
