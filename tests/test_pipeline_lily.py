@@ -49,6 +49,7 @@ from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
 LILY = REPO / "pipelines" / "lily"
 KEYS = [LILY / f"key_{k}.floret" for k in ("bud", "early", "mid", "open")]
 COLUMN_KEYS = [LILY / f"column_{k}.floret" for k in ("bud", "mid", "open")]
+GROWTH_COLUMN_KEYS = [LILY / f"growth_column_{k}.floret" for k in ("bud", "mid", "open")]
 BUILD = REPO / "build" / "lily"
 
 # polygonize's vertex order: organ by organ, copy by copy, row by row from the base
@@ -95,7 +96,8 @@ def test_inputs_are_what_make_keys_writes(tmp_path):
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     written = sorted(p.name for p in tmp_path.iterdir())
-    assert written == sorted([p.name for p in KEYS] + [p.name for p in COLUMN_KEYS] + ["lily.weights"])
+    assert written == sorted([p.name for p in KEYS] + [p.name for p in COLUMN_KEYS] + [p.name for p in GROWTH_COLUMN_KEYS]
+                             + ["lily.weights"])
     for name in written:
         assert (tmp_path / name).read_text() == (LILY / name).read_text(), \
             f"pipelines/lily/{name} differs from what make_keys.py writes: rerun it"
@@ -422,6 +424,35 @@ def test_tepal_markings(tepal_obj):
         assert not dark[:, 0].any() and not dark[:, -1].any(), "spots on the margins"
     bud = paint.paint(mesh, mesh, 0.0)
     assert (bud.sum(axis=1) > 1.2).all()  # no markings before the inner face shows
+
+
+def test_growth_lily_has_the_same_column():
+    """The growth-map lily's column is the key-pose lily's (same organs, poses and timing) scaled
+    nine times, on a receptacle of its own."""
+    for key, growth in zip(COLUMN_KEYS, GROWTH_COLUMN_KEYS):
+        a, b = read_floret(key), read_floret(growth)
+        assert [o.name for o in a.organs] == [o.name for o in b.organs]
+        assert a.key_time == b.key_time
+        for name in ("pistil", "stigma", "stamens", "anthers"):
+            np.testing.assert_allclose(b.organ(name).control_points, 9.0 * a.organ(name).control_points, atol=1e-3)
+
+
+def test_built_growth_lily_column_clear_of_the_tepals(capsys):
+    """If `make lily METHOD=growth` has been run: every keyframe's tepals against the column."""
+    canopy, column = BUILD / "growth" / "canopy", BUILD / "growth" / "column_obj"
+    if not canopy.is_dir() or not column.is_dir():
+        pytest.skip("make lily METHOD=growth has not been run")
+    import importlib.util
+
+    sys.path.insert(0, str(LILY))
+    try:
+        spec = importlib.util.spec_from_file_location("check_growth", LILY / "check_growth.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(str(LILY))
+    assert mod.main(canopy, column) == 0, capsys.readouterr().out
+    assert "tepals against the column: 0 intersecting pairs" in capsys.readouterr().out
 
 
 def test_makefile_chains_the_stages():

@@ -32,14 +32,24 @@ $(B)/growth_bud/petal.obj: growth_keys.py
 $(GB)/canopy/frame_$(LAST).obj: growth.toml $(B)/growth_bud/petal.obj $(GROWTH_SRC)
 	$(BIN)petal-grow -q growth.toml -o $(GB)/canopy
 
-# 3. pictures: frames 1, 10, ..., 100 (fig. 1), and the open growth-map lily beside the key-pose one
-$(GB)/lily_growth_sheet.png: $(GB)/canopy/frame_$(LAST).obj colors.toml
-	$(RENDER) $(GB)/canopy --sheet-every 10 --columns 6 --label 'frame {n}' --size $(TILE) --fit-all -o $@
+# the column: the key-pose lily's pistil (three-lobed stigma) and six stamens (versatile anthers)
+# scaled to this lily's size, on a receptacle of its own (make_keys.py), with the same timing
+GROWTH_COLUMN_KEYS := growth_column_bud.floret growth_column_mid.floret growth_column_open.floret
+$(GB)/column_frames/frame_$(LAST).floret: $(GROWTH_COLUMN_KEYS) column_growth.func $(FLORET_SRC)
+	$(BIN)floret-animate -q $(GROWTH_COLUMN_KEYS) --growth column_growth.func --frames $(FRAMES) -o $(GB)/column_frames
 
-$(GB)/lily_growth_beside.png: $(GB)/canopy/frame_$(LAST).obj $(B)/smooth/.done $(B)/column_keyframes/.done colors.toml growth_beside.py
+$(GB)/column_obj/frame_$(LAST).obj: $(GB)/column_frames/frame_$(LAST).floret $(POLY_SRC)
+	$(BIN)polygonize -q $(GB)/column_frames -o $(GB)/column_obj
+
+# 3. pictures: frames 1, 10, ..., 100 (fig. 1), and the open growth-map lily beside the key-pose one
+$(GB)/lily_growth_sheet.png: $(GB)/canopy/frame_$(LAST).obj $(GB)/column_obj/frame_$(LAST).obj colors.toml
+	$(RENDER) $(GB)/canopy $(GB)/column_obj --sheet-every 10 --columns 6 --label 'frame {n}' --size $(TILE) --fit-all -o $@
+
+$(GB)/lily_growth_beside.png: $(GB)/canopy/frame_$(LAST).obj $(GB)/column_obj/frame_$(LAST).obj $(B)/painted/.done $(B)/column_keyframes/.done colors.toml growth_beside.py
 	$(PY) growth_beside.py $(B) -o $@
 
-# 4. exact static test of every keyframe, joint angles, the midrib's reflex and the flat lamina
-$(GB)/check.txt: $(GB)/canopy/frame_$(LAST).obj check_growth.py
-	@$(PY) check_growth.py $(GB)/canopy > $@.tmp; status=$$?; cat $@.tmp; \
+# 4. exact static test of every keyframe (tepals, and tepals against the column), joint angles,
+#    the midrib's reflex and the flat lamina
+$(GB)/check.txt: $(GB)/canopy/frame_$(LAST).obj $(GB)/column_obj/frame_$(LAST).obj check_growth.py
+	@$(PY) check_growth.py $(GB)/canopy $(GB)/column_obj > $@.tmp; status=$$?; cat $@.tmp; \
 		if [ $$status -eq 0 ]; then mv $@.tmp $@; else rm -f $@.tmp; exit 1; fi

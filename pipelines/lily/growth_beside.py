@@ -2,8 +2,9 @@
 
 Usage: python growth_beside.py BUILD_DIR -o OUT.png     (BUILD_DIR = build/lily)
 
-Left: the last keyframe of petal-grow (BUILD_DIR/growth/canopy); right: the last smoothed frame
-of the key-pose lily with its column (BUILD_DIR/smooth, BUILD_DIR/column_keyframes). Each panel
+Left: the last keyframe of petal-grow (BUILD_DIR/growth/canopy) with its column
+(BUILD_DIR/growth/column_obj); right: the last smoothed, painted frame of the key-pose lily with
+its column (BUILD_DIR/painted, BUILD_DIR/column_keyframes). Each panel
 is a canopy-render still with the lily's colours and the same camera.
 """
 from __future__ import annotations
@@ -20,8 +21,8 @@ from PIL import Image, ImageDraw, ImageFont
 from inflo.formats.atomic import write_bytes_atomic
 
 HERE = Path(__file__).resolve().parent
-PANELS = (("growth maps (petal-grow, Ijiri et al. 2008)", ("growth/canopy",)),
-          ("key poses (floret-animate + fccompose)", ("smooth", "column_keyframes")))
+PANELS = (("growth maps (petal-grow, Ijiri et al. 2008)", ("growth/canopy", "growth/column_obj")),
+          ("key poses (floret-animate + fccompose)", ("painted", "column_keyframes")))
 
 
 def panel(build: Path, inputs, out: Path) -> Image.Image:

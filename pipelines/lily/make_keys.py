@@ -260,6 +260,29 @@ def write_column():
         (OUT / f"column_{key}.floret").write_text(text)
 
 
+# the growth-map lily (growth.mk) is about nine times the key-pose lily's size (tepals about 48
+# units long, their bases 1.2-1.9 from the axis): the same pistil, stigma, stamens and anthers,
+# scaled by GROWTH_SCALE about the receptacle's top, on a receptacle of its own that fits inside
+# the tepals' bases (r <= 1.0 above y = 0) with a collar under them (r up to 2.6 at y = -0.9)
+GROWTH_SCALE = 9.0
+GROWTH_RECEPTACLE = tube([(0, 0.6), (0, 0.55), (0, 0.3), (0, 0.0), (0, -0.35), (0, -0.7), (0, -1.1),
+                          (0, -1.6), (0, -3.0), (0, -8.0), (0, -10.0)],
+                         [0.0, 0.6, 0.95, 1.0, 1.5, 2.5, 2.6, 2.2, 1.2, 0.8, 0.8], base_cap=False)
+
+
+def write_growth_column():
+    for key, p in COLUMN.items():
+        blocks = []
+        for name, mat, n, phase in (("receptacle", 7, 1, 0), ("pistil", 5, 1, 0), ("stigma", 9, 3, 0),
+                                    ("stamens", 6, 6, 30), ("anthers", 8, 6, 30)):
+            pts = GROWTH_RECEPTACLE if name == "receptacle" else p[name] * GROWTH_SCALE
+            blocks.append(f"organ: {name}\nmaterial: {mat}\ndegree: 1 3\ngrid: 9 {len(pts)}\n"
+                          f"symmetry: {n} {phase}\nlambda: 0.1\neta: 9\npoints:\n{fmt_rows(pts)}\n")
+        text = (f"# the growth-map lily's receptacle, pistil, stigma, stamens and anthers, pose '{key}'; "
+                f"written by make_keys.py\nfloret 1\nname: column\ntime: {p['time']}\n\n" + "\n".join(blocks))
+        (OUT / f"growth_column_{key}.floret").write_text(text)
+
+
 def write_weights():
     """Fixed vertices: rows 0 and 1 of every tepal (the claw on the receptacle), in polygonize's
     vertex order (organ by organ, copy by copy, row by row from the base; 17 vertices a row on a
@@ -282,4 +305,5 @@ if __name__ == "__main__":
         OUT.mkdir(parents=True, exist_ok=True)
     main()
     write_column()
+    write_growth_column()
     write_weights()
