@@ -223,6 +223,7 @@ def hostile(tmp_path):
     (d / "rings.toml").write_text("[receptacle]\nsegments = 100000\nrings = 100000\n")
     (d / "radius.toml").write_text("[surface]\nradius = 1e300\n")
     (d / "room.toml").write_text("[hierarchy]\nroom_iterations = 1000000000000\n")
+    (d / "head.toml").write_text("[compound]\nhead_height = 1e300\n")
     (d / "area.toml").write_text("[primordia]\narea = 1e300\n")
     (d / "size.toml").write_text("[primordia]\nsize_factor = 1e300\n")
     (d / "tiny.toml").write_text("[primordia]\narea = 1e-300\n")
@@ -307,6 +308,7 @@ HOSTILE = [
     ("phyllotaxis", ["{d}/rings.toml", "-o", "{d}/h1"], "receptacle.segments <= 4096", "{d}/h1"),
     ("phyllotaxis", ["{d}/radius.toml", "-o", "{d}/h2"], "surface.radius in (0, 1e6]", "{d}/h2"),
     ("phyllotaxis", ["{d}/room.toml", "-o", "{d}/h3"], "hierarchy.room_iterations in [1, 1000]", "{d}/h3"),
+    ("phyllotaxis", ["{d}/head.toml", "-o", "{d}/h7"], "compound.head_height within +-1000", "{d}/h7"),
     ("phyllotaxis", ["{d}/area.toml", "-o", "{d}/h4"], "scales within +-1e+12", "{d}/h4"),
     ("phyllotaxis", ["{d}/size.toml", "-o", "{d}/h5"], "primordia.size_factor in (0, 1e6]", "{d}/h5"),
     ("phyllotaxis", ["{d}/tiny.toml", "-o", "{d}/h6"], "about 1e", "{d}/h6"),

@@ -383,8 +383,10 @@ def _check_ranges(p: dict, text: str, path) -> None:
             fail("receptacle", "inset", ">= 0 scene units")
     if "compound" in p:
         c = p["compound"]
-        if c["head_fill"] <= 0:
-            fail("compound", "head_fill", "> 0")
+        if not 0 < c["head_fill"] <= 1e3:
+            fail("compound", "head_fill", "in (0, 1000]")
+        if not abs(c["head_height"]) <= 1e3:
+            fail("compound", "head_height", "within +-1000 (head radii)")
         if not 0 < c["floret_fraction"] < 1:
             fail("compound", "floret_fraction", "in (0, 1)")
         if not 0 <= c["head_start"] < 1:
