@@ -219,6 +219,8 @@ def hostile(tmp_path):
     (d / "thyrse_dense.toml").write_text("[thyrse]\nnodes = 40\norder = 5.0\ndensity = 900000.0\n"
                                          "lateral_length = 0.9\n")
     (d / "thyrse_long.toml").write_text("[thyrse]\nlength = 1e300\n")
+    (d / "thyrse_reach.toml").write_text("[thyrse]\nreach = 1e300\nmin_distance = 1\n")
+    (d / "thyrse_tropism.toml").write_text("[thyrse]\ntropism = 1e300\n")
     # phyllotaxis
     (d / "rings.toml").write_text("[receptacle]\nsegments = 100000\nrings = 100000\n")
     (d / "radius.toml").write_text("[surface]\nradius = 1e300\n")
@@ -305,6 +307,8 @@ HOSTILE = [
     ("thyrse", ["{d}/thyrse_nodes.toml", "-o", "{d}/t1"], "an integer in [0, 10000]", "{d}/t1"),
     ("thyrse", ["{d}/thyrse_dense.toml", "-o", "{d}/t2"], "at most 1000000 nodes", "{d}/t2"),
     ("thyrse", ["{d}/thyrse_long.toml", "-o", "{d}/t3"], "a length in (0, 1e+06]", "{d}/t3"),
+    ("thyrse", ["{d}/thyrse_reach.toml", "-o", "{d}/t4"], "a reach in [0, 1e6]", "{d}/t4"),
+    ("thyrse", ["{d}/thyrse_tropism.toml", "-o", "{d}/t5"], "a weight in [0, 1e6]", "{d}/t5"),
     ("phyllotaxis", ["{d}/rings.toml", "-o", "{d}/h1"], "receptacle.segments <= 4096", "{d}/h1"),
     ("phyllotaxis", ["{d}/radius.toml", "-o", "{d}/h2"], "surface.radius in (0, 1e6]", "{d}/h2"),
     ("phyllotaxis", ["{d}/room.toml", "-o", "{d}/h3"], "hierarchy.room_iterations in [1, 1000]", "{d}/h3"),
