@@ -132,7 +132,7 @@ def write(out: Path) -> None:
     for frame in KEY_FRAMES:
         p = pose(frame)
         blocks = [f"organ: {name}\nmaterial: {mat}\ndegree: 1 3\ngrid: 9 {len(p[name])}\n"
-                  f"symmetry: {n} {phase}\nlambda: 0.07\neta: 9\npoints:\n{fmt_rows(p[name])}\n"
+                  f"symmetry: {n} {phase}\nlambda: 0.12\neta: 9\npoints:\n{fmt_rows(p[name])}\n"
                   for name, mat, n, phase in ORGANS]
         text = (f"# Eustoma calyx and column at frame {frame + 1}; written by make_column.py\n"
                 f"floret 1\nname: column\ntime: {frame / 99.0:.6f}\n\n" + "\n".join(blocks))
