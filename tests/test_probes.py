@@ -195,6 +195,8 @@ def hostile(tmp_path):
     _venation(d / "ven", "darts.toml", darts=1e9)
     _venation(d / "ven", "tex.toml", tex=16384, ss=8)
     _venation(d / "ven", "slow.toml", rate=1e-300)
+    (d / "ven" / "mesh.toml").write_text((d / "ven" / "ok.toml").read_text() + "[output]\nmesh_spacing = 1e-300\n")
+    (d / "ven" / "wide.toml").write_text((d / "ven" / "ok.toml").read_text() + "[width]\ntip = 1e300\n")
     # petal-grow: a small petal, its bud named like a frame in one folder
     pg = d / "pg"
     pg.mkdir()
@@ -291,6 +293,8 @@ HOSTILE = [
     ("venation", ["{d}/ven/tex.toml", "-o", "{d}/v3"], "texture.size x texture.supersample <= 16384", "{d}/v3"),
     ("venation", ["{d}/ven/slow.toml", "-o", "{d}/v4"], "growth that reaches its final size", "{d}/v4"),
     ("venation", ["{d}/ven/ok.toml", "--seed", "-1", "-o", "{d}/v5"], "--seed", "{d}/v5"),
+    ("venation", ["{d}/ven/mesh.toml", "-o", "{d}/v6"], "output.mesh_spacing >= the final blade's extent", "{d}/v6"),
+    ("venation", ["{d}/ven/wide.toml", "-o", "{d}/v7"], "width.tip <= 1e6", "{d}/v7"),
     ("venation", ["{d}/ven/ok.toml", "-o", "{d}/afile"], "expected an output folder, found a file", "{d}/afile/x"),
     ("venation", ["{d}/ven/ok.toml", "-o", "{d}/ven/ok.toml"], "expected an output folder, found a file",
      "{d}/ven/veins.obj"),

@@ -391,13 +391,21 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("sources", "region", "'margin' only with growth.type = 'marginal' (the band the margin sweeps)")
     if s["settle"] < 0:
         fail("sources", "settle", ">= 0")
+    if s["settle"] > 1_000_000:
+        fail("sources", "settle", "<= 1000000")
     w = p["width"]
     if w["tip"] <= 0:
         fail("width", "tip", "> 0")
+    if w["tip"] > 1e6:
+        fail("width", "tip", "<= 1e6")
     if w["exponent"] <= 0:
         fail("width", "exponent", "> 0")
+    if not 0.1 <= w["exponent"] <= 100:
+        fail("width", "exponent", "in [0.1, 100] (Murray's exponent)")
     if w["increment"] < 0:
         fail("width", "increment", ">= 0")
+    if w["increment"] > 1e6:
+        fail("width", "increment", "<= 1e6")
     r = p["refine"]
     if r["threshold"] < 0:
         fail("refine", "threshold", ">= 0 (0: no refinement)")
@@ -414,6 +422,8 @@ def _check_ranges(p: dict, text: str, path) -> None:
         fail("texture", "supersample", "in [1, 8]")
     if t["width_scale"] <= 0:
         fail("texture", "width_scale", "> 0")
+    if t["width_scale"] > 1e6:
+        fail("texture", "width_scale", "<= 1e6")
     for key in ("blade_color", "vein_color"):
         if not t[key]:
             fail("texture", key, "a colour '#rrggbb'")
@@ -550,6 +560,10 @@ def _check_work(p: Params, blade: Blade, growth: Growth) -> None:
     if not darts <= MAX_DARTS:
         fail("sources", "darts", f"sources.darts <= {MAX_DARTS} / the final blade area {area:.6g} = "
              f"{MAX_DARTS / max(area, 1e-300):.6g} (at most {MAX_DARTS} darts a step)", f"{p.sources.darts:g}")
+    ms = p.output.mesh_spacing
+    if ms and not ext / ms <= MAX_SPAN:
+        fail("output", "mesh_spacing", f"output.mesh_spacing >= the final blade's extent / {MAX_SPAN} = "
+             f"{ext / MAX_SPAN:.6g}, or 0", f"{ms:g}")
     px = p.texture.size * p.texture.supersample
     if px > MAX_TEXTURE:
         fail("texture", "supersample", f"texture.size x texture.supersample <= {MAX_TEXTURE} pixels",
