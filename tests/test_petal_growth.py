@@ -129,13 +129,15 @@ def test_a_placements_petal_factor_gives_the_canopy_of_a_pre_grown_template(tmp_
     np.testing.assert_allclose(last[fixed], frames[-1][fixed], atol=2e-6)
 
 
-def test_without_petal_weights_the_factor_changes_nothing(tmp_path):
-    frames, faces, fixed, w = _floret_files(tmp_path)
+def test_a_petal_factor_without_petal_weights_is_refused(tmp_path):
+    """'#@ petal:' on an id without a 'petal weight' line would be ignored: one line, exit 2."""
+    _floret_files(tmp_path)
     write_scene(tmp_path / "a.scn", [Placement("o", 0, [0, 0, 0], [1, 1, 1], [0, 1, 0], [1, 0, 0], petal=2.0)])
     write_fcc_text(tmp_path / "a.fcc", scene="a.scn", frames=1)
     res = run_cli("fccompose", "-q", tmp_path / "a.fcc", "-o", tmp_path / "out")
-    assert res.returncode == 0, res.stderr
-    np.testing.assert_allclose(read_obj(list_obj_sequence(tmp_path / "out")[0]).vertices, frames[0], atol=2e-6)
+    assert res.returncode == 2, res.stderr
+    assert "expected a 'petal weight' line" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
 
 
 def _umbel_scene():

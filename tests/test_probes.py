@@ -206,6 +206,7 @@ def hostile(tmp_path):
     write_bud_obj(pg / "petal.obj", grid_bud(x, s, t, 4, 5))
     (pg / "ok.toml").write_text(PETAL_FLOWER.format(e_in="1 + 0.5 * v"))
     (pg / "pow.toml").write_text(PETAL_FLOWER.format(e_in="9**9**9"))
+    (pg / "exp.toml").write_text(PETAL_FLOWER.format(e_in="exp(u * 1000)"))
     (pg / "iters.toml").write_text(PETAL_FLOWER.format(e_in="1").replace("iterations = 5", "iterations = 1000000000000"))
     (pg / "keys.toml").write_text(PETAL_FLOWER.format(e_in="1").replace("keyframes = 3", "keyframes = 1000000000000"))
     Image.new("L", (5000, 5000)).save(pg / "big.png")
@@ -300,6 +301,7 @@ HOSTILE = [
      "{d}/ven/veins.obj"),
     ("venation", ["{d}/ven/ok.toml", "-o", "{d}/afile/sub"], "whose parents are folders", "{d}/afile/sub"),
     ("petal-grow", ["{d}/pg/pow.toml", "-o", "{d}/p1"], "constant exponents within +-1024", "{d}/p1"),
+    ("petal-grow", ["{d}/pg/exp.toml", "-o", "{d}/p7"], "expected values within +-1e+06 over the organ", "{d}/p7"),
     ("petal-grow", ["{d}/pg/iters.toml", "-o", "{d}/p2"], "iterations: an integer in [0, 10000]", "{d}/p2"),
     ("petal-grow", ["{d}/pg/keys.toml", "-o", "{d}/p3"], "keyframes: an integer in [1, 10000]", "{d}/p3"),
     ("petal-grow", ["{d}/pg/png.toml", "-o", "{d}/p4"], "a PNG of at most 16777216 pixels", "{d}/p4"),

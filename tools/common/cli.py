@@ -82,7 +82,7 @@ def inflo_command(name: str, **command_kwargs):
                     raise
                 click.echo(f"{name}: error: {_path_error(exc)}", err=True)
                 sys.exit(2)
-            except (OverflowError, FloatingPointError) as exc:
+            except (OverflowError, FloatingPointError, ZeroDivisionError) as exc:
                 if debug:
                     raise
                 click.echo(f"{name}: error: expected input whose numbers stay within floating point range, found "

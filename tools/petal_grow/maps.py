@@ -235,7 +235,17 @@ def triangle_values(m: ScalarMap, tri_uv: np.ndarray) -> np.ndarray:
     ``tri_uv`` is (m, 3, 2): the uv of each triangle's corners."""
     n = len(tri_uv)
     s = m(_corner_and_centroid(tri_uv)).reshape(4, n)
+    big = float(np.abs(s).max()) if s.size else 0.0
+    if not big <= MAX_MAP_VALUE:
+        from inflo.formats.errors import InputError
+
+        raise InputError(f"growth map {shorten(str(m.source))}: expected values within +-{MAX_MAP_VALUE:g} over "
+                         f"the organ, found {big:g}")
     return (s[0] + s[1] + s[2] + 3.0 * s[3]) / 6.0
+
+
+#: the largest magnitude a scalar growth map may take on an organ (rates, factors and angles)
+MAX_MAP_VALUE = 1e6
 
 
 def triangle_directions(m: DirectionMap, tri_uv: np.ndarray) -> np.ndarray:
