@@ -16,7 +16,7 @@ What is checked (Ijiri et al. 2008, sec. 6.1 and 6.3):
 - fccompose on the pipeline's own lily.fcc / lily.scn, run for the first 12 frames (where the
   petals press on the sepals in the key-pose animation), finds and resolves collisions and writes
   frames with no intersecting triangle pairs;
-- the column (three key poses, timed by column_growth.func): receptacle, pistil, a three-lobed
+- the column (five key poses, timed by column_growth.func): receptacle, pistil, a three-lobed
   stigma, six stamens with versatile anthers -- each anther attached near its middle on its
   filament's tip, along the filament in the bud and turned crosswise (a T) in the open flower,
   tilting steadily between, never flattened -- and none of them touching a tepal in the keyframes;
@@ -48,8 +48,8 @@ from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
 
 LILY = REPO / "pipelines" / "lily"
 KEYS = [LILY / f"key_{k}.floret" for k in ("bud", "early", "mid", "open")]
-COLUMN_KEYS = [LILY / f"column_{k}.floret" for k in ("bud", "mid", "open")]
-GROWTH_COLUMN_KEYS = [LILY / f"growth_column_{k}.floret" for k in ("bud", "mid", "open")]
+COLUMN_KEYS = [LILY / f"column_{k}.floret" for k in ("bud", "early", "mid", "late", "open")]
+GROWTH_COLUMN_KEYS = [LILY / f"growth_column_{k}.floret" for k in ("bud", "early", "mid", "late", "open")]
 BUILD = REPO / "build" / "lily"
 
 # polygonize's vertex order: organ by organ, copy by copy, row by row from the base

@@ -34,7 +34,7 @@ $(GB)/canopy/frame_$(LAST).obj: growth.toml $(B)/growth_bud/petal.obj $(GROWTH_S
 
 # the column: the key-pose lily's pistil (three-lobed stigma) and six stamens (versatile anthers)
 # scaled to this lily's size, on a receptacle of its own (make_keys.py), with the same timing
-GROWTH_COLUMN_KEYS := growth_column_bud.floret growth_column_mid.floret growth_column_open.floret
+GROWTH_COLUMN_KEYS := growth_column_bud.floret growth_column_early.floret growth_column_mid.floret growth_column_late.floret growth_column_open.floret
 $(GB)/column_frames/frame_$(LAST).floret: $(GROWTH_COLUMN_KEYS) column_growth.func $(FLORET_SRC)
 	$(BIN)floret-animate -q $(GROWTH_COLUMN_KEYS) --growth column_growth.func --frames $(FRAMES) -o $(GB)/column_frames
 

@@ -183,10 +183,12 @@ RECEPTACLE = tube([(0, 0.21), (0, 0.20), (0, 0.15), (0, 0.08), (0, 0.03), (0, -0
 # versatile anthers (lily anthers are dorsifixed: the filament's tip enters the anther's back near
 # its middle, and the anther swings on it): the anther's axis, in the stamen's radial plane, is turned
 # from the filament's tip direction by this many degrees (outward and downward) at the column's key
-# times 0, 0.5 and 1: along the filament in the bud, crosswise (a T) in the open flower. Three poses
-# keep each turn to 45 degrees, which floret-animate's per-column blending carries with the capsule
-# shortened by cos 22.5 deg = 0.92 at most half-way (two poses, a quarter turn: cos 45 deg).
-ANTHER_TURN = {"bud": 5.0, "mid": 50.0, "open": 95.0}
+# times 0, 0.25, 0.5, 0.75 and 1: along the filament in the bud, crosswise (a T) in the open flower.
+# Five poses keep each turn to 22.5 degrees: floret-animate blends each control column in its own
+# frame, which carries a capsule turning about one axis shortened by the cosine of half the turn
+# half-way between two poses and its rings distorted by as much (two poses and a quarter turn
+# flattened the anthers half-way; three, 45 degrees apiece, still showed paddles between poses).
+ANTHER_TURN = {"bud": 5.0, "early": 27.5, "mid": 50.0, "late": 72.5, "open": 95.0}
 # a three-lobed stigma (Lilium: three carpels, three stigma lobes): three capsules (symmetry 3)
 # spreading from the top of the style, each lobe's inner pole inside the style's tip
 STIGMA = {"bud": dict(centre=(0.035, 1.93), axis=(0.45, 0.89), length=0.20, radius=0.05),
@@ -233,16 +235,19 @@ def _column_poses():
                stamens=tube([(0.12, 0.10), (0.3, 1.4), (0.6, 2.7), (0.85, 3.6)],
                             [0.03, 0.025, 0.025, 0.03]),
                stigma=stigma(STIGMA["open"]))
-    # the pose half-way (key time 0.5): tubes half-way, the anther half-turned
-    mid = dict(time=0.5, **{k: 0.5 * (bud[k] + opn[k]) for k in ("pistil", "stamens", "stigma")})
-    for pose, key, length, radius in ((bud, "bud", 0.45, 0.05), (mid, "mid", 0.625, 0.065),
-                                      (opn, "open", 0.8, 0.08)):
-        pose["anthers"] = anther(pose["stamens"], ANTHER_TURN[key], length, radius)
-    return {"bud": bud, "mid": mid, "open": opn}
+    # the poses between (key times 0.25, 0.5, 0.75): tubes part-way, the anther part-turned
+    poses = {"bud": bud}
+    for key, f in (("early", 0.25), ("mid", 0.5), ("late", 0.75)):
+        poses[key] = dict(time=f, **{k: (1.0 - f) * bud[k] + f * opn[k] for k in ("pistil", "stamens", "stigma")})
+    poses["open"] = opn
+    for key, pose in poses.items():
+        f = pose["time"]
+        pose["anthers"] = anther(pose["stamens"], ANTHER_TURN[key], 0.45 + 0.35 * f, 0.05 + 0.03 * f)
+    return poses
 
 
 # pistil on the axis (style, a three-lobed stigma), six stamens (filaments) leaning outward, each
-# carrying a versatile anther; three poses at key times 0, 0.5, 1 (column_growth.func times them)
+# carrying a versatile anther; five poses at key times 0, 0.25, 0.5, 0.75, 1 (column_growth.func times them)
 COLUMN = _column_poses()
 
 
