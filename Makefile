@@ -66,6 +66,13 @@ test-blender: $(STAMP) bytecode
 	@.venv-blender/bin/python -c 'import bpy' 2>/dev/null || .venv-blender/bin/python -m pip install --quiet 'bpy==4.5.*'
 	$(PY) -m pytest -q tests/test_blender.py $(PYTEST_ARGS)
 
+# the Blender add-on (blender/inflo_blender/, docs/blender.md): a zip for Edit > Preferences >
+# Add-ons (Blender 4.2 and 4.5 LTS); standard library only, no venv needed
+.PHONY: blender-addon
+blender-addon: build/inflo_blender.zip
+build/inflo_blender.zip: $(wildcard blender/inflo_blender/*.py blender/inflo_blender/*.toml) blender/make_zip.py
+	$(PYTHON) blender/make_zip.py -o $@
+
 bench: $(STAMP) bytecode
 	$(PY) -m bench.run
 
