@@ -166,10 +166,13 @@ class Progress:
     frames: int | None = None
     of: int | None = None
     unit: str = "frames"
+    since: float = 0.0
+    cwd: str = ""
     lines: list[str] = field(default_factory=list)
 
-    def start_step(self, index: int, label: str) -> None:
-        self.step, self.stage = index, label
+    def start_step(self, index: int, label: str, cwd: str = "") -> None:
+        """A step begins; ``cwd``: the folder its make runs in (relative outputs are under it)."""
+        self.step, self.stage, self.cwd = index, label, cwd
         self.tool, self.output, self.frames, self.of = "", None, None, None
 
     def feed(self, line: str) -> bool:
@@ -191,17 +194,21 @@ class Progress:
         if tool in _TOOLS or (tool.startswith("python") and len(words) > 1 and words[1].endswith(".py")):
             self.tool = tool if tool in _TOOLS else os.path.basename(words[1])
             out = _OUT.search(line)
-            self.output = out.group(1).strip("'\"") if out else None
+            self.output = os.path.join(self.cwd, out.group(1).strip("'\"")) if out else None
             self.frames, self.of, self.unit = None, None, "frames"
+            self.since = time.time()
             return True
         return False
 
     def poll(self) -> bool:
-        """Count the frame files in the running tool's output folder; True when it changed."""
+        """Count the frame files the running tool has written to its output folder (those newer
+        than its command line: a rerun over an earlier build's frames counts from 0); True when
+        it changed."""
         if not self.output or not os.path.isdir(self.output):
             return False
         try:
-            n = sum(1 for e in os.scandir(self.output) if _FRAME_FILE.match(e.name))
+            n = sum(1 for e in os.scandir(self.output)
+                    if _FRAME_FILE.match(e.name) and e.stat().st_mtime >= self.since - 1.0)
         except OSError:
             return False
         if n and n != self.frames and self.of is None:
@@ -277,7 +284,7 @@ class BuildProcess:
     def _start(self, index: int) -> None:
         self.index = index
         step = self.steps[index]
-        self.progress.start_step(index, step.label)
+        self.progress.start_step(index, step.label, step.argv[step.argv.index("-C") + 1])
         self.proc = subprocess.Popen(step.argv, cwd=str(self.project), env=self.env, stdin=subprocess.DEVNULL,
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, bufsize=1,
                                      start_new_session=True)
@@ -316,8 +323,7 @@ class BuildProcess:
         rc = self.proc.poll()
         if rc is None:
             return changed, got
-        for t in self._readers:
-            t.join(timeout=2)
+        self._close()
         more = self.pump_rest()
         got += more
         if self.cancelled:
@@ -329,6 +335,16 @@ class BuildProcess:
         else:
             self.returncode = 0
         return True, got
+
+    def _close(self) -> None:
+        """The step's process has ended: finish reading its pipes and close them."""
+        for t in self._readers:
+            t.join(timeout=2)
+        for stream in (self.proc.stdout, self.proc.stderr):
+            try:
+                stream.close()
+            except (OSError, ValueError):
+                pass
 
     def pump_rest(self) -> list[tuple[str, str]]:
         got = []
@@ -363,8 +379,7 @@ class BuildProcess:
             except ProcessLookupError:
                 pass
             proc.wait()
-        for t in self._readers:
-            t.join(timeout=2)
+        self._close()
         self.pump_rest()
         self.returncode = proc.returncode if proc.returncode not in (0, None) else -signal.SIGTERM
 
