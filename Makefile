@@ -65,6 +65,7 @@ test-blender: $(STAMP) bytecode
 	@test -x .venv-blender/bin/python || $(PYTHON) -m venv .venv-blender
 	@.venv-blender/bin/python -c 'import bpy' 2>/dev/null || .venv-blender/bin/python -m pip install --quiet 'bpy==4.5.*'
 	$(PY) -m pytest -q tests/test_blender.py $(PYTEST_ARGS)
+	$(PY) -m pytest -q tests/test_blender_addon.py $(PYTEST_ARGS)
 
 # the Blender add-on (blender/inflo_blender/, docs/blender.md): a zip for Edit > Preferences >
 # Add-ons (Blender 4.2 and 4.5 LTS); standard library only, no venv needed
