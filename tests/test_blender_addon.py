@@ -249,7 +249,7 @@ def test_addon_builds_in_background(bpy_python, addon_zip, tmp_path):
     parts = {"tepals": list_obj_sequence(build / "canopy"), "column": list_obj_sequence(build / "column_obj")}
     check_import(rep, "lily", parts, load_color_file(proj / "pipelines" / "lily" / "colors.toml"), 100,
                  build / "lily.usdc")
-    assert "inflo: lily (draft): 5/7 canopy · fccompose" in r.stdout, r.stdout[-2000:]
+    assert "inflo: lily (draft): 6/7 canopy · fccompose" in r.stdout, r.stdout[-2000:]
     assert "inflo: built lily (draft)" in r.stdout
     print(f"draft lily built and imported in {rep['seconds']:.1f} s")
 

@@ -81,12 +81,19 @@ def test_build_steps():
     lily = core.species_by_name(REPO, "lily")
     steps = core.build_steps(REPO, lily, "draft")
     assert steps[0] == core.Step("venv", ("make", "-C", str(REPO), "--no-print-directory", "venv"))
-    assert [s.label for s in steps[1:]] == [s for s in lily.stages if s not in ("pictures", "check")]
+    assert steps[1].argv[-1] == str(REPO / "build" / "lily" / "quality.txt")
+    assert [s.label for s in steps[2:]] == ["frames", "obj", "column", "canopy", "usd"]
     assert steps[-1].argv == ("make", "-C", str(REPO / "pipelines" / "lily"), "--no-print-directory",
                               "QUALITY=draft", "usd")
-    assert [s.label for s in core.build_steps(REPO, lily, "final", "all")[1:]] == list(lily.stages)
+    assert [s.label for s in core.build_steps(REPO, lily, "final", "all")[2:]] == list(lily.stages)
     with pytest.raises(ValueError, match="draft or final"):
         core.build_steps(REPO, lily, "best")
+    # every stage a [usd] part is under is built (its folder), whatever its name
+    for sp in core.find_species(REPO)[0]:
+        labels = [s.label for s in core.build_steps(REPO, sp, "draft")]
+        assert labels[-1] == "usd" and not {"pictures", "check"} & set(labels)
+        assert {p.split("/")[0] for p in sp.usd_parts} & set(sp.stages) <= set(labels)
+    assert lily.usd_parts == ("canopy", "column_obj")
     env = core.build_env(REPO, {"PATH": "/usr/bin", "PYTHONHOME": "/blender/python", "PYTHONPATH": "x"})
     assert env == {"PATH": f"{REPO}/.venv/bin{os.pathsep}/usr/bin"}
 
@@ -136,6 +143,8 @@ def test_error_line():
 
 TOY_SPECIES = 'name = "toy"\ntitle = "A toy"\nfamily = "head"\nstages = ["frames", "check", "usd"]\n'
 TOY_MAKEFILE = """\
+%/quality.txt:
+\t@mkdir -p $(@D) && echo $(QUALITY) > $@
 frames:
 \t@mkdir -p out && for i in 0 1 2; do touch out/frame_000$$i.obj; done
 \tfloret-animate -q a.floret -o out
@@ -167,9 +176,10 @@ def test_build_runs_fails_and_cancels(toy):
     project, sp = toy
     lines = []
     b = core.BuildProcess(project, sp, "draft")
-    assert [s.label for s in b.steps] == ["venv", "frames", "usd"]
+    assert [s.label for s in b.steps] == ["venv", "quality", "frames", "usd"]
     assert b.run(lambda stream, line: lines.append((stream, line.rstrip()))) == 0
     assert (sp.folder / "done").is_file() and ("out", "checked") not in lines
+    assert (project / "build" / "toy" / "quality.txt").read_text() == "draft\n"
     assert b.progress.stage == "usd"
     # the frames step's tool and its output folder, relative to the species folder make runs in
     p = core.Progress("toy", "draft", n_steps=3)

@@ -30,9 +30,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 QUALITIES = ("draft", "final")
-# the stages that make the USD's inputs; "pictures" (canopy-render's stills, sheets, GIFs) and
-# "check" are left out of a Blender build unless every stage is asked for (scope "all")
-NOT_FOR_USD = ("pictures", "check")
+# stages that make no input of the USD: canopy-render's pictures, the check, and the figures'
+# variants (the lily's and yarrow's subdivided keyframes, the dahlia's packed head, the lilac
+# without collisions); left out of a Blender build (scope "usd") unless a [usd] part is under
+# the stage's folder, run with every stage (scope "all", which is `make <species>`)
+NOT_FOR_USD = ("pictures", "check", "smooth", "painted", "packed", "canopy_off")
 
 
 # --------------------------------------------------------------------------------------- species
@@ -44,6 +46,7 @@ class Species:
     family: str
     stages: tuple[str, ...]
     folder: Path
+    usd_parts: tuple[str, ...] = ()  # the [usd] parts' paths under build/<species>/
 
 
 def find_species(project) -> tuple[list[Species], list[str]]:
@@ -66,8 +69,10 @@ def find_species(project) -> tuple[list[Species], list[str]]:
             continue
         title = data.get("title") if isinstance(data.get("title"), str) else name
         stages = data.get("stages") if isinstance(data.get("stages"), list) else []
-        found.append(Species(name, title, str(data.get("family", "")),
-                             tuple(str(s) for s in stages), path.parent))
+        usd = data.get("usd") if isinstance(data.get("usd"), dict) else {}
+        parts = usd.get("parts") if isinstance(usd.get("parts"), dict) else {}
+        found.append(Species(name, title, str(data.get("family", "")), tuple(str(s) for s in stages),
+                             path.parent, tuple(str(v) for v in parts.values())))
     return found, errors
 
 
@@ -115,17 +120,24 @@ class Step:
 def build_steps(project, species: Species, quality: str, scope: str = "usd") -> list[Step]:
     """The make commands of a build: the project's venv (``make venv``: made on first use,
     0.1 s when current), then ``make -C pipelines/<species> QUALITY=q <stage>`` for each stage of
-    its species.toml in order (scope ``usd``: those the USD needs, no pictures or check; ``all``:
-    every stage, which is ``make <species>``), ending with ``usd``."""
+    its species.toml in order (scope ``usd``: those the USD needs, :data:`NOT_FOR_USD` left out;
+    ``all``: every stage, which is ``make <species>``), ending with ``usd``."""
     if quality not in QUALITIES:
         raise ValueError(f"quality must be draft or final, found {quality!r}")
     if scope not in ("usd", "all"):
         raise ValueError(f"scope must be usd or all, found {scope!r}")
     root = str(Path(os.path.expanduser(str(project))))
-    stages = [s for s in species.stages if scope == "all" or s not in NOT_FOR_USD]
+    tops = {p.split("/")[0] for p in species.usd_parts}
+    stages = [s for s in species.stages if scope == "all" or s not in NOT_FOR_USD or s in tops]
     if "usd" not in stages:
         stages.append("usd")
     steps = [Step("venv", ("make", "-C", root, "--no-print-directory", "venv"))]
+    # build/<species>/quality.txt (pipelines/common.mk): what the build's quality is, which the
+    # stages the USD needs do not all write; named as make names it, from the real path of the
+    # folder make runs in
+    real = Path(os.path.realpath(species.folder))
+    steps.append(Step("quality", ("make", "-C", str(species.folder), "--no-print-directory", f"QUALITY={quality}",
+                                  str(real.parent.parent / "build" / species.name / "quality.txt"))))
     for s in stages:
         steps.append(Step(s, ("make", "-C", str(species.folder), "--no-print-directory", f"QUALITY={quality}", s)))
     return steps
