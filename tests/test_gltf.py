@@ -198,3 +198,34 @@ def test_every_nth_frame_keeps_the_last_and_the_duration(build):
     np.testing.assert_allclose(frames[1][faces], obj.vertices[obj.faces], atol=1.01 * step)
     res = _run(seq, "--every", 2, "-o", tmp / "e.usdc")
     assert res.exit_code == 2 and "--every" in res.output
+
+
+
+def test_a_part_whose_vertex_count_changes_is_a_flip_book(tmp_path):
+    """Branches rebuilt every frame (their vertex count changes): one node per frame with that
+    frame's mesh, scaled 1 at its frame only by a STEP animation, and an empty first frame left out."""
+    from inflo.tools.canopy_export import cli as export_cli
+    from inflo.tools.canopy_export.gltf import glb_chunks
+
+    seq = tmp_path / "branches"
+    seq.mkdir()
+    (seq / "frame_0000.obj").write_text("# empty\n")
+    (seq / "frame_0001.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    (seq / "frame_0002.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 2 0\nf 1 2 3\nf 1 3 4\n")
+    out = tmp_path / "b.glb"
+    res = CliRunner().invoke(export_cli.main, ["-q", str(seq), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    doc, blob = glb_chunks(out.read_bytes())
+    frames = [n for n in doc["nodes"] if "extras" in n and "frame" in n["extras"]]
+    assert [n["extras"]["frame"] for n in frames] == [2, 3]
+    assert all(n["scale"] == [0.0, 0.0, 0.0] for n in frames)  # frame 1 (empty) is what shows first
+    counts = [doc["accessors"][doc["meshes"][n["mesh"]]["primitives"][0]["attributes"]["POSITION"]]["count"]
+              for n in frames]
+    assert counts == [3, 4]
+    anim = doc["animations"][0]
+    steps = [s for s in anim["samplers"] if s["interpolation"] == "STEP"]
+    assert len(steps) == 2 and {c["target"]["path"] for c in anim["channels"]} == {"scale"}
+    acc = doc["accessors"][steps[1]["output"]]
+    view = doc["bufferViews"][acc["bufferView"]]
+    sc = np.frombuffer(blob, np.float32, acc["count"] * 3, view.get("byteOffset", 0)).reshape(-1, 3)
+    assert sc[:, 0].tolist() == [0.0, 0.0, 1.0]

@@ -178,7 +178,41 @@ class GltfBuilder:
         n_targets_max = 0
         n_triangles = 0
         bounds = []  # per part (min, max) over every frame, moved by --translate
+        flips = []  # (node, frame) of the flip-book parts' frame nodes
         for part in self.parts:
+            if not part.static and len({len(v) for v in part.positions}) > 1:
+                # a part whose vertex count changes (branches that grow, rebuilt every frame: their
+                # vertex k is not one point through time) is a flip book: a node per frame holding
+                # that frame's mesh, shown (scale 1) at its frame only by a STEP animation of scales
+                move = np.asarray(self.translate.get(part.name, (0.0, 0.0, 0.0)), dtype=np.float64)
+                starts = [smp[0] for smp in part.samples]
+                most = 0
+                for k, v in enumerate(part.positions):
+                    _, fcs, names = part.samples[int(np.searchsorted(starts, k, side="right")) - 1]
+                    if not len(v) or not len(fcs):
+                        continue
+                    v = np.asarray(v, dtype=np.float64)
+                    bounds.append((v.min(axis=0) + move, v.max(axis=0) + move))
+                    most = max(most, len(fcs))
+                    position = vec3(v, None)
+                    mats = np.array([self._material_index(part, nm) for nm in names], np.int64)
+                    index_type = _USHORT if len(v) < 65535 else _UINT
+                    prims = []
+                    for m in sorted(set(mats.tolist())):
+                        tri = fcs[mats == m].astype(np.uint16 if index_type == _USHORT else np.uint32)
+                        view = add_view(tri.tobytes(), _ELEMENT_ARRAY_BUFFER)
+                        prims.append({"attributes": {"POSITION": position}, "mode": 4, "material": int(m),
+                                      "indices": add_accessor(view, index_type, tri.size, "SCALAR")})
+                    meshes.append({"name": f"{part.name}_{k + 1:04d}", "primitives": prims})
+                    node = {"name": f"{part.name}_{k + 1:04d}", "mesh": len(meshes) - 1,
+                            "scale": [1.0 if k == 0 else 0.0] * 3, "extras": {"part": part.name, "frame": k + 1}}
+                    if move.any():
+                        node["translation"] = [float(x) for x in move]
+                    nodes.append(node)
+                    flips.append((len(nodes) - 1, k))
+                part.positions = []
+                n_triangles += most
+                continue
             frames = np.stack(part.positions)  # (F, n, 3)
             part.positions = []
             nv = frames.shape[1]
@@ -292,11 +326,18 @@ class GltfBuilder:
                               "pbrMetallicRoughness": {"baseColorFactor": [*lin, 1.0], "metallicFactor": 0.0,
                                                        "roughnessFactor": 0.6}})
         animations = []
-        if channels:
+        if channels or flips:
             times = np.arange(self.n_frames, dtype=np.float32) / np.float32(self.fps)
             tview = add_view(times.tobytes())
             tacc = add_accessor(tview, _FLOAT, len(times), "SCALAR", lo=[times[0]], hi=[times[-1]])
             anim = {"name": "growth", "channels": [], "samplers": []}
+            for node, k in flips:
+                sc = np.zeros((self.n_frames, 3), np.float32)
+                sc[k] = 1.0
+                out = add_accessor(add_view(sc.tobytes()), _FLOAT, self.n_frames, "VEC3")
+                anim["samplers"].append({"input": tacc, "output": out, "interpolation": "STEP"})
+                anim["channels"].append({"sampler": len(anim["samplers"]) - 1,
+                                         "target": {"node": node, "path": "scale"}})
             out_by_count = {}
             for count, node in zip(samplers, channels):
                 if count not in out_by_count:

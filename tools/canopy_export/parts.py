@@ -7,8 +7,9 @@ the file's stem). Every sequence exported together must have the same number of 
 called (``frame_0000.obj`` ... or ``1.obj`` ...).
 
 :func:`iter_frames` reads the frames one at a time and checks each part's topology as it goes: a
-frame may change the faces (florets emerging), but not the vertex count (vertex *k* is the same
-point in every frame, formats/obj.md). Sequences follow fccompose's rules: numbered without a gap,
+frame may change the faces (florets emerging, branches growing) and with them the vertex count,
+but a frame with the previous frame's faces must also have its vertex count (vertex *k* is the
+same point in every frame, formats/obj.md). Sequences follow fccompose's rules: numbered without a gap,
 no empty frame file; coordinates must fit float32.
 """
 from __future__ import annotations
@@ -171,12 +172,12 @@ def _check_topology(part: Part, frame: int, mesh: ObjMesh, prev: ObjMesh, first:
                 else f"the {first.n_faces} faces")
         found = str(mesh.n_vertices) if mesh.n_vertices != first.n_vertices else "other faces"
         raise FormatError(path, None, f"{what} of {part.paths[0].name} (constant topology)", found)
-    if mesh.n_vertices != prev.n_vertices:
-        # vertex k is the same point in every frame (formats/obj.md): faces may change (florets
-        # emerging), the vertices may not
-        raise FormatError(path, None, f"{prev.n_vertices} vertices as in {part.path(frame - 1).name} (vertex k is "
-                          "the same point in every frame; faces may change, the vertex count may not)",
-                          str(mesh.n_vertices))
+    if same_faces and mesh.n_vertices != prev.n_vertices:
+        # vertex k is the same point in every frame (formats/obj.md): a frame with its predecessor's
+        # faces has its vertices too; one whose faces change may add or drop vertices (branches
+        # that grow: branch-gen's frames, time-sampled points in USD, padded in a .glb)
+        raise FormatError(path, None, f"{prev.n_vertices} vertices as in {part.path(frame - 1).name} (the same "
+                          "faces; vertex k is the same point in every frame)", str(mesh.n_vertices))
     return not same_faces
 
 
