@@ -109,3 +109,56 @@ def file_digests(folder, skip=()) -> dict:
     folder = Path(folder)
     return {p.relative_to(folder).as_posix(): hashlib.md5(p.read_bytes()).hexdigest()
             for p in sorted(folder.rglob("*")) if p.is_file() and p.name not in skip}
+
+
+# ---- a real browser (the viewer page's tests) ------------------------------------------------------
+BROWSERS = ("chromium-headless-shell", "chromium", "chromium-browser")
+VIEWER_BACKGROUND = (0xF2, 0xF1, 0xEC)  # the viewer page's background colour
+
+
+def find_browser() -> str | None:
+    """A headless Chromium on PATH (Debian's chromium-headless-shell or chromium), or None."""
+    import shutil
+
+    for name in BROWSERS:
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def test_artefacts_folder() -> Path:
+    """Where tests keep pictures worth looking at: build/test-artefacts/ (INFLO_ARTEFACTS elsewhere)."""
+    folder = Path(os.environ.get("INFLO_ARTEFACTS", REPO / "build" / "test-artefacts"))
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+test_artefacts_folder.__test__ = False  # a helper, not a test
+
+
+def browser_screenshot(browser: str, url: str, target: Path):
+    """A 640x480 screenshot of ``url`` (software WebGL) saved as ``target``, as an int16 RGB array."""
+    import numpy as np
+    from PIL import Image
+
+    target.unlink(missing_ok=True)
+    cmd = [browser, "--headless", "--no-sandbox", "--disable-gpu-sandbox", "--use-angle=swiftshader",
+           "--enable-unsafe-swiftshader", "--hide-scrollbars", "--window-size=640,480",
+           "--virtual-time-budget=15000", f"--screenshot={target}", url]
+    if os.path.basename(browser) != "chromium-headless-shell":
+        cmd.insert(1, "--headless=new")
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert target.is_file(), f"no screenshot from {browser}: {proc.stderr[-2000:]}"
+    return np.asarray(Image.open(target).convert("RGB"), dtype=np.int16)
+
+
+def silhouette_iou(png, still) -> tuple:
+    """Blender's render (a PNG with alpha) against canopy-render's still (white background): the
+    intersection over union of the two silhouettes, and the share of the render's pixels drawn."""
+    import numpy as np
+    from PIL import Image
+
+    alpha = np.asarray(Image.open(png).convert("RGBA"))[..., 3] > 127
+    drawn = np.any(np.abs(still.astype(int) - 255) > 24, axis=2)
+    return float(np.sum(alpha & drawn) / np.sum(alpha | drawn)), float(alpha.mean())

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
 import subprocess
 import urllib.request
 from pathlib import Path
@@ -19,21 +18,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import BROWSERS, VIEWER_BACKGROUND, browser_screenshot, find_browser, test_artefacts_folder
 
 from inflo.tools.canopy_export import cli as export_cli
 from inflo.tools.canopy_view import cli as view_cli
 
-BROWSERS = ("chromium-headless-shell", "chromium", "chromium-browser")
-BACKGROUND = (0xF2, 0xF1, 0xEC)  # the page's background colour
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _browser() -> str | None:
-    for name in BROWSERS:
-        path = shutil.which(name)
-        if path:
-            return path
-    return None
 
 
 def _flower_frames(folder: Path, n_frames: int = 100) -> None:
@@ -80,26 +70,6 @@ def viewer(tmp_path_factory):
     return tmp / "build"
 
 
-def _artefacts() -> Path:
-    folder = Path(os.environ.get("INFLO_ARTEFACTS", ROOT / "build" / "test-artefacts"))
-    folder.mkdir(parents=True, exist_ok=True)
-    return folder
-
-
-def _screenshot(browser: str, url: str, target: Path) -> np.ndarray:
-    from PIL import Image
-
-    target.unlink(missing_ok=True)
-    cmd = [browser, "--headless", "--no-sandbox", "--disable-gpu-sandbox", "--use-angle=swiftshader",
-           "--enable-unsafe-swiftshader", "--hide-scrollbars", "--window-size=640,480",
-           "--virtual-time-budget=15000", f"--screenshot={target}", url]
-    if os.path.basename(browser) != "chromium-headless-shell":
-        cmd.insert(1, "--headless=new")
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    assert target.is_file(), f"no screenshot from {browser}: {proc.stderr[-2000:]}"
-    return np.asarray(Image.open(target).convert("RGB"), dtype=np.int16)
-
-
 def _body(browser: str, url: str) -> str:
     """The page's <body> tag after some seconds of (virtual) time."""
     cmd = [browser, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
@@ -111,7 +81,7 @@ def _body(browser: str, url: str) -> str:
 
 
 def test_the_page_draws_the_flower_and_its_frames_differ(viewer):
-    browser = _browser()
+    browser = find_browser()
     if browser is None:
         pytest.skip("no headless Chromium found (looked for " + ", ".join(BROWSERS) + "): install it as root with "
                     "'apt-get install -y chromium-headless-shell' (make's set-up does where it can)")
@@ -122,9 +92,9 @@ def test_the_page_draws_the_flower_and_its_frames_differ(viewer):
             assert r.status == 200 and b"Test flower" in r.read()
         with urllib.request.urlopen(base.replace("index.html", "flower.glb"), timeout=10) as r:
             assert r.headers["Content-Type"] == "model/gltf-binary" and r.read(4) == b"glTF"
-        out = _artefacts()
-        first = _screenshot(browser, base + "?frame=1", out / "canopy_view_frame_1.png")
-        last = _screenshot(browser, base + "?frame=100", out / "canopy_view_frame_100.png")
+        out = test_artefacts_folder()
+        first = browser_screenshot(browser, base + "?frame=1", out / "canopy_view_frame_1.png")
+        last = browser_screenshot(browser, base + "?frame=100", out / "canopy_view_frame_100.png")
         # opened without ?frame it plays: some frames on, the slider's frame is past the first
         body = _body(browser, base)
         assert 'data-ready="1"' in body and int(body.split('data-frame="')[1].split('"')[0]) > 1, body
@@ -136,7 +106,7 @@ def test_the_page_draws_the_flower_and_its_frames_differ(viewer):
     # the model's area: below the title, above the frame bar
     body = (slice(int(0.15 * h), int(0.85 * h)), slice(0, w))
     for shot in (first, last):
-        drawn = np.abs(shot[body] - np.array(BACKGROUND)).sum(axis=2) > 30
+        drawn = np.abs(shot[body] - np.array(VIEWER_BACKGROUND)).sum(axis=2) > 30
         assert drawn.mean() > 0.005, f"the flower is not drawn ({drawn.mean():.4f} of the pixels differ)"
     changed = np.abs(first[body] - last[body]).sum(axis=2) > 30
     assert changed.mean() > 0.01, f"frames 1 and 100 look the same ({changed.mean():.4f} of the pixels differ)"

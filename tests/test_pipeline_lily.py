@@ -488,7 +488,6 @@ def test_built_lily_viewer_plays_the_opening_in_a_browser():
     tests built the lily's stages but not it): served by canopy-view's server
     and opened in headless Chromium, the page draws the lily at frame 1 (the bud) and at frame 100
     (the open flower), and the two differ; the screenshots are kept in build/test-artefacts/."""
-    import importlib.util
     import urllib.request
 
     page = BUILD / "viewer" / "index.html"
@@ -500,10 +499,9 @@ def test_built_lily_viewer_plays_the_opening_in_a_browser():
         assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     if not page.is_file():
         pytest.skip("make lily has not been run")
-    spec = importlib.util.spec_from_file_location("viewer_test", REPO / "tests" / "test_canopy_view.py")
-    vt = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(vt)
-    browser = vt._browser()
+    from conftest import VIEWER_BACKGROUND, browser_screenshot, find_browser, test_artefacts_folder
+
+    browser = find_browser()
     if browser is None:
         pytest.skip("no headless Chromium found: install it as root with 'apt-get install -y chromium-headless-shell'")
     from inflo.tools.canopy_view import cli as view_cli
@@ -513,15 +511,15 @@ def test_built_lily_viewer_plays_the_opening_in_a_browser():
         base = f"http://127.0.0.1:{server.server_address[1]}/index.html"
         with urllib.request.urlopen(base.replace("index.html", "lily.glb"), timeout=10) as r:
             assert r.read(4) == b"glTF"
-        out = vt._artefacts()
-        bud = vt._screenshot(browser, base + "?frame=1", out / "lily_viewer_frame_1.png")
-        open_ = vt._screenshot(browser, base + "?frame=100", out / "lily_viewer_frame_100.png")
+        out = test_artefacts_folder()
+        bud = browser_screenshot(browser, base + "?frame=1", out / "lily_viewer_frame_1.png")
+        open_ = browser_screenshot(browser, base + "?frame=100", out / "lily_viewer_frame_100.png")
     finally:
         server.shutdown()
         server.server_close()
     h, w, _ = bud.shape
     body = (slice(int(0.15 * h), int(0.85 * h)), slice(0, w))
-    drawn = [float((np.abs(s[body] - np.array(vt.BACKGROUND)).sum(axis=2) > 30).mean()) for s in (bud, open_)]
+    drawn = [float((np.abs(s[body] - np.array(VIEWER_BACKGROUND)).sum(axis=2) > 30).mean()) for s in (bud, open_)]
     assert drawn[0] > 0.002 and drawn[1] > 0.01, f"the lily is not drawn: {drawn}"
     # the open flower covers more of the page than the bud
     assert drawn[1] > 1.5 * drawn[0], drawn
