@@ -396,6 +396,17 @@ def test_branch_gen_cli_rba_frames(tmp_path, write):
     d, _ = cKDTree(last.vertices).query(pos)
     assert np.all(d < 1e-6), "in the last frame the tips sit on the florets of that frame"
     assert no_partial_files(out)
+    # a rerun replaces the earlier run's own files, never mixes them, and keeps a user's file
+    (out / "frames" / "notes.txt").write_text("mine\n")
+    r = run_cli("branch-gen", scn, prm, "--rba", tmp_path / "rba", "--frame-step", "4", "-o", out, "-q")
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in (out / "frames").iterdir()) == ["branches_0000.obj", "branches_0004.obj",
+                                                                  "branches_0005.obj", "notes.txt"]
+    r = run_cli("branch-gen", scn, prm, "-o", out, "-q")
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in (out / "frames").iterdir()) == ["notes.txt"]
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [
+        "branches.obj", "frames", "skeleton.obj", "skeleton.radii"]
 
 
 @pytest.mark.parametrize("toml, match", [

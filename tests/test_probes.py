@@ -197,6 +197,9 @@ def hostile(tmp_path):
     _venation(d / "ven", "slow.toml", rate=1e-300)
     (d / "ven" / "mesh.toml").write_text((d / "ven" / "ok.toml").read_text() + "[output]\nmesh_spacing = 1e-300\n")
     (d / "ven" / "wide.toml").write_text((d / "ven" / "ok.toml").read_text() + "[width]\ntip = 1e300\n")
+    _venation(d / "ven", "bigtex.toml", tex=16384)  # frame textures of 16384^2 pixels: 32 at most
+    (d / "ven" / "frametex.toml").write_text((d / "ven" / "bigtex.toml").read_text()
+                                             + "[output]\nframe_step = 1\nframe_textures = true\n")
     # petal-grow: a small petal, its bud named like a frame in one folder
     pg = d / "pg"
     pg.mkdir()
@@ -296,6 +299,11 @@ HOSTILE = [
     ("venation", ["{d}/ven/ok.toml", "--seed", "-1", "-o", "{d}/v5"], "--seed", "{d}/v5"),
     ("venation", ["{d}/ven/mesh.toml", "-o", "{d}/v6"], "output.mesh_spacing >= the final blade's extent", "{d}/v6"),
     ("venation", ["{d}/ven/wide.toml", "-o", "{d}/v7"], "width.tip <= 1e6", "{d}/v7"),
+    ("venation", ["{d}/ven/frametex.toml", "-o", "{d}/v8"], "expected output.frame_step: a frame step of at most",
+     "{d}/v8"),
+    ("venation", ["{d}/ven/bigtex.toml", "--frame-step", "1", "--frame-textures", "-o", "{d}/v9"],
+     "--frame-step: expected a frame step of at most 10000 frames and 8589934592 texture pixels", "{d}/v9"),
+    ("venation", ["{d}/ven/ok.toml", "--frame-step", "0", "-o", "{d}/afile"], "expected an output folder", "{d}/afile/x"),
     ("venation", ["{d}/ven/ok.toml", "-o", "{d}/afile"], "expected an output folder, found a file", "{d}/afile/x"),
     ("venation", ["{d}/ven/ok.toml", "-o", "{d}/ven/ok.toml"], "expected an output folder, found a file",
      "{d}/ven/veins.obj"),
@@ -340,6 +348,12 @@ HOSTILE = [
     ("subdivide", ["{d}/one.obj", "-o", "{d}/one.obj"], "that is the input mesh", "{d}/one.obj.bak"),
     ("subdivide", ["{d}/sub", "-o", "{d}/sub"], "that holds the input mesh", "{d}/sub/frame_0001.obj"),
     ("subdivide", ["{d}/one.obj", "-o", "{d}/afile/s.obj"], "whose parents are folders", "{d}/afile/s.obj"),
+    ("dimorph", ["{d}/head.scn", "--alpha", "90", "-o", "{d}/head.scn"], "that is the input scene",
+     "{d}/head.scn.bak"),
+    ("dimorph", ["{d}/head.scn", "--alpha", "90", "-o", "{d}/afile/t.scn"], "whose parents are folders",
+     "{d}/afile/t.scn"),
+    ("branch-gen", ["{d}/head.scn", "-o", "{d}/afile"], "expected an output folder, found a file",
+     "{d}/afile/branches.obj"),
     ("branch-gen", ["{d}/head.scn", "--seed", "-5", "-o", "{d}/b1"], "--seed", "{d}/b1"),
     ("branch-gen", ["{d}/head.scn", "{d}/bgseed.toml", "-o", "{d}/b2"], "a seed in [0, 4294967295]", "{d}/b2"),
     ("inflo-sweep", ["{d}/sw/in.toml", "-o", "{d}/sw/inp/out"], "outside the folders each variant copies",
@@ -408,4 +422,46 @@ def test_petal_grow_rerun_replaces_its_own_frames_only(hostile):
     r = run_cli("petal-grow", "-q", hostile / "pg" / "ok.toml", "--keyframes", "2", "-o", out)
     assert r.returncode == 0, r.stderr
     assert sorted(p.name for p in out.glob("*.obj")) == ["frame_0000.obj", "frame_0001.obj", "mine.obj"]
+    assert not any(p.name.startswith(".staging") for p in out.iterdir())
+
+
+def test_subdivide_rerun_replaces_its_own_frames_only(hostile):
+    """A sequence rerun into the folder of an earlier one: its frames replace the earlier run's
+    (a shorter sequence leaves none of the earlier frames behind), a user's file stays, no
+    staging folder is left."""
+    import shutil
+
+    seq = hostile / "sub"
+    shutil.copy(seq / "frame_0000.obj", seq / "frame_0001.obj")
+    out = hostile / "subo"
+    r = run_cli("subdivide", "-q", seq, "--no-collisions", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in out.glob("*.obj")) == ["frame_0000.obj", "frame_0001.obj"]
+    (out / "mine.obj").write_text("# a user's file\n")
+    (seq / "frame_0001.obj").unlink()
+    r = run_cli("subdivide", "-q", seq, "--no-collisions", "--levels", "2", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in out.glob("*.obj")) == ["frame_0000.obj", "mine.obj"]
+    assert sum(line.startswith("f ") for line in (out / "frame_0000.obj").read_text().splitlines()) == 32
+    assert not any(p.name.startswith(".staging") for p in out.iterdir())
+
+
+def test_phyllotaxis_rerun_is_whole_or_not_at_all(hostile):
+    """A rerun that fails keeps the earlier scene and frames; a complete one replaces them and
+    leaves the other files of the folder alone."""
+    vogel = REPO / "pipelines" / "examples" / "sweeps" / "vogel.toml"
+    out = hostile / "ph"
+    r = run_cli("phyllotaxis", "-q", vogel, "-o", out)
+    assert r.returncode == 0, r.stderr
+    first = (out / "scene.scn").read_bytes()
+    (out / "mine.txt").write_text("mine\n")
+    r = run_cli("phyllotaxis", "-q", hostile / "tiny.toml", "-o", out)  # refused: a huge primordium count
+    assert r.returncode == 2, r.stderr
+    assert (out / "scene.scn").read_bytes() == first
+    small = hostile / "small.toml"
+    small.write_text(vogel.read_text().replace("count = 100", "count = 50"))
+    r = run_cli("phyllotaxis", "-q", small, "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert (out / "scene.scn").read_bytes() != first
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["mine.txt", "scene.scn"]
     assert not any(p.name.startswith(".staging") for p in out.iterdir())

@@ -14,11 +14,12 @@ import warnings
 
 import click
 
+from inflo.formats.atomic import staged_output
 from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import read_scn
 from inflo.tools.common.cli import SEED, inflo_command, progress
 
-from .generate import branch_gen, write_branch_gen
+from .generate import OUTPUT_FILES, branch_gen, write_branch_gen
 from .params import read_params
 
 
@@ -59,10 +60,14 @@ def _run(scene, params, output, rba, frame_step, algorithm, seed, base, quiet):
     sc = read_scn(scene) if algo == "rodkaew" else None
     frames = read_rba_sequence(rba, sc)[1] if rba and algo == "rodkaew" else None
     total = len(sc) if sc is not None else p.sca.n_points
-    with progress(length=max(total, 1), label="branch-gen", quiet=quiet) as bar:
-        result = branch_gen(sc, p, rba_frames=frames, algorithm=algo, frame_step=frame_step,
-                            progress=bar.update)
-    write_branch_gen(output, result, p)
+    inputs = [(scene, "scene"), (params, "parameter file"), (rba, "RBA folder")]
+    # a rerun replaces the earlier run's files only when it completes (never new branches with an
+    # old run's frames)
+    with staged_output(output, "branch-gen", stale_patterns=OUTPUT_FILES, inputs=inputs) as stage:
+        with progress(length=max(total, 1), label="branch-gen", quiet=quiet) as bar:
+            result = branch_gen(sc, p, rba_frames=frames, algorithm=algo, frame_step=frame_step,
+                                progress=bar.update)
+        write_branch_gen(stage, result, p)
     if not quiet:
         click.echo(f"branch-gen: {result.node_pos.shape[0]} skeleton nodes, {len(result.chain_list)} branches, "
                    f"{result.branches_mesh.n_faces} triangles -> {output}", err=True)

@@ -279,6 +279,11 @@ def format_radii(radius, header: str = "") -> str:
     return "".join(lines)
 
 
+#: the files :func:`write_branch_gen` writes, as patterns relative to its folder (a rerun's own
+#: earlier files where the folder has no manifest yet)
+OUTPUT_FILES = (r"skeleton\.obj", r"skeleton\.radii", r"branches\.obj", r"frames/branches_\d+\.obj")
+
+
 def write_branch_gen(out_dir, result: BranchResult, params: Params) -> list:
     """Write skeleton.obj, skeleton.radii, branches.obj (and frames/) into ``out_dir``.
 

@@ -6,8 +6,11 @@ the scene file (the minimal invocation).
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
+from inflo.formats.atomic import check_output_path, refuse_output_over_inputs, staged_output
 from inflo.formats.scn import read_scn, write_scn
 from inflo.tools.common.cli import inflo_command
 
@@ -83,6 +86,8 @@ def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_sca
                           bracts, bract_id, bract_scale, petal_size, orient_rays, small_ray_scale, marginal,
                           bract_development_frames)
     check_window_options(opts)
+    check_output_path(output, folder=False)
+    refuse_output_over_inputs(output, [(scene, "input scene")], folder=False)
     sc = read_scn(scene)
     out, counts = dimorph_scene(sc, opts)
     write_scn(output, out)
@@ -118,12 +123,14 @@ def sweep(output, alpha, n_min, n_max, n_fixed, alpha_min, alpha_max, alpha_step
         raise InputError(f"cone angles must lie in (0, {top}] degrees with --alpha-min <= --alpha-max and --alpha-step > 0")
     if not 0 < divergence < 360:
         raise InputError(f"--divergence {divergence} outside (0, 360) degrees")
-    res = write_sweep(output, alpha=alpha, n_range=(n_min, n_max), n_fixed=n_fixed,
-                      alpha_range=(alpha_min, alpha_max), alpha_step=alpha_step, divergence=divergence,
-                      half_angle=half_angle)
+    own = (r"sweep_n\.csv", r"sweep_n\.png", r"sweep_alpha\.csv", r"sweep_alpha\.png")
+    with staged_output(output, "dimorph-sweep", stale_patterns=own) as stage:  # the four files of one run
+        res = write_sweep(stage, alpha=alpha, n_range=(n_min, n_max), n_fixed=n_fixed,
+                          alpha_range=(alpha_min, alpha_max), alpha_step=alpha_step, divergence=divergence,
+                          half_angle=half_angle)
     if not quiet:
         for p in res["paths"]:
-            click.echo(f"dimorph sweep: wrote {p}", err=True)
+            click.echo(f"dimorph sweep: wrote {Path(output) / Path(p).name}", err=True)
 
 
 class _SceneOrSubcommand(click.Group):

@@ -3,9 +3,10 @@ from __future__ import annotations
 
 import click
 
+from inflo.formats.atomic import staged_output
 from inflo.tools.common.cli import inflo_command, portable_path, progress
 
-from .generate import generate
+from .generate import OUTPUT_FILES, generate
 from .params import read_params
 
 
@@ -19,7 +20,10 @@ def main(params, output, png, quiet, debug):
     def bar(length, label):
         return progress(length=length, label=label, quiet=quiet)
 
-    summary = generate(p, output, progress=bar, header=f"phyllotaxis {portable_path(params)}")
+    # a rerun replaces the earlier run's files only when it completes (never a new scene.scn with
+    # an old run's RBA frames)
+    with staged_output(output, "phyllotaxis", stale_patterns=OUTPUT_FILES, inputs=[(params, "parameter file")]) as stage:
+        summary = generate(p, stage, progress=bar, header=f"phyllotaxis {portable_path(params)}")
     for msg in summary.messages:
         click.echo(f"phyllotaxis: warning: {msg}", err=True)
     if png:
@@ -29,4 +33,4 @@ def main(params, output, png, quiet, debug):
         plot_discs(png, pv["pos"], pv["diameter"], pv["age"], title=f"{summary.model}: {summary.florets} florets")
     if not quiet:
         extra = f", {summary.frames} RBA frames" if summary.frames else ""
-        click.echo(f"phyllotaxis: {summary.model}: {summary.florets} florets{extra} -> {summary.scene}", err=True)
+        click.echo(f"phyllotaxis: {summary.model}: {summary.florets} florets{extra} -> {output}/scene.scn", err=True)

@@ -51,6 +51,11 @@ def _func_or_number(spec):
     return read_func(spec) if isinstance(spec, str) else float(spec)
 
 
+#: the files a run writes in its output folder, as patterns relative to it (a rerun's own earlier
+#: files where the folder has no manifest yet)
+OUTPUT_FILES = (r"scene\.scn", r"rba/\d+\.rba", r"receptacle\.obj", r"receptacle/frame_\d+\.obj")
+
+
 def generate(params: Params, out_dir, *, progress=None, header: str | None = None) -> Summary:
     """Run the model the parameters describe and write ``out_dir/scene.scn`` (+ ``out_dir/rba/``).
 

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import click
 
-from inflo.formats.atomic import check_output_path, output_lock, refuse_output_over_inputs
+from inflo.formats.atomic import check_output_path, refuse_output_over_inputs, staged_output
 from inflo.formats.obj import list_obj_sequence, read_obj, read_obj_sequence, write_obj
 from inflo.tools.common.cli import inflo_command, progress
 
@@ -94,15 +94,19 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
         h = spacing if spacing is not None else default_spacing(meshes[0].vertices)
         resolve = collision_resolver(spacing=h, iterations=collision_iterations, max_retries=max_collision_retries)
     notes: list = []
-    with progress(length=len(meshes), label="subdivide", quiet=quiet) as bar:
-        out, reports = [], []
-        for start, stop in topology_runs(meshes):  # one subdivision plan per topology
-            o, r = subdivide_meshes(meshes[start:stop], levels, resolve=resolve, name=str(paths[start]),
-                                    on_frame=lambda k: bar.update(1), notes=notes)
-            out.extend(o)
-            reports.extend(r)
-    targets = [Path(output)] if single else [Path(output) / p.name for p in paths]
-    with contextlib.nullcontext() if single else output_lock(output, "subdivide"):
+    # a sequence goes through a staging folder: a rerun replaces the earlier run's frames only when
+    # it completes (never frames of two runs), and a second run into the folder is refused
+    staged = contextlib.nullcontext(None) if single else staged_output(
+        output, "subdivide", stale_patterns=(r"frame_\d+\.obj",), inputs=[(p, "input mesh") for p in paths])
+    with staged as stage:
+        with progress(length=len(meshes), label="subdivide", quiet=quiet) as bar:
+            out, reports = [], []
+            for start, stop in topology_runs(meshes):  # one subdivision plan per topology
+                o, r = subdivide_meshes(meshes[start:stop], levels, resolve=resolve, name=str(paths[start]),
+                                        on_frame=lambda k: bar.update(1), notes=notes)
+                out.extend(o)
+                reports.extend(r)
+        targets = [Path(output)] if single else [Path(stage) / p.name for p in paths]
         for t, m in zip(targets, out):
             write_obj(t, m)
     if not quiet:

@@ -14,11 +14,12 @@ import math
 
 import click
 
+from inflo.formats.atomic import staged_output
 from inflo.formats.errors import InputError
 from inflo.formats.obj import read_obj
 from inflo.tools.common.cli import inflo_command
 
-from .generate import thyrse, write_thyrse
+from .generate import OUTPUT_FILES, thyrse, write_thyrse
 from .params import read_params
 
 
@@ -42,8 +43,11 @@ def main(params, output, base, rooms, quiet, debug):
         if m.n_faces == 0:
             raise InputError(f"{path}: expected a floret model with triangles (--room), found none")
         models.append((m.vertices, m.faces))
-    result = thyrse(p, models)
-    write_thyrse(output, result, p)
+    inputs = [(params, "parameter file")] + [(r, "floret model") for r in rooms]
+    # a rerun replaces the earlier run's files only when it completes
+    with staged_output(output, "thyrse", stale_patterns=OUTPUT_FILES, inputs=inputs) as stage:
+        result = thyrse(p, models)
+        write_thyrse(stage, result, p)
     if not quiet:
         click.echo(f"thyrse: {len(result.layout.floret_node)} florets, {len(result.branches.chain_list)} branches, "
                    f"{result.branches.branches_mesh.n_faces} triangles -> {output}", err=True)

@@ -43,6 +43,7 @@ import numpy as np
 from inflo.formats.errors import InputError
 from inflo.formats.obj import ObjMesh, write_obj
 from inflo.formats.scn import Placement, Scene, write_scn
+from inflo.tools.branch_gen.generate import OUTPUT_FILES as BRANCH_GEN_FILES
 from inflo.tools.branch_gen.generate import BranchResult, skeleton_geometry, write_branch_gen
 from inflo.tools.branch_gen.skeleton import Skeleton
 from inflo.tools.common import linalg as la
@@ -569,6 +570,10 @@ def thyrse(p: Params, rooms=()) -> ThyrseResult:
     br = BranchResult(skeleton=sk, node_pos=lay.node_pos, node_parent=lay.node_parent, node_tip=lay.node_tip,
                       node_radius=radius, chain_list=chain_list, skeleton_mesh=skel, branches_mesh=mesh, header=head)
     return ThyrseResult(layout=lay, scene=scene, branches=br, obstacle=ob)
+
+
+#: the files :func:`write_thyrse` writes, as patterns relative to its folder
+OUTPUT_FILES = (r"scene\.scn", *BRANCH_GEN_FILES, r"obstacle/frame_0000\.obj")
 
 
 def write_thyrse(out_dir, result: ThyrseResult, p: Params) -> list:

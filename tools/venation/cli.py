@@ -15,7 +15,7 @@ from inflo.formats.atomic import staged_output
 from inflo.tools.common.cli import SEED, inflo_command, progress, stall_notice
 
 from .generate import run_venation, summary
-from .params import load_inputs, read_params
+from .params import check_frames, load_inputs, read_params
 
 
 @inflo_command("venation", help="Grow open or closed leaf venation patterns in a growing blade (Runions ch. 4).")
@@ -29,6 +29,9 @@ from .params import load_inputs, read_params
 def main(params, output, seed, frame_step, frame_textures, quiet, debug):
     p = read_params(params)
     inputs = load_inputs(p)
+    check_frames(p, inputs, p.output.frame_step if frame_step is None else frame_step,
+                 p.output.frame_textures if frame_textures is None else frame_textures,
+                 option=frame_step is not None)
     limit = max(p.run.max_iterations, 1)
     scale = p.growth.scale
     files = [params] + ([p.blade.contour] if p.blade.contour else []) + (

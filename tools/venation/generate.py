@@ -29,7 +29,7 @@ from .output import (
     write_margin,
     write_widths,
 )
-from .params import Inputs, Params
+from .params import Inputs, Params, frame_limit_error, frames_allowed
 from .simulate import SimParams, Snapshot, VenationResult, simulate
 
 __all__ = ["run_venation", "VenationRun", "sim_params", "texture_style", "summary", "finish_graph"]
@@ -130,7 +130,12 @@ def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None,
     frames: list[int] = []
     out.mkdir(parents=True, exist_ok=True)
 
+    allowed = frames_allowed(p, textures)
+
     def on_frame(snap: Snapshot):
+        if len(frames) >= allowed:  # a run that goes on past its growth (the bound checked before is a floor)
+            raise frame_limit_error(p, step, textures, option=frame_step is not None,
+                                    found=f"more than {allowed} frames by iteration {snap.iteration}")
         name = frame_name(snap.iteration, prefix="veins_")
         fdir = out / "frames"
         fpos, fpar, fext, w, _ = finish_graph(p, snap.node_pos, snap.node_parent, snap.extra_edges, sp.seed)

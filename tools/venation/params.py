@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from inflo.formats.errors import FormatError, did_you_mean, parse_toml, read_bytes, shorten
+from inflo.formats.errors import FormatError, InputError, did_you_mean, parse_toml, read_bytes, shorten
 
 from .blade import GROWTH_TYPES, Blade, Growth, blade_from_points
 
@@ -569,6 +569,42 @@ def _check_work(p: Params, blade: Blade, growth: Growth) -> None:
         fail("texture", "supersample", f"texture.size x texture.supersample <= {MAX_TEXTURE} pixels",
              f"{p.texture.size} x {p.texture.supersample} = {px}")
 
+
+MAX_FRAMES = 10_000  # frames a run writes (output.frame_step): 4 files each
+MAX_FRAME_TEXTURE_PIXELS = 1 << 33  # the pixels of every frame's texture together (output.frame_textures)
+
+
+def frame_limit_error(p: Params, step: int, textures: bool, *, option: bool, found: str) -> InputError:
+    """The one-line error of a run that would write more frames, or frame textures, than the bounds:
+    about the file's ``output.frame_step`` (its line) or the ``--frame-step`` option."""
+    px = p.texture.size ** 2
+    what = (f"at most {MAX_FRAMES} frames and {MAX_FRAME_TEXTURE_PIXELS} texture pixels in all "
+            f"({MAX_FRAME_TEXTURE_PIXELS // px} frame textures of {p.texture.size}^2)" if textures
+            else f"at most {MAX_FRAMES} frames")
+    expected = f"a frame step of {what}"
+    if option:
+        return InputError(f"--frame-step: expected {expected}, found {step}: {found}")
+    return FormatError(p.source, _line_of(p.text, "output", "frame_step"), f"output.frame_step: {expected}",
+                       f"{step}: {found}")
+
+
+def frames_allowed(p: Params, textures: bool) -> int:
+    """How many frames a run may write (frame textures count against their pixel bound too)."""
+    if not textures:
+        return MAX_FRAMES
+    return max(1, min(MAX_FRAMES, MAX_FRAME_TEXTURE_PIXELS // (p.texture.size ** 2)))
+
+
+def check_frames(p: Params, inputs: Inputs, step: int, textures: bool, *, option: bool = False) -> None:
+    """Refuse (one line) before any work a frame step whose frames the growth alone implies (one
+    every ``step`` of its ``growth.steps`` iterations) exceed the bounds: each frame is four files,
+    and a frame texture as large as the final one."""
+    if step <= 0:
+        return
+    implied = inputs.growth.steps // step + 1
+    if implied > frames_allowed(p, textures):
+        raise frame_limit_error(p, step, textures, option=option,
+                                found=f"{implied} frames over the growth's {inputs.growth.steps} iterations")
 
 def _in_or_on(blade: Blade, pts, scale, tol) -> np.ndarray:
     pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
