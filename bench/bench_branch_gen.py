@@ -29,7 +29,7 @@ def sca_runions(ctx: BenchContext) -> list[Result]:
     t, res = ctx.timed(_sca, 3000, repeat=1 if ctx.quick else 3)
     note = (f"{len(res.node_pos)} nodes, {res.iterations} iterations, {int(res.alive.sum())} points left, "
             f"{res.distance_evaluations} point-node distances")
-    out = [Result("sca_n3000_unit_sphere", t, "s", "issue 7 goal 1 s (Runions sec. 3.2.4: seconds to minutes)",
+    out = [Result("sca_n3000_unit_sphere", t, "s", "goal 1 s (Runions sec. 3.2.4: seconds to minutes)",
                   1.0, note)]
     sizes = [1000, 3000, 10000] if ctx.quick else [1000, 3000, 10000, 30000]
     times, evals = [], []
@@ -61,7 +61,7 @@ def rodkaew_5000(ctx: BenchContext) -> Result:
     params = params_from_dict({"rodkaew": {"step": 0.005, "merge_distance": 0.006, "steps_per_frame": 4}})
     grow_rodkaew(_florets(50), params)  # compile
     t, sk = ctx.timed(grow_rodkaew, _florets(n), params, repeat=1)
-    return Result(f"rodkaew_{n}_florets", t, "s", "issue 7 goal 5 s", 5.0,
+    return Result(f"rodkaew_{n}_florets", t, "s", "goal 5 s", 5.0,
                   f"{sk.n_nodes} nodes, emergence over 50 frames, 4 steps per frame")
 
 

@@ -101,13 +101,13 @@ def growth(ctx: BenchContext) -> list[Result]:
         if extrapolate:
             per_frame = seconds / steps
             est = per_frame * extrapolate
-            out.append(Result(f"{name}_growth", est / 60, "min", "6 min goal (issue 5); thesis 60 min (table 4.1)",
+            out.append(Result(f"{name}_growth", est / 60, "min", "6 min goal; thesis 60 min (table 4.1)",
                               6.0, f"extrapolated to {extrapolate} frames from {steps} frames in {seconds:.0f} s "
                                    f"(incl. start-up); " + note))
         else:
             big = n_fl >= 1000
             out.append(Result(f"{name}_growth", seconds / 60, "min",
-                              "6 min goal (issue 5); thesis 60 min (table 4.1)" if big else
+                              "6 min goal; thesis 60 min (table 4.1)" if big else
                               ("thesis table 4.1 (350k tri: 60 min)" if not ctx.quick else ""),
                               6.0 if big else None, note))
         out.append(Result(f"{name}_rate", rate, "triangles*steps/s", "", None, f"{tris:,} triangles x {steps} steps"))

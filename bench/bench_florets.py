@@ -33,7 +33,7 @@ from inflo.tools.polygonize.run import polygonize_files, polygonize_frames
 
 from .harness import REPO, BenchContext, Result
 
-ANCHOR = "1 s goal (issue 3)"
+ANCHOR = "1 s goal"
 EXAMPLES = REPO / "pipelines" / "examples"
 LAMBDA_POINTS = [(0, 0.032), (0.6, 0.04), (0.75, 0.032), (1, 0.032)]
 ETA_POINTS = [(0, 7), (0.6, 9), (0.8, 15), (1, 3)]

@@ -32,7 +32,7 @@ from inflo.tools.pbd.solver import edge_lengths, hinge_angles
 
 from .harness import BenchContext, Result
 
-ANCHOR = "6e7 projections/s, plain numba loop, one core (issue 5)"
+ANCHOR = "6e7 projections/s, plain numba loop, one core"
 
 
 def canopy_arrays(n_florets: int):

@@ -65,17 +65,17 @@ def bench_petal_grow(ctx: BenchContext) -> list[Result]:
     out = []
     p = _params(ctx, "eustoma", text, mesh, str(bud / "petal.obj"))
     t, res = _time(ctx, "eustoma", p, repeat)
-    out.append(Result("petal_grow_eustoma_100", t, "s", "Ijiri et al. sec. 6.3: 8 min (issue 22 goal: 10 s)", 480.0,
+    out.append(Result("petal_grow_eustoma_100", t, "s", "Ijiri et al. sec. 6.3: 8 min (goal: 10 s)", 480.0,
                       _note(res, 5 * 456)))
     p = _params(ctx, "single", text, mesh, str(bud / "petal.obj"), organs=1)
     t, res = _time(ctx, "single", p, repeat)
-    out.append(Result("petal_grow_single_petal_100", t, "s", "Ijiri et al. sec. 6.3: 2.5 min (issue 22 goal: 1 s)",
+    out.append(Result("petal_grow_single_petal_100", t, "s", "Ijiri et al. sec. 6.3: 2.5 min (goal: 1 s)",
                       150.0, _note(res, 456)))
     lbud = ctx.workdir / "lily_bud"
     subprocess.run([sys.executable, str(LILY / "growth_keys.py"), "-o", str(lbud)], check=True)
     p = _params(ctx, "lily", (LILY / "growth.toml").read_text(), "../../build/lily/growth_bud", str(lbud))
     t, res = _time(ctx, "lily", p, repeat)
-    out.append(Result("petal_grow_lily_100", t, "s", "Ijiri et al. sec. 6.3: 11.5 min (issue 22 goal: 10 s)", 690.0,
+    out.append(Result("petal_grow_lily_100", t, "s", "Ijiri et al. sec. 6.3: 11.5 min (goal: 10 s)", 690.0,
                       _note(res, 3 * 680 + 3 * 560)))
     return out
 

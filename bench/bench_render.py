@@ -24,7 +24,7 @@ from inflo.tools.canopy_render.render import Renderer, RenderOptions, scene_poin
 
 from .harness import BenchContext, Result
 
-ANCHOR = "10 s goal (issue 2)"
+ANCHOR = "10 s goal"
 
 
 def _cli() -> str:

@@ -54,7 +54,7 @@ def _pattern(ctx: BenchContext, label: str, name: str, size: float, neighbourhoo
     note = (f"{r.n_nodes} vein nodes, {len(r.extra_edges)} anastomoses, {r.iterations} iterations, "
             f"{r.sources_placed} sources; {per * 1e6:.1f} us per node; "
             + ", ".join(f"{k} {v:.2f} s" for k, v in r.timings.items()))
-    out = [Result(f"venation_{label}_10k", r.seconds, "s", "issue 23 goal 5 s for 10k vein nodes", 5.0, note)]
+    out = [Result(f"venation_{label}_10k", r.seconds, "s", "goal 5 s for 10k vein nodes", 5.0, note)]
     factors = [0.5, 1.0] if ctx.quick else [0.5, 0.71, 1.0, 1.41]
     ns, ts = [], []
     for f in factors:
@@ -93,7 +93,7 @@ def sunflower(ctx: BenchContext) -> list[Result]:
     r = simulate(inp.blade, inp.growth, sp)
     pos, parent, extra, widths, _ = finish_graph(p, r.node_pos, r.node_parent, r.extra_edges, sp.seed)
     t = time.perf_counter() - t0
-    return [Result("venation_sunflower_leaf", t, "s", "issue 23 goal 5 s for 10k vein nodes", 5.0 * len(pos) / 1e4,
+    return [Result("venation_sunflower_leaf", t, "s", "goal 5 s for 10k vein nodes", 5.0 * len(pos) / 1e4,
                    f"{r.n_nodes} simulated vein nodes, {len(pos)} after refinement, {len(extra)} anastomoses, "
                    f"{r.blind_ends} blind ends; simulation {r.seconds:.2f} s")]
 

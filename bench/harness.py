@@ -4,7 +4,7 @@ A benchmark module is ``bench/bench_<topic>.py`` defining ``BENCHMARKS``, a list
 ``fn(ctx: BenchContext) -> Result | list[Result]``. ``python -m bench.run`` imports every such
 module, runs each function, prints one line per result::
 
-    render_400k_triangles: 1.23 s (anchor: 10 s goal, issue 2; ratio: 0.12)
+    render_400k_triangles: 1.23 s (anchor: 10 s goal; ratio: 0.12)
 
 and appends a row per result to ``bench/results.csv`` (date, machine, commit, name, value, unit,
 anchor, ratio, note). ``ratio`` is value / anchor_value in the anchor's unit (below 1 is faster

@@ -5,7 +5,7 @@ Usage: python size_along.py IN.scn OUT.scn GAIN POWER
 A ball dahlia's receptacle is a dome, not a sphere: with florets of one size standing on it, the
 head would be a hemisphere with a flattened top (its last, youngest florets, at the top, are the
 least developed). The florets formed later, higher up the dome, are made larger, so that the open
-ball is round (issue 17: "sized along the ball so the ball stays round"): the scale of the k-th of
+ball is round ("sized along the ball so the ball stays round"): the scale of the k-th of
 n ray florets in their order of formation (0 at the base, n - 1 at the top) is multiplied by
 ``1 + GAIN (k / (n - 1)) ** POWER``. Bracts keep theirs. Written atomically (formats.scn).
 """

@@ -167,7 +167,7 @@ def _schema(cls) -> dict[str, tuple]:
 SCHEMA: dict[str, dict[str, tuple]] = {name: _schema(cls) for name, cls in _SECTIONS.items()}
 
 _OPTIONAL = ("dynamics", "compound", "hierarchy")
-# work limits (issue 14: beyond them a run hangs or exhausts memory instead of saying so)
+# work limits (beyond them a run hangs or exhausts memory instead of saying so)
 MAX_SAMPLES = 10_000_000
 # the receptacle mesh and the room passes a frame (formats/phyllotaxis.md, "Bounds")
 MAX_SEGMENTS = 4096
