@@ -294,3 +294,26 @@ def test_make_blender_addon_target(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "blender/make_zip.py -o build/inflo_blender.zip" in r.stdout
 
+
+
+def test_panel_diagram(tmp_path):
+    """blender/draw_panel.py: the panel's draw() with a stand-in bpy records the panel's rows in
+    order (project, species with its title, quality as toggles, build scope, Build, Import build,
+    the build's state); a folder that is no project gets the error box; the diagram is a PNG."""
+    draw_panel = _load("draw_panel", REPO / "blender" / "draw_panel.py")
+    tree = draw_panel.record(REPO, "lily", "final")
+    assert [(i["type"], i.get("name") or i.get("text")) for i in tree[:2]] == [("prop", "project"), ("prop", "species")]
+    assert dict(tree[1]["items"]) == {s.name: s.title for s in core.find_species(REPO)[0]}
+    quality = tree[2]["items"][0]
+    assert (tree[2]["type"], quality["name"], quality["expand"], quality["value"]) == ("row", "quality", True, "final")
+    assert tree[3]["name"] == "scope" and tree[4]["text"] == "Build" and tree[4]["icon"] == "PLAY"
+    assert tree[5]["items"][0]["text"] == "Import build"
+    assert tree[6]["type"] == "label" and ("built:" in tree[6]["text"] or "not built yet" in tree[6]["text"])
+    bad = draw_panel.record(tmp_path, "lily")
+    assert [i["type"] for i in bad] == ["prop", "box"] and bad[1]["items"][0]["icon"] == "ERROR"
+    out = tmp_path / "panel.png"
+    draw_panel.draw(tree, out)
+    from PIL import Image
+
+    with Image.open(out) as im:
+        assert im.width == 660 and im.height > 400
