@@ -33,8 +33,9 @@ bytecode: $(STAMP)
 	@$(PY) -m compileall -q tools formats > /dev/null
 
 # make test runs two pytest processes side by side (2 cores): the species builds and the tests that
-# read build/<species> (tests/test_golden.py first, then tests/test_pipeline_*.py, in one process, in
-# order), and every other test file; each process's report is printed whole, and the target fails if
+# read build/<species> (tests/test_golden.py and tests/test_pipeline_*.py in one process; each species
+# is built once per session by conftest's species_build, whichever test asks first), and every other
+# test file; each process's report is printed whole, and the target fails if
 # either does. With PYTEST_ARGS (a selection: -k, a file) it is one plain pytest run.
 BUILD_TESTS := tests/test_golden.py $(sort $(wildcard tests/test_pipeline_*.py))
 test: $(STAMP) bytecode lint

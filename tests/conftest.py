@@ -162,3 +162,40 @@ def silhouette_iou(png, still) -> tuple:
     alpha = np.asarray(Image.open(png).convert("RGBA"))[..., 3] > 127
     drawn = np.any(np.abs(still.astype(int) - 255) > 24, axis=2)
     return float(np.sum(alpha & drawn) / np.sum(alpha | drawn)), float(alpha.mean())
+
+
+@pytest.fixture(scope="session")
+def species_build():
+    """``species_build(name)`` -> the species' golden spec (:mod:`inflo.tools.golden`), its draft
+    build made once per session by ``make`` (incremental) at the golden manifest's quality and
+    targets: the golden-file tests and the species tests that read ``build/<species>`` ask for it
+    alike, so neither depends on the other having run first. ``INFLO_GOLDEN_REBUILD=1``: ``make
+    -B``; ``INFLO_GOLDEN_NO_BUILD=1``: ``build/<species>`` as it is."""
+    import shutil
+
+    from inflo.tools import golden as G
+
+    done: dict = {}
+
+    def get(name):
+        if name not in done:
+            spec = G.load_species(name, REPO)
+            if os.environ.get("INFLO_GOLDEN_NO_BUILD"):
+                done[name] = (spec, None)
+            elif shutil.which("make") is None:
+                done[name] = (spec, "skip")
+            else:
+                r = G.build_species(spec, rebuild=bool(os.environ.get("INFLO_GOLDEN_REBUILD")))
+                err = None
+                if r.returncode != 0:
+                    tail = "\n".join(((r.stdout or "") + (r.stderr or "")).splitlines()[-25:])
+                    err = f"{' '.join(r.args)} failed (exit {r.returncode}):\n{tail}"
+                done[name] = (spec, err)
+        spec, err = done[name]
+        if err == "skip":
+            pytest.skip("no make")
+        if err:
+            pytest.fail(err, pytrace=False)
+        return spec
+
+    return get

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -503,35 +502,6 @@ def _golden_cases():
         for name, _ in spec.selection(listing):
             cases.append(pytest.param(sp, "file", name, id=f"{sp}/{name}"))
     return cases
-
-
-@pytest.fixture(scope="session")
-def species_build():
-    """species -> its Species, built once per session (make, incremental; see the module doc)."""
-    done: dict = {}
-
-    def get(name):
-        if name not in done:
-            spec = G.load_species(name, REPO)
-            if os.environ.get("INFLO_GOLDEN_NO_BUILD"):
-                done[name] = (spec, None)
-            elif shutil.which("make") is None:
-                done[name] = (spec, "skip")
-            else:
-                r = G.build_species(spec, rebuild=bool(os.environ.get("INFLO_GOLDEN_REBUILD")))
-                err = None
-                if r.returncode != 0:
-                    tail = "\n".join(((r.stdout or "") + (r.stderr or "")).splitlines()[-25:])
-                    err = f"{' '.join(r.args)} failed (exit {r.returncode}):\n{tail}"
-                done[name] = (spec, err)
-        spec, err = done[name]
-        if err == "skip":
-            pytest.skip("no make")
-        if err:
-            pytest.fail(err, pytrace=False)
-        return spec
-
-    return get
 
 
 @pytest.mark.slow
