@@ -90,7 +90,7 @@ def check_frames(report: dict, arrays: dict, parts: dict, colors: dict, frames=N
 
     ``parts``: part name -> its OBJ frames (a list) or one OBJ file (a static part, the same in
     every frame); ``frames``: the scene frames to check (default: every frame of the probe)."""
-    from inflo.tools.canopy_render.colors import material_color
+    from inflo.formats.colors import material_color
 
     frames = frames or sorted(int(f) for f in next(iter(report["objects"].values()))["frames"])
     for name, source in parts.items():
@@ -132,7 +132,7 @@ def lily_build():
 
 
 def test_lily_usd_in_blender(bpy_python, lily_build, tmp_path):
-    from inflo.tools.canopy_render.colors import load_color_file
+    from inflo.formats.colors import load_color_file
     from inflo.tools.canopy_render.render import GLUnavailable, RenderOptions, auto_camera, render_meshes
 
     colors = load_color_file(LILY / "colors.toml")
@@ -171,7 +171,7 @@ def test_lily_usd_in_blender(bpy_python, lily_build, tmp_path):
 
 
 def test_obj_frame_in_blender(bpy_python, lily_build, tmp_path):
-    from inflo.tools.canopy_render.colors import load_color_file, material_color
+    from inflo.formats.colors import load_color_file, material_color
 
     colors = load_color_file(LILY / "colors.toml")
     for folder in ("canopy", "column_obj"):
@@ -197,7 +197,7 @@ def test_species_usd_in_blender(bpy_python, species, tmp_path):
     """Another species' build/<species>/<species>.usdc, where it has been built (``make
     <species>``; not built from scratch here: minutes each, but brought up to date): first, middle
     and last frame as in the lily test, faces that change (florets emerging) included."""
-    from inflo.tools.canopy_render.colors import load_color_file
+    from inflo.formats.colors import load_color_file
 
     build = REPO / "build" / species
     usd = build / f"{species}.usdc"
@@ -238,6 +238,6 @@ def test_changing_faces_in_blender(bpy_python, tmp_path):
     report, arrays = probe(bpy_python, out, tmp_path / "probe", "--faces")
     assert (report["frame_start"], report["frame_end"]) == (1, 4)
     assert [report["objects"]["canopy"]["frames"][str(f)]["polygons"] for f in (1, 2, 3, 4)] == [2, 2, 4, 4]
-    from inflo.tools.canopy_render.colors import load_color_file
+    from inflo.formats.colors import load_color_file
 
     check_frames(report, arrays, {"canopy": list_obj_sequence(seq)}, load_color_file(tmp_path / "colors.toml"))

@@ -17,12 +17,12 @@ from click.testing import CliRunner
 from conftest import no_partial_files, run_cli
 from PIL import Image
 
+from inflo.formats.colors import MATERIAL_PALETTE, load_color_file, material_color, parse_color
 from inflo.formats.errors import InputError
 from inflo.formats.obj import ObjMesh, write_obj, write_obj_sequence
 from inflo.tools.canopy_render import cli as render_cli
 from inflo.tools.canopy_render import render as render_mod
 from inflo.tools.canopy_render.camera import Camera, camera_from_fcc, fit_camera, view_basis
-from inflo.tools.canopy_render.colors import MATERIAL_PALETTE, load_color_file, material_color, parse_color
 from inflo.tools.canopy_render.demo import flower
 from inflo.tools.canopy_render.output import encode_gif, write_mp4
 from inflo.tools.canopy_render.render import (

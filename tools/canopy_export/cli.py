@@ -113,7 +113,7 @@ def main(inputs, output, color_file, units, fps, start_frame, normals, constant_
          pc2_dir, quantize, title, figures, every, viewer, quiet, debug):
     colors = None
     if color_file:
-        from inflo.tools.canopy_render.colors import load_color_file
+        from inflo.formats.colors import load_color_file
 
         colors = load_color_file(color_file)
     glb = output.lower().endswith(".glb")

@@ -167,7 +167,7 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
     output : path
         ``.usdc`` (binary), ``.usda`` (text) or ``.usd`` (binary).
     colors : mapping or None
-        A colour table (:func:`inflo.tools.canopy_render.colors.load_color_file`): material key ->
+        A colour table (:func:`inflo.formats.colors.load_color_file`): material key ->
         sRGB; material colours follow canopy-render's rules (the table, then the palette).
     options : ExportOptions
     pc2_dir : path or None
@@ -182,7 +182,7 @@ def export_canopy(parts: Sequence[Part], output, *, colors: Mapping[str, tuple] 
         that changes where the faces do not, a changing topology with ``constant_topology`` or a
         PC2 cache); nothing is written then.
     """
-    from inflo.tools.canopy_render.colors import INPUT_PALETTE, material_color
+    from inflo.formats.colors import INPUT_PALETTE, material_color
 
     from .gltf import GLTF_SUFFIXES, GltfBuilder
     from .usd import USD_SUFFIXES, UsdBuilder, srgb_to_linear

@@ -32,7 +32,7 @@ faces with an image at their ``vt`` coordinates (see :mod:`.texture`); e.g. a ve
 
 Colours: the OBJ's vertex colours; else ``--color`` per input; else its ``usemtl`` materials
 (``--colors FILE.toml``, then the built-in botanical palette by SCN ``mtl:`` id or organ word);
-else an automatic colour per input. See ``inflo.tools.canopy_render.colors``.
+else an automatic colour per input. See ``inflo.formats.colors``.
 
 Examples::
 
@@ -51,10 +51,10 @@ from pathlib import Path
 
 import click
 
+from inflo.formats.colors import load_color_file, parse_color
 from inflo.tools.common.cli import inflo_command
 
 from .camera import DEFAULT_FOV, DEFAULT_MARGIN, VIEWS
-from .colors import load_color_file, parse_color
 from .render import RenderOptions
 
 __all__ = ["main"]

@@ -31,8 +31,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from inflo.formats.colors import INPUT_PALETTE, RGB, material_color
+
 from .camera import Camera, fit_camera
-from .colors import INPUT_PALETTE, RGB, material_color
 
 __all__ = [
     "RenderOptions",
