@@ -52,6 +52,8 @@ def load_addon(bpy, zip_path):
 
     if not hasattr(bpy.types.Scene, "inflo"):
         inflo_blender.register()
+        return inflo_blender
+    return None
 
 
 def hero_frame(project: Path, species: str, quality: str):
@@ -109,7 +111,7 @@ def main(argv=None) -> int:
     import bpy
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    load_addon(bpy, args.zip)
+    registered = load_addon(bpy, args.zip)
     project = Path(args.project).resolve()
     names = args.species or sorted(p.parent.name for p in (project / "pipelines").glob("*/species.toml"))
     failed = 0
@@ -120,6 +122,9 @@ def main(argv=None) -> int:
             failed += 1
             line = f"failed: {str(exc).strip().splitlines()[-1] if str(exc).strip() else exc}"
         print(f"render_species: {name}: {line}", flush=True)
+    if registered is not None:
+        # bpy 4.5 as a module hangs at exit while a Python class it registered is still registered
+        registered.unregister()
     return 1 if failed else 0
 
 
