@@ -101,8 +101,8 @@ def ccd_queries(ctx: BenchContext) -> list[Result]:
 def ccd_canopy_pairs(ctx: BenchContext) -> list[Result]:
     from inflo.tools.collide.contacts import _narrow_ee_serial, _narrow_vt_serial
     from inflo.tools.collide.detect import step_broad_phase
-    from inflo.tools.fccompose.synthetic import opening_floret
     from inflo.tools.pbd import mesh_edges
+    from inflo.tools.testing.florets import opening_floret
 
     frames, faces, _ = opening_floret(10)
     side = 4 if ctx.quick else 10

@@ -4,7 +4,7 @@
   ``build/lily`` (built with ``make -C pipelines/lily usd`` when missing): export seconds and the
   file's size, against the OBJ sequences' size (ratio: USD / OBJ bytes).
 - ``export_350k``: a synthetic canopy of the yarrow's size, 1,060 five-petal florets of 330
-  triangles (349,800 triangles; :mod:`inflo.tools.fccompose.synthetic`, placed on a grid, one
+  triangles (349,800 triangles; :mod:`inflo.tools.testing.florets`, placed on a grid, one
   ``g`` group and material per floret as fccompose writes them), over ``FRAMES_350K`` frames
   (10; 2 with ``--quick``): export seconds against writing the same OBJ frames, and the size
   against the OBJ frames'. The note extrapolates both to 100 frames (points are per frame, the
@@ -31,7 +31,7 @@ import numpy as np
 from inflo.formats.obj import ObjMesh, list_obj_sequence, write_obj
 from inflo.tools.canopy_export.export import ExportOptions, export_canopy
 from inflo.tools.canopy_export.parts import resolve_parts
-from inflo.tools.fccompose.synthetic import opening_floret
+from inflo.tools.testing.florets import opening_floret
 
 from .harness import BenchContext, Result
 

@@ -1,6 +1,6 @@
 """Whole-canopy growth with collisions (thesis table 4.1).
 
-A synthetic canopy of identical 5-petal florets (:mod:`inflo.tools.fccompose.synthetic`, 330
+A synthetic canopy of identical 5-petal florets (:mod:`inflo.tools.testing.florets`, 330
 triangles each) on a jittered grid, opening over the frames so that neighbours' petals meet;
 ``fccompose`` runs end to end in a fresh process (reading, growth, CCD, collision response, sanity
 checks every 50 frames, an OBJ every 25 frames):
@@ -28,7 +28,7 @@ import sys
 import time
 from pathlib import Path
 
-from inflo.tools.fccompose.synthetic import (
+from inflo.tools.testing.florets import (
     grid_canopy_scene,
     opening_floret,
     write_fcc_text,

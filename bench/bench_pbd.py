@@ -1,6 +1,6 @@
 """PBD constraint projections per second on a ~100k-triangle canopy.
 
-The canopy: 300 synthetic 5-petal florets (:mod:`inflo.tools.fccompose.synthetic`, 330 triangles
+The canopy: 300 synthetic 5-petal florets (:mod:`inflo.tools.testing.florets`, 330 triangles
 each) placed on a grid, half open. Rest values are the current ones scaled by 0.99 (lengths) and
 shifted by 0.05 rad (angles), so every projection does its full work. Reported separately:
 
@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from inflo.tools.fccompose.synthetic import grid_canopy_scene, opening_floret
 from inflo.tools.pbd import (
     colour_constraints,
     mesh_edges,
@@ -29,6 +28,7 @@ from inflo.tools.pbd import (
     project_internal_by_part,
 )
 from inflo.tools.pbd.solver import edge_lengths, hinge_angles
+from inflo.tools.testing.florets import grid_canopy_scene, opening_floret
 
 from .harness import BenchContext, Result
 

@@ -7,7 +7,7 @@
 - ``render_400k_triangles_first``: the first frame of a fresh :class:`Renderer` in this process
   (context creation, shader compilation, first upload).
 
-The mesh is :func:`inflo.tools.canopy_render.demo.canopy`: 50 heads of 20 curved petals, 401,200
+The mesh is :func:`inflo.tools.testing.flowers.canopy`: 50 heads of 20 curved petals, 401,200
 triangles, two materials, rendered at 1024x768 with 4x multisampling.
 """
 from __future__ import annotations
@@ -19,8 +19,8 @@ from pathlib import Path
 
 from inflo.formats.obj import write_obj
 from inflo.tools.canopy_render.camera import fit_camera
-from inflo.tools.canopy_render.demo import canopy
 from inflo.tools.canopy_render.render import Renderer, RenderOptions, scene_points
+from inflo.tools.testing.flowers import canopy
 
 from .harness import BenchContext, Result
 

@@ -1,6 +1,6 @@
 """subdivide: two Loop levels with collision handling on a ~100k-triangle canopy (goal: 30 s).
 
-The canopy: 420 open synthetic 5-petal florets (:mod:`inflo.tools.fccompose.synthetic`, 240
+The canopy: 420 open synthetic 5-petal florets (:mod:`inflo.tools.testing.florets`, 240
 triangles each, 100,800 in all) on a jittered grid, neighbours' petal tips a few percent of a petal
 apart (collision-free by the exact test); two levels give 1.6M triangles. Reports the library time (operators + Loop positions +
 CCD and collision constraints per level), the collision constraints each level needed (the thesis
@@ -13,9 +13,9 @@ import math
 import numpy as np
 
 from inflo.tools.collide import intersecting_pairs
-from inflo.tools.fccompose.synthetic import opening_floret
 from inflo.tools.subdivide.collisions import collision_resolver
 from inflo.tools.subdivide.smooth import plan_subdivision, subdivide_frames
+from inflo.tools.testing.florets import opening_floret
 
 from .harness import BenchContext, Result
 

@@ -23,7 +23,6 @@ from inflo.formats.obj import ObjMesh, write_obj, write_obj_sequence
 from inflo.tools.canopy_render import cli as render_cli
 from inflo.tools.canopy_render import render as render_mod
 from inflo.tools.canopy_render.camera import Camera, camera_from_fcc, fit_camera, view_basis
-from inflo.tools.canopy_render.demo import flower
 from inflo.tools.canopy_render.output import encode_gif, write_mp4
 from inflo.tools.canopy_render.render import (
     GL_PACKAGES,
@@ -35,6 +34,7 @@ from inflo.tools.canopy_render.render import (
     vertex_normals,
 )
 from inflo.tools.canopy_render.sheet import contact_sheet, every_nth, frame_index, grid_shape
+from inflo.tools.testing.flowers import flower
 
 WHITE = (1.0, 1.0, 1.0)
 

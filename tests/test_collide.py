@@ -366,7 +366,7 @@ def test_ee_constraint_separates_the_edges():
 
 def sheets(nx=6, gap=0.05, shift=0.0):
     """Two parallel grid sheets, the upper one above the lower by ``gap``."""
-    from inflo.tools.canopy_render.demo import grid_faces
+    from inflo.tools.testing.flowers import grid_faces
 
     u, w = np.meshgrid(np.linspace(0, 1, nx), np.linspace(0, 1, nx), indexing="ij")
     lower = np.stack([u, w, 0 * u], -1).reshape(-1, 3)

@@ -16,7 +16,7 @@ from inflo.formats.rba import RbaFrame, write_rba_sequence
 from inflo.formats.scn import Placement
 from inflo.tools.collide import intersecting_pairs
 from inflo.tools.fccompose.compose import compose_canopy
-from inflo.tools.fccompose.synthetic import (
+from inflo.tools.testing.florets import (
     opening_floret,
     two_floret_scene,
     write_fcc_text,

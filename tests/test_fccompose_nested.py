@@ -19,7 +19,7 @@ from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import RbaFrame, write_rba_sequence
 from inflo.formats.scn import Placement
-from inflo.tools.fccompose.synthetic import opening_floret, write_fcc_text, write_floret_animation, write_scene
+from inflo.tools.testing.florets import opening_floret, write_fcc_text, write_floret_animation, write_scene
 
 N_FRAMES = 6
 

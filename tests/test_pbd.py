@@ -157,14 +157,14 @@ def strip(nu=6, nv=4, rng=None):
     x = np.stack([u, v, 0.1 * np.sin(3 * u) * np.cos(2 * v)], -1).reshape(-1, 3)
     if rng is not None:
         x = x + rng.normal(scale=0.01, size=x.shape)
-    from inflo.tools.canopy_render.demo import grid_faces
+    from inflo.tools.testing.flowers import grid_faces
 
     tri = grid_faces(nu, nv)
     return x, tri
 
 
 def test_mesh_hinges_flat_grid_is_zero_and_matches_init():
-    from inflo.tools.canopy_render.demo import grid_faces
+    from inflo.tools.testing.flowers import grid_faces
 
     tri = grid_faces(4, 3)
     u, v = np.meshgrid(np.arange(4.0), np.arange(3.0), indexing="ij")

@@ -15,7 +15,7 @@ from inflo.formats.scn import Group, Placement, Scene, read_scn, write_scn
 from inflo.formats.weights import read_petal_weight_file
 from inflo.tools.dimorph.dimorph import DimorphOptions, dimorph_scene
 from inflo.tools.fccompose.model import Template
-from inflo.tools.fccompose.synthetic import opening_floret, write_fcc_text, write_floret_animation, write_scene
+from inflo.tools.testing.florets import opening_floret, write_fcc_text, write_floret_animation, write_scene
 
 N_FRAMES = 6
 

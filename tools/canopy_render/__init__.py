@@ -2,10 +2,10 @@
 
 Modules: :mod:`.render` (the GL renderer: ``render_meshes``, ``render_sequence``, ``Renderer``,
 ``RenderOptions``), :mod:`.camera` (``Camera``, named views, automatic framing, ``.fcc`` camera
-keys), :mod:`.colors` (palette, material colours, colour files), :mod:`.sheet` (contact sheets,
+keys), :mod:`.sheet` (contact sheets,
 frame numbers), :mod:`.output` (PNG, GIF, MP4 writers, atomic), :mod:`.inputs` (OBJ files and
-sequences as layers), :mod:`.job` (one CLI run), :mod:`.cli` (the command), :mod:`.demo`
-(synthetic flowers for tests and benchmarks).
+sequences as layers), :mod:`.job` (one CLI run) and :mod:`.cli` (the command). Colours:
+:mod:`inflo.formats.colors`; synthetic flowers for tests and benchmarks: :mod:`inflo.tools.testing`.
 """
 from .camera import Camera, camera_from_fcc, fit_camera
 from .render import GLUnavailable, Renderer, RenderOptions, auto_camera, render_meshes, render_sequence

@@ -5,5 +5,4 @@
 - :mod:`.compose`: :func:`compose_canopy`, Algorithm 1 (growth, CCD, collision response), output
   frames, log and resume; :class:`Simulation` for one step at a time.
 - :mod:`.log`: the per-frame ``log.csv``.
-- :mod:`.synthetic`: synthetic opening florets and scenes for tests, examples and benchmarks.
 """

@@ -1,7 +1,7 @@
 """Synthetic opening florets and scenes for tests, examples and benchmarks (stand-ins until
 ``polygonize`` output exists).
 
-A floret is a fan of curved petal strips (:func:`inflo.tools.canopy_render.demo.petal`) whose
+A floret is a fan of curved petal strips (:func:`inflo.tools.testing.flowers.petal`) whose
 bases sit on a small ring around the floret axis (+Y) and which open from an upright bud to a
 spread flower over the frames. The base row of every petal is fixed (weight file). Petals of one
 floret never touch each other in any frame.
@@ -16,7 +16,7 @@ import numpy as np
 from inflo.formats.atomic import write_text_atomic
 from inflo.formats.obj import ObjMesh, write_obj_sequence
 from inflo.formats.scn import Placement, Scene, write_scn
-from inflo.tools.canopy_render.demo import midrib_directions, petal_patch
+from inflo.tools.testing.flowers import midrib_directions, petal_patch
 
 __all__ = ["petal_strip", "opening_floret", "write_floret_animation", "write_scene", "write_fcc_text",
            "two_floret_scene", "grid_canopy_scene"]
@@ -25,7 +25,7 @@ __all__ = ["petal_strip", "opening_floret", "write_floret_animation", "write_sce
 def petal_strip(phi: float, *, length: float, width: float, rise: float, bend: float, cup: float, nu: int,
                 nv: int, base) -> tuple[np.ndarray, np.ndarray]:
     """One curved petal leaving ``base`` at azimuth ``phi``: the midrib and cross-section of
-    ``canopy_render.demo.petal`` (:func:`~inflo.tools.canopy_render.demo.petal_patch`), with a base
+    ``testing.flowers.petal`` (:func:`~inflo.tools.testing.flowers.petal_patch`), with a base
     as wide as half the petal so that the two fixed base rows hold its orientation, and the midrib
     stepped from the base point itself.
 
@@ -112,7 +112,7 @@ def write_fcc_text(path, *, scene="scene.scn", animation="anim", weight="petal_b
                    k_stretch=0.99, k_bend=0.99, updates_per_frame=1, sanity_every=1, extra="") -> None:
     """A ``.fcc`` file for one animation (id 0) placed by ``scene``."""
     lines = [
-        "# synthetic canopy (inflo.tools.fccompose.synthetic)",
+        "# synthetic canopy (inflo.tools.testing.florets)",
         f"solver iterations: {solver_iterations}",
         f"collision iterations: {collision_iterations}",
         f"max collision retries: {retries}",

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from inflo.tools.fccompose.synthetic import (
+from inflo.tools.testing.florets import (
     opening_floret,
     two_floret_scene,
     write_fcc_text,
