@@ -39,8 +39,8 @@ from .broad import (
     vertex_boxes,
 )
 from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
-from .tritri import _pair_flag
-from .tritri import _share_vertex as _tri_share_vertex
+from .tripair import _decide, _pair_flag
+from .tripair import _share_vertex as _tri_share_vertex
 
 __all__ = ["probe_contacts", "can_probe", "intersecting_pairs_by_part"]
 
@@ -391,8 +391,6 @@ def intersecting_pairs_by_part(vertex_x: np.ndarray, tri_indices: np.ndarray, tr
     (k, 2) int32
         Pairs ``(i, j)``, ``i < j``, sorted (as :func:`.tritri.intersecting_pairs`).
     """
-    from .tritri import _decide
-
     x = np.ascontiguousarray(vertex_x, dtype=np.float64)
     tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
     if len(tri) < 2:
