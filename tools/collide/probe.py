@@ -21,6 +21,8 @@ retry comes (:class:`.detect._ProbedBroadPhase`).
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
 
@@ -39,8 +41,8 @@ from .broad import (
     vertex_boxes,
 )
 from .ccd import edge_edge_ccd, edge_edge_culled, vertex_triangle_ccd, vertex_triangle_culled
-from .tritri import _pair_flag
-from .tritri import _share_vertex as _tri_share_vertex
+from .tripair import _decide, _pair_flag
+from .tripair import _share_vertex as _tri_share_vertex
 
 __all__ = ["probe_contacts", "can_probe", "intersecting_pairs_by_part"]
 
@@ -50,6 +52,39 @@ _VT_CAND, _EE_CAND, _VT_HIT, _EE_HIT, _VT_EVEN, _EE_EVEN, _VT_ODD, _EE_ODD, _VT_
 _N_COUNTERS = 11
 #: crossing pairs of each kind a part may write in the first pass (a part with more is run again)
 _PART_CAP = 16
+
+
+# what the kernels share (NamedTuples of arrays, as tools/branch_gen's kernels take them: numba
+# passes each as one argument, its fields typed separately)
+
+
+class _Mesh(NamedTuple):
+    """The step's mesh, as the continuous tests read it."""
+
+    x0: np.ndarray  # (n, 3) float64: positions at the start of the step
+    x1: np.ndarray  # (n, 3) float64: at its end
+    tri: np.ndarray  # (m, 3) int32
+    edges: np.ndarray  # (e, 2) int32
+    tol: float  # the continuous tests' tolerance
+
+
+class _Elements(NamedTuple):
+    """One kind of element (vertices, triangles or edges), grouped by part, with their boxes in one
+    frame (a part's own moving frame, or the scene's)."""
+
+    boxes: np.ndarray  # (k, 6) float64: every element's box
+    parts: np.ndarray  # (n_parts, 6) float64: every part's box (the box of its elements')
+    starts: np.ndarray  # (n_parts + 1,) int64: the first element of every part
+
+
+class _Neighbours(NamedTuple):
+    """The parts each part's pairs across parts are sought with (:func:`.broad._overlapping_parts`:
+    part p's are ``nbr[start[p]:start[p + 1]]``)."""
+
+    vt_start: np.ndarray  # its vertices against their triangles
+    vt_nbr: np.ndarray
+    ee_start: np.ndarray  # its edges against their edges
+    ee_nbr: np.ndarray
 
 
 def can_probe(tri: np.ndarray, edges: np.ndarray, vertex_part) -> bool:
@@ -124,8 +159,10 @@ def probe_contacts(x0: np.ndarray, x1: np.ndarray, tri: np.ndarray, edges: np.nd
     pv, pt, pe = _part_boxes(vb, sv), _part_boxes(tb, st), _part_boxes(eb, se)
     vt_start, vt_nbr = _overlapping_parts(pv, pt, False, PARTS_CROSS)
     ee_start, ee_nbr = _overlapping_parts(pe, pe, True, PARTS_CROSS)
-    args = (x0, x1, tri, edges, float(tolerance), sv, st, se, vb_l, tb_l, eb_l, pv_l, pt_l, pe_l,
-            vb, tb, eb, pv, pt, pe, vt_start, vt_nbr, ee_start, ee_nbr)
+    args = (_Mesh(x0, x1, tri, edges, float(tolerance)),
+            _Elements(vb_l, pv_l, sv), _Elements(tb_l, pt_l, st), _Elements(eb_l, pe_l, se),
+            _Elements(vb, pv, sv), _Elements(tb, pt, st), _Elements(eb, pe, se),
+            _Neighbours(vt_start, vt_nbr, ee_start, ee_nbr))
     # each part writes up to _PART_CAP crossing pairs of a kind into its own slots
     start = np.zeros((n_parts, _N_COUNTERS), np.int64)
     start[:, _VT_AT] = start[:, _EE_AT] = np.arange(n_parts) * _PART_CAP
@@ -315,28 +352,28 @@ def _region(pa, p, pb, q, r):
 
 
 @njit(cache=True)
-def _pair_parts(kind, p, q, boxes_a, boxes_b, pa, pb, sa, sb, same, x0, x1, tri, edges, tol,
-                la, lb, ca, cb, key, tmp, r, out, c, out_vt, out_ee):
-    """Test the elements of part p (``a`` set) against those of part q (``b`` set) that reach into
-    the intersection of the two parts' boxes."""
-    d = _region(pa, p, pb, q, r)
+def _pair_parts(kind, p, q, a, b, same, mesh, la, lb, ca, cb, key, tmp, r, out, c, out_vt, out_ee):
+    """Test the elements of part p (:class:`_Elements` ``a``) against those of part q (``b``) that
+    reach into the intersection of the two parts' boxes."""
+    d = _region(a.parts, p, b.parts, q, r)
     if d < 0:
         return
-    na = _region_sorted(boxes_a, sa[p], sa[p + 1], d, r, la, ca, key, tmp)
+    x0, x1, tri, edges, tol = mesh.x0, mesh.x1, mesh.tri, mesh.edges, mesh.tol
+    na = _region_sorted(a.boxes, a.starts[p], a.starts[p + 1], d, r, la, ca, key, tmp)
     if same and p == q:  # one list against itself (a part's own edges)
         _sweep_self(ca, la, na, d, x0, x1, tri, edges, tol, out, c, out_vt, out_ee)
         return
-    nb = _region_sorted(boxes_b, sb[q], sb[q + 1], d, r, lb, cb, key, tmp)
+    nb = _region_sorted(b.boxes, b.starts[q], b.starts[q + 1], d, r, lb, cb, key, tmp)
     _sweep_test(kind, ca, cb, la, lb, na, nb, d, same, x0, x1, tri, edges, tol, out, c, out_vt, out_ee)
 
 
 @njit(cache=True, parallel=True)
-def _probe_kernel(x0, x1, tri, edges, tol, sv, st, se, vb_l, tb_l, eb_l, pv_l, pt_l, pe_l,
-                  vb, tb, eb, pv, pt, pe, vt_start, vt_nbr, ee_start, ee_nbr, want, out_vt, out_ee, cursors):
-    """Per part (those ``want`` flags): its own pairs (moving-frame boxes ``*_l``) and its pairs
-    with the parts listed for it (scene boxes); (n_parts, :data:`_N_COUNTERS`) counters, started
-    from ``cursors`` (where each part writes its crossing pairs into ``out_vt`` / ``out_ee``, and
-    how many it may write)."""
+def _probe_kernel(mesh, v_own, t_own, e_own, v_scene, t_scene, e_scene, nbr, want, out_vt, out_ee, cursors):
+    """Per part (those ``want`` flags): its own pairs (the vertices, triangles and edges with their
+    moving-frame boxes, ``*_own``) and its pairs with the parts listed for it (``nbr``; the scene's
+    boxes, ``*_scene``); (n_parts, :data:`_N_COUNTERS`) counters, started from ``cursors`` (where
+    each part writes its crossing pairs into ``out_vt`` / ``out_ee``, and how many it may write)."""
+    sv, st, se = v_scene.starts, t_scene.starts, e_scene.starts
     n_parts = sv.shape[0] - 1
     big = 1
     for p in range(n_parts):
@@ -355,15 +392,13 @@ def _probe_kernel(x0, x1, tri, edges, tol, sv, st, se, vb_l, tb_l, eb_l, pv_l, p
         r = np.empty(6)
         out = np.zeros(4)
         c = counts[p]
-        _pair_parts(0, p, p, vb_l, tb_l, pv_l, pt_l, sv, st, False, x0, x1, tri, edges, tol,
-                    la, lb, ca, cb, key, tmp, r, out, c, out_vt, out_ee)
-        _pair_parts(1, p, p, eb_l, eb_l, pe_l, pe_l, se, se, True, x0, x1, tri, edges, tol,
-                    la, lb, ca, cb, key, tmp, r, out, c, out_vt, out_ee)
-        for t in range(vt_start[p], vt_start[p + 1]):
-            _pair_parts(0, p, vt_nbr[t], vb, tb, pv, pt, sv, st, False, x0, x1, tri, edges, tol,
+        _pair_parts(0, p, p, v_own, t_own, False, mesh, la, lb, ca, cb, key, tmp, r, out, c, out_vt, out_ee)
+        _pair_parts(1, p, p, e_own, e_own, True, mesh, la, lb, ca, cb, key, tmp, r, out, c, out_vt, out_ee)
+        for t in range(nbr.vt_start[p], nbr.vt_start[p + 1]):
+            _pair_parts(0, p, nbr.vt_nbr[t], v_scene, t_scene, False, mesh,
                         la, lb, ca, cb, key, tmp, r, out, c, out_vt, out_ee)
-        for t in range(ee_start[p], ee_start[p + 1]):
-            _pair_parts(1, p, ee_nbr[t], eb, eb, pe, pe, se, se, True, x0, x1, tri, edges, tol,
+        for t in range(nbr.ee_start[p], nbr.ee_start[p + 1]):
+            _pair_parts(1, p, nbr.ee_nbr[t], e_scene, e_scene, True, mesh,
                         la, lb, ca, cb, key, tmp, r, out, c, out_vt, out_ee)
     return counts
 
@@ -391,8 +426,6 @@ def intersecting_pairs_by_part(vertex_x: np.ndarray, tri_indices: np.ndarray, tr
     (k, 2) int32
         Pairs ``(i, j)``, ``i < j``, sorted (as :func:`.tritri.intersecting_pairs`).
     """
-    from .tritri import _decide
-
     x = np.ascontiguousarray(vertex_x, dtype=np.float64)
     tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
     if len(tri) < 2:
