@@ -326,3 +326,22 @@ def begin_sequence(folder, tool: str, planned, suffix: str, prefix: str = "frame
     write_text_atomic(_manifest(folder, tool), f"# the files {tool}'s last run wrote here\n"
                       + "".join(f"{Path(n).name}\n" for n in planned))
     return removed
+
+
+def end_sequence(folder, tool: str, written, suffix: str, prefix: str = "frame_") -> list[Path]:
+    """End a frame sequence in ``folder`` (a run that may have resumed one): remove ``tool``'s own
+    frames that are not among ``written`` -- those its manifest lists, or for a folder from before
+    manifests ``prefix<digits>suffix`` files -- and record ``written`` as its manifest. Returns the
+    removed paths."""
+    folder = Path(folder)
+    keep = {Path(n).name for n in written}
+    listed = read_manifest(folder, tool)
+    if listed is None:
+        removed = remove_stale_frames(folder, keep, suffix, prefix=prefix)
+    else:
+        removed = [folder / n for n in listed if n not in keep and (folder / n).is_file()]
+        for p in removed:
+            p.unlink()
+    write_text_atomic(_manifest(folder, tool), f"# the files {tool}'s last run wrote here\n"
+                      + "".join(f"{n}\n" for n in sorted(keep)))
+    return removed

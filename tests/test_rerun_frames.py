@@ -73,3 +73,20 @@ def test_a_sequence_rerun_removes_its_own_frames_only(tmp_path):
     assert sorted(p.name for p in frames.glob("*.floret")) == ["frame_0000.floret", "frame_0001.floret"]
     assert run_cli("polygonize", "-q", frames, "-o", obj).returncode == 0
     assert sorted(p.name for p in obj.glob("*.obj")) == ["frame_0000.obj", "frame_0001.obj", "frame_0009.obj"]
+
+
+def test_fccompose_rerun_removes_its_own_frames_only(tmp_path):
+    """fccompose's earlier frames go (by its manifest) before a rerun writes any, and a shorter
+    rerun leaves none of the longer run's; a user's file named like a frame stays."""
+    import shutil
+
+    src = tmp_path / "fcc"
+    shutil.copytree(REPO / "pipelines" / "examples" / "fccompose", src)
+    out = tmp_path / "canopy"
+    r = run_cli("fccompose", "-q", src / "dense.fcc", "--frames", "3", "--updates", "1", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in out.glob("*.obj")) == [f"frame_{i:04d}.obj" for i in range(4)]
+    (out / "frame_0099.obj").write_text("# a user's file named like a frame\n")
+    r = run_cli("fccompose", "-q", src / "dense.fcc", "--frames", "2", "--updates", "1", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in out.glob("*.obj")) == [f"frame_{i:04d}.obj" for i in range(3)] + ["frame_0099.obj"]

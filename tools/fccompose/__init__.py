@@ -2,7 +2,10 @@
 
 - :mod:`.model`: the canopy as a constraint system (static ``Model``, changing ``State``), built
   from a ``.fcc`` file with its OBJ sequences, weight files, SCN and RBA files.
-- :mod:`.compose`: :func:`compose_canopy`, Algorithm 1 (growth, CCD, collision response), output
-  frames, log and resume; :class:`Simulation` for one step at a time.
+  Carved into :mod:`.system` (the constraint system), :mod:`.inputs` (reading the files),
+  :mod:`.assemble` (instancing the placements) and :mod:`.kernels` (numba kernels).
+- :mod:`.compose`: :func:`compose_canopy`, Algorithm 1 (growth, CCD, collision response) and the
+  frame loop; :mod:`.simulation`: :class:`Simulation`, one step at a time with its retries and
+  collision rounds; :mod:`.output`: the frames, resume state and fingerprint on disk.
 - :mod:`.log`: the per-frame ``log.csv``.
 """

@@ -69,7 +69,7 @@ from pathlib import Path
 
 import numpy as np
 
-from inflo.formats.atomic import frame_name, remove_stale_frames
+from inflo.formats.atomic import begin_sequence, end_sequence, frame_name
 from inflo.formats.errors import InputError
 from inflo.formats.fcc import CanopyParams, check_references
 from inflo.tools.pbd.solver import bending_residual, distance_residual
@@ -185,13 +185,16 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
                ComposeResult(n_triangles=model.n_triangles, n_vertices=model.n_vertices, last_frame=n),
                inputs=inputs)
     result = run.result
+    every = params.output_every
+    planned = [frame_name(k, "frame_", ".obj", 4) for k in range(n + 1) if k % every == 0 or k == n]
     if state is not None:
         run.log_rows = [r for r in read_log(out / "log.csv") if r and int(r[0]) <= state.frame]
         result.first_frame = state.frame + 1
     else:
         # an older run's frames go before this one writes any: interrupted, it leaves a shorter
-        # sequence of its own frames (which --resume continues), never a mix of two runs
-        remove_stale_frames(out, [], ".obj")
+        # sequence of its own frames (which --resume continues), never a mix of two runs; only
+        # fccompose's own frames go (its manifest), never a user's file named like one
+        begin_sequence(out, "fccompose", planned, ".obj")
         _first_frame(run, allow_initial_intersections)
         result.first_frame = 1
 
@@ -204,10 +207,8 @@ def compose_canopy(params: CanopyParams, out_dir, *, resume: bool = False, stric
         run.warn(f"{len(ids)} florets due to emerge found no room by frame {n} (placement indices "
                  f"{_ids_text(ids)}): each intersects the "
                  f"canopy, or itself, where its RBA files place it")
-    # frames of an earlier, longer run in the same folder are not part of this one
-    every = params.output_every
-    remove_stale_frames(out, [frame_name(k, "frame_", ".obj", 4) for k in range(n + 1)
-                              if k % every == 0 or k == n], ".obj")
+    # frames of an earlier, longer run of its own in the same folder are not part of this one
+    end_sequence(out, "fccompose", planned, ".obj")
     result.seconds = time.perf_counter() - t_start
     return result
 
