@@ -34,11 +34,13 @@ usd: $(B)/$(SPECIES).usdc $(B)/viewer/index.html
 $(B)/$(SPECIES).usdc: $(USD_DEPS) colors.toml $(EXPORT_SRC)
 	$(BIN)canopy-export -q $(USD_FLAGS) $(USD_PARTS) $(USD_TRANSLATE) --colors colors.toml --units $(USD_UNITS) --fps 24 -o $@
 # the same parts as one binary glTF (growth as morph targets) and the page that plays it, with
-# three.js beside it: open with `canopy-view $(B)` or any static server (formats/gltf.md)
+# three.js beside it: open with `canopy-view $(B)` or any static server (formats/gltf.md); at most
+# VIEWER_MB megabytes (frames thinned to fit: a final yarrow's 100 frames of branches would be 235 MB)
+VIEWER_MB ?= 50
 viewer: $(B)/viewer/index.html
 $(B)/viewer/index.html: $(USD_DEPS) colors.toml $(EXPORT_SRC) $(call SRC,canopy_view)
 	$(BIN)canopy-export -q $(USD_PARTS) $(USD_TRANSLATE) --colors colors.toml --units $(USD_UNITS) --fps 24 \
-		--title "$(TITLE)" --figure "$(QUALITY) build" --viewer -o $(B)/viewer/$(SPECIES).glb
+		--title "$(TITLE)" --figure "$(QUALITY) build" --max-mb $(VIEWER_MB) --viewer -o $(B)/viewer/$(SPECIES).glb
 endif
 
 clean:

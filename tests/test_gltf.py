@@ -201,6 +201,38 @@ def test_every_nth_frame_keeps_the_last_and_the_duration(build):
 
 
 
+def test_max_mb_thins_the_frames_until_the_file_fits(tmp_path):
+    """--max-mb: a larger --every, in proportion to the size, until the .glb fits; the first and
+    last frame kept; a budget that even two frames exceed is one line, exit 2, and no file."""
+    from inflo.formats.obj import ObjMesh, write_obj
+
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    n = 120
+    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    base = np.column_stack([u.ravel(), v.ravel(), np.zeros(u.size)])
+    q = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
+    faces = np.vstack([np.column_stack([q, q + 1, q + n]), np.column_stack([q + 1, q + n + 1, q + n])]).astype(np.int32)
+    for k in range(12):
+        write_obj(seq / f"frame_{k:04d}.obj", ObjMesh(base + [0, 0, 0.02 * k] * np.sin(3 * base[:, :1] + k), faces))
+    full = tmp_path / "full.glb"
+    assert _run(seq, "-o", full).exit_code == 0
+    budget = 0.45 * full.stat().st_size / 1e6
+    out = tmp_path / "thin.glb"
+    assert _run(seq, "--max-mb", budget, "-o", out).exit_code == 0
+    assert out.stat().st_size <= budget * 1e6 < full.stat().st_size
+    doc, binary = glb_chunks(out.read_bytes())
+    frames, fs, _ = _frames(doc, binary, 0)
+    assert 2 <= len(frames) < 12
+    last = read_obj(seq / "frame_0011.obj")
+    step = doc["nodes"][0]["scale"][0] / 32767
+    np.testing.assert_allclose(frames[-1][fs], last.vertices[last.faces], atol=1.01 * step + 1e-6)
+    res = _run(seq, "--max-mb", 0.1, "-o", tmp_path / "tiny.glb")
+    if full.stat().st_size * 2 / 12 > 0.1e6:
+        assert res.exit_code == 2 and "within --max-mb 0.1" in res.output
+        assert not (tmp_path / "tiny.glb").exists()
+
+
 def test_a_part_whose_vertex_count_changes_is_a_flip_book(tmp_path):
     """Branches rebuilt every frame (their vertex count changes): one node per frame with that
     frame's mesh, scaled 1 at its frame only by a STEP animation, and an empty first frame left out."""

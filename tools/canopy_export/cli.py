@@ -30,6 +30,7 @@ writes the viewer page beside it (``canopy-view DIR`` serves it).
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import click
@@ -107,10 +108,12 @@ def _translate(ctx, param, values):
               help=".glb: a line of figures the viewer page shows under the title. Repeatable.")
 @click.option("--every", type=click.IntRange(min=1), default=1, show_default=True,
               help=".glb: keep every Nth frame (and the last), played at fps/N: a lighter file of a long or large build.")
+@click.option("--max-mb", "max_mb", type=click.FloatRange(min=0.1, max=1e6), default=None, metavar="MB",
+              help=".glb: at most this many megabytes: frames are thinned (a larger --every) until the file fits.")
 @click.option("--viewer", is_flag=True,
               help=".glb: also write the viewer page beside it (index.html and three.js; formats/gltf.md).")
 def main(inputs, output, color_file, units, fps, start_frame, normals, constant_topology, subsets, mtl, translate,
-         pc2_dir, quantize, title, figures, every, viewer, quiet, debug):
+         pc2_dir, quantize, title, figures, every, max_mb, viewer, quiet, debug):
     colors = None
     if color_file:
         from inflo.formats.colors import load_color_file
@@ -119,8 +122,9 @@ def main(inputs, output, color_file, units, fps, start_frame, normals, constant_
     glb = output.lower().endswith(".glb")
     if viewer and not glb:
         raise click.BadParameter("--viewer needs a .glb output", param_hint="--viewer")
-    if every > 1 and not glb:
-        raise click.BadParameter("--every needs a .glb output", param_hint="--every")
+    for name, given in (("--every", every > 1), ("--max-mb", max_mb is not None)):
+        if given and not glb:
+            raise click.BadParameter(f"{name} needs a .glb output", param_hint=name)
     parts = resolve_parts(inputs)
     n_frames = frame_count(parts)
     if viewer:
@@ -130,22 +134,38 @@ def main(inputs, output, color_file, units, fps, start_frame, normals, constant_
         refuse_output_over_inputs(Path(output).parent, [(q, "OBJ frame") for p in parts for q in p.paths]
                                   + ([(color_file, "colour file")] if color_file else []), option="--viewer",
                                   writes=lambda rel: rel in page or rel.startswith("three/"))
-    if every > 1 and n_frames > 1:
-        keep = sorted(set(range(0, n_frames, every)) | {n_frames - 1})
-        for part in parts:
-            if not part.is_static:
-                part.paths = [part.paths[k] for k in keep]
-        n_frames, fps = len(keep), fps / every
+    all_paths = [list(part.paths) for part in parts]
     extras = {"title": title or Path(output).stem, "figures": list(figures)} if glb else {}
-    options = ExportOptions(fps=fps, start_frame=start_frame, meters_per_unit=units, normals=normals,
-                            constant_topology=constant_topology, subsets=subsets, mtl=mtl, translate=translate,
-                            quantize=quantize, extras=extras)
-    with progress(length=n_frames, label="canopy-export", quiet=quiet, unit="frames") as bar:
-        report = export_canopy(parts, output, colors=colors, options=options, pc2_dir=pc2_dir,
-                               on_frame=lambda k: bar.update(1))
+
+    def export(step):
+        """Export keeping every ``step``-th frame (and the last), played at fps / step."""
+        keep = sorted(set(range(0, n_frames, step)) | {n_frames - 1}) if n_frames > 1 else list(range(n_frames))
+        for part, paths in zip(parts, all_paths):
+            part.paths = paths if part.is_static else [paths[k] for k in keep]
+        options = ExportOptions(fps=fps / step, start_frame=start_frame, meters_per_unit=units, normals=normals,
+                                constant_topology=constant_topology, subsets=subsets, mtl=mtl, translate=translate,
+                                quantize=quantize, extras=extras)
+        with progress(length=len(keep), label="canopy-export", quiet=quiet, unit="frames") as bar:
+            return export_canopy(parts, output, colors=colors, options=options, pc2_dir=pc2_dir,
+                                 on_frame=lambda k: bar.update(1)), len(keep)
+
+    report, kept = export(every)
+    # a size budget: the file grows with the frames kept, so thin them in proportion until it fits
+    # (the first and last frame always stay)
+    while max_mb is not None and os.path.getsize(output) > max_mb * 1e6 and kept > 2:
+        every = max(every + 1, math.ceil(every * os.path.getsize(output) / (max_mb * 1e6)))
+        report, kept = export(every)
+    if max_mb is not None and os.path.getsize(output) > max_mb * 1e6:
+        from inflo.formats.errors import InputError
+
+        size = os.path.getsize(output)
+        os.unlink(output)  # no output beyond the budget
+        raise InputError(f"{output}: expected a .glb within --max-mb {max_mb:g}, found {size / 1e6:.1f} MB "
+                         f"with {kept} frames")
     if viewer:
         from inflo.tools.canopy_view.page import write_viewer
 
         write_viewer(Path(output).parent, Path(output).name, title=extras["title"])
     if not quiet:
-        click.echo(f"canopy-export: {report.summary()}", err=True)
+        thinned = f" (every {every}th frame kept for --max-mb {max_mb:g})" if max_mb is not None and every > 1 else ""
+        click.echo(f"canopy-export: {report.summary()}{thinned}", err=True)
