@@ -758,13 +758,15 @@ def test_retreat_parts_keeps_up_with_the_carried_motion():
 
 
 def test_a_misshapen_part_without_room_for_its_carried_shape_is_put_at_a_smaller_one():
-    """The ``"parts"`` fallback's last resort (``parts["shrink"]``): a part the solve left out of
+    """The ``"parts"`` fallback's last resort (``Parts.shrink``): a part the solve left out of
     shape whose carried shape crosses something is put on the first smaller shape offered for it
     that the step reaches collision-free; ``shrunk`` says at which scale. Where none fits (or the
     free one is not offered for that part) it keeps the solve's shape and counts as misshapen."""
+    import dataclasses
+
     from inflo.tools.collide.detect import detect_collisions
     from inflo.tools.collide.resolve import CollisionResult
-    from inflo.tools.collide.retreat import _retreat_fallback
+    from inflo.tools.collide.retreat import Parts, _retreat_fallback
 
     x0, tri, edges, vp = _two_squares(0.5)
     tol = 1e-9
@@ -793,8 +795,8 @@ def test_a_misshapen_part_without_room_for_its_carried_shape_is_put_at_a_smaller
         return [(crossing, every), (free, every)] if s == 0.85 else [(crossing, every)]
 
     res = CollisionResult()
-    parts = dict(vertex_part=vp, n_parts=2, misshapen=misshapen, carried=lambda: carried, shrink=shrink,
-                 shrink_scales=[0.85, 0.7])
+    parts = Parts(vertex_part=vp, n_parts=2, misshapen=misshapen, carried=lambda: carried, shrink=shrink,
+                  shrink_scales=[0.85, 0.7])
     _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect)
     assert asked == [(0.85, [False, True])]
     assert res.shrunk.tolist() == [1.0, 0.85] and res.misshapen == 0
@@ -807,7 +809,8 @@ def test_a_misshapen_part_without_room_for_its_carried_shape_is_put_at_a_smaller
     x1 = x0.copy()
     x1[6, 2] = 1.5
     res = CollisionResult()
-    parts["shrink"] = lambda s, which: [(crossing, np.ones(2, bool)), (free, np.zeros(2, bool))]
+    parts = dataclasses.replace(parts, shrink=lambda s, which: [(crossing, np.ones(2, bool)),
+                                                                (free, np.zeros(2, bool))])
     _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect)
     assert res.shrunk.tolist() == [1.0, 1.0] and res.misshapen == 1
     assert x1[6, 2] == 1.5 and len(res.retreated) == 0

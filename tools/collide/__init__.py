@@ -30,6 +30,7 @@ from .response import (
     solve_ee_collision_constraint,
     solve_vt_collision_constraint,
 )
+from .retreat import Parts
 from .tritri import (
     intersecting_pairs,
     intersecting_pairs_between,
@@ -42,7 +43,7 @@ __all__ = [
     "box_pairs", "edge_boxes", "lattice_cell_size", "triangle_boxes", "vertex_boxes",
     "cubic_edge_edge", "cubic_roots_01", "cubic_vertex_triangle", "cull_cubic", "edge_edge_ccd",
     "point_triangle_distance", "segment_segment_distance", "vertex_triangle_ccd",
-    "CollisionResult", "Contacts", "default_tolerance", "detect_collisions", "resolve_collisions",
+    "CollisionResult", "Contacts", "Parts", "default_tolerance", "detect_collisions", "resolve_collisions",
     "project_collision_constraints", "solve_collision_constraint", "solve_ee_collision_constraint",
     "solve_vt_collision_constraint",
     "intersecting_pairs", "intersecting_pairs_between", "intersecting_pairs_brute", "intersecting_pairs_with",

@@ -84,12 +84,12 @@ class CollisionResult:
     """passes that relaxed parts left out of shape and resolved what that moved"""
     misshapen: int = 0
     """parts (``fallback="parts"``) still out of shape at the end: their carried shape crosses
-    something, and so does each smaller shape ``parts["shrink"]`` offers, so they keep the
+    something, and so does each smaller shape ``parts.shrink`` offers, so they keep the
     collision-free shape the solve gave them (reported; fccompose does not redo such a step:
     halving it made squeezed canopies 9 x slower)"""
     shrunk: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """(n_parts,) the scale each part was put at by the ``"parts"`` fallback's last resort for parts
-    out of shape (``parts["shrink"]``): 1 where none; empty when the fallback did not run"""
+    out of shape (``parts.shrink``): 1 where none; empty when the fallback did not run"""
 
 
 def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarray,
@@ -144,26 +144,15 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         it and only reports them in ``remaining`` (the caller resolves them, e.g. by
         :func:`retreat_parts`); ``"parts"``: :func:`retreat_parts` with ``parts``, on this step's
         broad phase (incremental, as the rounds).
-    parts : dict or None
-        For ``fallback="parts"``: ``vertex_part``, ``n_parts``, ``carried`` (a callable giving the
-        carried positions, called only when needed), ``misshapen`` (callable or None: parts out of
-        shape are moved back too, also when no pair is left), ``crossing`` (bool: also move back
-        the parts of pairs still crossing; False leaves those to the caller, e.g. to substep) and,
-        optional, ``shrink`` and ``shrink_scales``: ``shrink(s, which)`` gives smaller shapes of
-        the parts of the (n_parts,) bool ``which`` at scale ``s``, a list of ``(target, fits)``:
-        (n, 3) positions and the (n_parts,) bool parts for which they are a shape within bounds
-        (fccompose: the carried shape scaled about each floret's base, for the florets whose
-        carried shape is in shape; the rest shape scaled, for all). They are tried in turn, at
-        each ``s`` of ``shrink_scales``, for the parts still out of shape whose carried shape
-        crosses something or is out of shape too (:func:`reshape_parts`; ``CollisionResult.shrunk``);
-        with ``intersecting`` (the exact static test, as :func:`place_parts` takes it) a smaller
-        shape that the step's way to it crosses is taken where the shape itself intersects nothing;
-        with also ``blockers(x, which)`` (the parts not in ``which`` whose triangles intersect
-        those of ``which``) and ``scaled(x, which, s)`` (the shapes of ``which`` in ``x`` scaled by
-        ``s`` about their bases), a part that fits at no scale is tried with the neighbours in
-        its way made smaller too (:func:`_shrink_with_blockers`).
+    parts : :class:`.retreat.Parts` or None
+        For ``fallback="parts"``: the parts (``vertex_part``, ``n_parts``) and the caller's policy
+        for those left crossing or out of shape (``carried``, ``misshapen``, ``crossing``,
+        ``shrink`` at ``shrink_scales``, ``intersecting``, ``blockers``, ``scaled``; fccompose: the
+        carried shape scaled about each floret's base for the florets whose carried shape is in
+        shape, the rest shape scaled for all), tried as :func:`.retreat._retreat_fallback` says
+        (``CollisionResult.shrunk``).
     vertex_part : (n,) int or None
-        The part of every vertex (default: ``parts["vertex_part"]``): where parts are carried far
+        The part of every vertex (default: ``parts.vertex_part``): where parts are carried far
         over the step, pairs within a part are found in its moving frame (:func:`step_broad_phase`;
         the same contacts, found faster); where the parts are grouped (:func:`.probe.can_probe`),
         round 0 is detected part by part without a pair list (:func:`.probe.probe_contacts`:
@@ -187,7 +176,7 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
     tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
     edges = np.ascontiguousarray(edge_indices, dtype=np.int32)
     x0 = np.ascontiguousarray(x0, dtype=np.float64)
-    vp = parts.get("vertex_part") if parts else None
+    vp = parts.vertex_part if parts is not None else None
     if vertex_part is None:
         vertex_part = vp
     broad = step_broad_phase(x0, np.ascontiguousarray(x1, dtype=np.float64), tri, edges, 0.5 * tol, cell_size,
@@ -263,10 +252,10 @@ def resolve_collisions(x0: np.ndarray, x1: np.ndarray, vertex_inv_mass: np.ndarr
         return found
 
     found = run_rounds(None)
-    misshapen = parts.get("misshapen") if (fallback == "parts" and parts) else None
+    misshapen = parts.misshapen if (fallback == "parts" and parts is not None) else None
     if relax is not None and misshapen is not None:
         # repair: relax the florets the rounds left out of shape harder, and resolve what that moved
-        vp = np.asarray(parts["vertex_part"])
+        vp = np.asarray(parts.vertex_part)
         for _ in range(REPAIR_PASSES):
             bad = np.asarray(misshapen(x1), dtype=bool) if not len(found) else None
             if bad is None or not bad.any():

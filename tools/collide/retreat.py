@@ -8,6 +8,7 @@ smaller one, the neighbours in the way made smaller too (:func:`_shrink_with_blo
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,6 +18,55 @@ from .detect import detect_collisions
 # --------------------------------------------------------------------------------------------------
 # The fallback that keeps parts whole
 # --------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Parts:
+    """The parts of a collision system (fccompose: its florets) and the caller's policy for parts
+    the collision rounds leave crossing or out of shape: what ``fallback="parts"`` of
+    :func:`.resolve.resolve_collisions` works with.
+
+    Attributes
+    ----------
+    vertex_part : (n,) int
+        The part of every vertex.
+    n_parts : int
+        How many parts.
+    carried : callable
+        ``carried()`` -> (n, 3): the carried start-of-step positions (called only when needed).
+    misshapen : callable or None
+        ``misshapen(x)`` -> (n_parts,) bool: the parts out of shape in ``x``.
+    crossing : bool
+        Also move back the parts of pairs still crossing (False leaves those to the caller, e.g.
+        to substep).
+    shrink : callable or None
+        ``shrink(s, which)`` -> a list of ``(target, fits)``: smaller shapes of the parts of the
+        (n_parts,) bool ``which`` at scale ``s`` ((n, 3) positions, and the parts for which they
+        are a shape within bounds), tried in turn at each of ``shrink_scales``.
+    shrink_scales : sequence of float
+        The scales ``shrink`` is tried at, largest first.
+    intersecting : callable or None
+        The exact static test (as :func:`place_parts` takes it): a smaller shape the step's way to
+        it crosses is taken where the shape itself intersects nothing.
+    blockers : callable or None
+        ``blockers(x, which)`` -> (n_parts,) bool: the parts not in ``which`` whose triangles
+        intersect those of ``which``.
+    scaled : callable or None
+        ``scaled(x, which, s)`` -> (n, 3): the shapes of ``which`` in ``x`` scaled by ``s`` about
+        their bases (with ``blockers``: a part that fits at no scale is tried with the neighbours
+        in its way made smaller too, :func:`_shrink_with_blockers`).
+    """
+
+    vertex_part: np.ndarray
+    n_parts: int
+    carried: Callable[[], np.ndarray]
+    misshapen: Callable[[np.ndarray], np.ndarray] | None = None
+    crossing: bool = True
+    shrink: Callable | None = None
+    shrink_scales: Sequence[float] = ()
+    intersecting: Callable | None = None
+    blockers: Callable | None = None
+    scaled: Callable | None = None
 
 
 @dataclass
@@ -46,21 +96,21 @@ def _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect) -> None:
     motion (:func:`retreat_parts`, down to ``x0`` if need be: the step must end collision-free);
     then the florets out of shape (those moved back included) are put on their carried
     start-of-step shape where that crosses nothing and is in shape (:func:`reshape_parts`); else,
-    with ``parts["shrink"]``, on a smaller shape that fits (module doc of fccompose: ``crowded
+    with ``parts.shrink``, on a smaller shape that fits (module doc of fccompose: ``crowded
     scales``; the neighbours in the way made smaller too where nothing else fits,
     :func:`_shrink_with_blockers`); elsewhere they keep the collision-free shape the solve gave
     them (a floret frozen at ``x0`` while its rest values grow would tear later)."""
-    vp = np.asarray(parts["vertex_part"])
-    n_parts = int(parts["n_parts"])
-    misshapen = parts.get("misshapen")
+    vp = np.asarray(parts.vertex_part)
+    n_parts = int(parts.n_parts)
+    misshapen = parts.misshapen
     carried = None
     retreated = np.zeros(n_parts, bool)
     if len(res.remaining):
-        if not parts.get("crossing", True):
+        if not parts.crossing:
             return  # the caller redoes the step
         start = np.zeros(n_parts, bool)
         start[np.unique(vp[res.remaining.indices.ravel()])] = True
-        carried = parts["carried"]()
+        carried = parts.carried()
         ret = retreat_parts(x0, x1, tri, edges, vp, n_parts, start, tolerance=tol, carried=carried,
                             detect=detect)
         retreated |= ret.fraction < 1.0
@@ -74,18 +124,18 @@ def _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect) -> None:
         bad = np.asarray(misshapen(x1), dtype=bool)
         if bad.any():
             if carried is None:
-                carried = parts["carried"]()
+                carried = parts.carried()
             moved, _ = reshape_parts(x0, x1, carried, vp, bad, detect)
             retreated |= moved
             res.reverted += int(np.count_nonzero(moved[vp]))
             still = bad & ~moved
-            shrink = parts.get("shrink")
-            intersecting = parts.get("intersecting")
+            shrink = parts.shrink
+            intersecting = parts.intersecting
             if shrink is not None:
                 # a carried shape out of shape itself (the floret started the step so) is no cure
                 still |= moved & np.asarray(misshapen(x1), dtype=bool)
                 # no room for a shape of its own size: a smaller one (the caller grows it back)
-                for s in parts.get("shrink_scales", ()):
+                for s in parts.shrink_scales:
                     if not still.any():
                         break
                     for target, fits in shrink(float(s), still.copy()):
@@ -103,10 +153,10 @@ def _retreat_fallback(res, x0, x1, tri, edges, tol, parts, detect) -> None:
                         still &= ~put
                         if not still.any():
                             break
-                blockers = parts.get("blockers")
-                scales = list(parts.get("shrink_scales", ()))
+                blockers = parts.blockers
+                scales = list(parts.shrink_scales)
                 if still.any() and blockers is not None and intersecting is not None and scales:
-                    _shrink_with_blockers(res, x1, vp, still, retreated, shrink, parts["scaled"], blockers,
+                    _shrink_with_blockers(res, x1, vp, still, retreated, shrink, parts.scaled, blockers,
                                           intersecting, scales, misshapen)
             res.misshapen = int(np.count_nonzero(still))
     res.retreated = np.nonzero(retreated)[0]

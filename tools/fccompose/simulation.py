@@ -17,6 +17,7 @@ import numpy as np
 from inflo.tools.collide.broad import lattice_cell_size, triangle_boxes
 from inflo.tools.collide.contacts import default_tolerance
 from inflo.tools.collide.resolve import CollisionResult, resolve_collisions
+from inflo.tools.collide.retreat import Parts
 from inflo.tools.collide.tritri import intersecting_pairs, intersecting_pairs_with
 from inflo.tools.common import linalg as la
 from inflo.tools.pbd.solver import (
@@ -477,10 +478,10 @@ class Simulation:
                 out[b[~both]] = True
             return out & which
 
-        parts = dict(vertex_part=vp, n_parts=nf, misshapen=misshapen, carried=carried,
-                     crossing=retreat_crossing, shrink=shrink, intersecting=intersecting,
-                     scaled=scaled, blockers=blockers,
-                     shrink_scales=[s for s in p.crowded_scales if s < 1.0])
+        parts = Parts(vertex_part=vp, n_parts=nf, misshapen=misshapen, carried=carried,
+                      crossing=retreat_crossing, shrink=shrink, intersecting=intersecting,
+                      scaled=scaled, blockers=blockers,
+                      shrink_scales=[s for s in p.crowded_scales if s < 1.0])
         # round 0 probed without pair lists while the last step's round 0 found nothing (a head
         # before its florets meet); once contacts come, retries follow and need the lists anyway
         res = resolve_collisions(x0s, x1s, w if v is None else w[v], tri, edges, relax=relax,
