@@ -247,7 +247,7 @@ def _query_one(a, boxes_a, same, skip_b, verts_a, verts_b, part_a, part_b, mode,
                     # first: in a same-set query half the entries are earlier elements (a prefix
                     # of each bucket, which _build fills in element order), rejected without
                     # reading their boxes: the edges' round-0 query of the 100k benchmark canopy's
-                    # last frame 45 -> 31 ms, the same pairs (bisecting the prefix: no faster)
+                    # last frame about 30 % faster, the same pairs (bisecting the prefix: no faster)
                     if same and b <= a:
                         continue
                     if mode != PARTS_ANY and (part_a[a] == part_b[b]) != (mode == PARTS_SAME):
@@ -678,9 +678,9 @@ def box_pairs_brute(boxes_a, boxes_b, same):
 
 #: the part-by-part sweep (:mod:`.probe`) is used where no part has more elements than this: a
 #: sweep goes along one axis, so a big part's elements each pass many others (the lily, one part
-#: of 3,780 triangles: its collision time 1.3 s with the grid, 2.1 s with the sweep; since a
-#: part's own edges are swept once rather than in both orders, 2.0 s either way; the dense
-#: growing head's florets, 280 triangles: the sweep 2 x faster)
+#: of 3,780 triangles, collides about 1.6 x slower with the sweep than with the grid, and still
+#: 1.5 x once a part's own edges are swept once rather than in both orders; the dense growing
+#: head's florets, 280 triangles, collide 2 x faster with the sweep)
 PART_SWEEP_MAX_ELEMENTS = 1500
 
 

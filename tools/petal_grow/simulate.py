@@ -548,8 +548,8 @@ def run(params: Params, out_dir, *, keyframes: int | None = None, collisions: bo
 
     ``threads``: numba threads for the parallel kernels of the collision core (None: numba's
     default). A flower has a few thousand triangles, where starting the threads costs more than
-    they save: the exact test of a keyframe took 2 ms on one thread and 6-40 ms on two (2-core VM,
-    loaded). Results do not depend on it."""
+    they save: the exact test of a keyframe is 3-20 x slower on two threads than on one. Results
+    do not depend on it."""
     old = numba.get_num_threads()
     if threads is not None:
         numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
