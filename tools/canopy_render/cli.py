@@ -155,7 +155,7 @@ def _frames(ctx, param, value):
               help="Take texture images from the inputs' .mtl files (map_Kd) for the faces with 'vt' coordinates.")
 @click.option("--sequence", "as_sequence", is_flag=True,
               help="The input files are the frames of one sequence (e.g. a shell-expanded glob).")
-def main(inputs, output, frame, sheet_frames, sheet_every, columns, label_format, title, fps, size, view,
+def main(*, inputs, output, frame, sheet_frames, sheet_every, columns, label_format, title, fps, size, view,
          azimuth, elevation, up_axis, fov, ortho, zoom, margin, fcc, fit_all, background, colors_per_input,
          color_file, no_vertex_colors, wireframe, wireframe_color, draw_lines, line_color, line_width,
          samples, textures, mtl_textures, as_sequence, quiet, debug):

@@ -64,7 +64,7 @@ from .sweep import write_sweep
 @click.option("--orient-rays", type=click.Choice(["none", "group", "top"]), default="none", show_default=True,
               help="Turn each ray floret about its axis so that its local +X (a zygomorphic floret's outward "
                    "petal) points away from its group's or top-level group's centre.")
-def run(scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, small_ray_scale, disk_scale, centre,
+def run(*, scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_scale, small_ray_scale, disk_scale, centre,
         half_angle, ray_lead, ray_development_frames, disk_development_frames, bracts, bract_id, bract_scale,
         petal_size, orient_rays, marginal, bract_development_frames, quiet, debug):
     from inflo.formats.errors import InputError
