@@ -84,6 +84,7 @@ def read_toml_text(path, undecodable: Callable[[object, bytes, UnicodeDecodeErro
 _HEADERS = {
     "any": re.compile(r"^\[+\s*([^\]]+?)\s*\]+"),  # [table] and [[array of tables]]
     "single": re.compile(r"^\[\s*([^\]]+?)\s*\]"),  # [table] only
+    "pair": re.compile(r"^\[\[?\s*([^\]]+?)\s*\]\]?"),  # [table] and [[table]], no more brackets
 }
 
 
@@ -97,17 +98,21 @@ class LineStyle:
         The section name of the keys above the first header (what callers pass for top-level keys).
     brackets : str
         ``"any"``: ``[table]`` and ``[[table]]`` headers; ``"single"``: a header is ``[`` ... ``]``
-        (``[[table]]`` reads as the name ``[table``).
+        (``[[table]]`` reads as the name ``[table``); ``"pair"``: one or two brackets.
     unquote : bool
         A header's name loses its double quotes (``["blade"]`` is ``blade``).
     dotted : bool
         A header ``[a.b]`` opens section ``a`` (the part before the first dot).
     key_quotes : str
-        The quote characters a key may be written in (``"key" = ...``).
+        The quote characters a key may be written in (``"key" = ...``); "" for bare keys only.
     fallback : str or None
         When ``key`` of ``section`` is not found: ``"header"``: the section's header line (as
         :func:`line_of` finds it with ``key=None``); ``"prefix"``: the first line that starts
         with brackets, the section's name and ``]`` or ``.`` (spaces allowed between); None: no line.
+    one_table : bool
+        Only the ``nth`` header named ``section`` counts (an array of tables, ``[[organ]]``): the
+        key is searched from it to the next header of any name, and when absent the header's own
+        line is the answer. ``fallback`` does not apply.
     """
 
     top: str | None = None
@@ -116,17 +121,22 @@ class LineStyle:
     dotted: bool = True
     key_quotes: str = "\"'"
     fallback: str | None = None
+    one_table: bool = False
 
 
-def line_of(text: str, section: str | None, key: str | None, style: LineStyle = LineStyle()) -> int | None:
+def line_of(text: str, section: str | None, key: str | None, style: LineStyle = LineStyle(),
+            nth: int = 0) -> int | None:
     """1-based line of ``key`` inside ``section`` (``style.top`` for the top level), or of the
     section's header when ``key`` is None; None when not found. Best effort: the text is searched
     line by line, not parsed (a line of a multi-line value that looks like a header counts as one).
+    ``nth``: which header named ``section`` (from 0), for a ``style.one_table`` search.
     """
     header = _HEADERS[style.brackets]
-    quotes = re.escape(style.key_quotes)
-    pat = None if key is None else re.compile(rf"^[{quotes}]?{re.escape(key)}[{quotes}]?\s*=")
+    quotes = f"[{re.escape(style.key_quotes)}]?" if style.key_quotes else ""
+    pat = None if key is None else re.compile(rf"^{quotes}{re.escape(key)}{quotes}\s*=")
     lines = text.splitlines()
+    if style.one_table:
+        return _line_in_table(lines, section, pat, header, style, nth)
     current = style.top
     for i, raw in enumerate(lines, 1):
         s = raw.strip()
@@ -153,6 +163,31 @@ def line_of(text: str, section: str | None, key: str | None, style: LineStyle = 
             if start.match(raw.strip()):
                 return i
     return None
+
+
+def _line_in_table(lines, section, pat, header, style: LineStyle, nth: int) -> int | None:
+    """:func:`line_of` in the ``nth`` table named ``section`` only (``style.one_table``)."""
+    found = None
+    seen = -1
+    for i, raw in enumerate(lines, 1):
+        s = raw.strip()
+        m = header.match(s)
+        if m:
+            if found is not None:
+                break
+            name = m.group(1)
+            if style.unquote:
+                name = name.strip().strip('"')
+            if style.dotted:
+                name = name.split(".")[0]
+            if name == section:
+                seen += 1
+                if seen == nth:
+                    found = i
+            continue
+        if found is not None and pat is not None and pat.match(s):
+            return i
+    return found
 
 
 # ---------------------------------------------------------------------------------------------

@@ -217,3 +217,33 @@ def test_vector():
 def test_unknown_line_is_none_without_text():
     t = ParamText("<params>", "")
     assert str(t.bad("sca", "step", "a number", "x")) == "<params>: expected sca.step as a number, found \"'x'\""
+
+
+ORGANS = """\
+[flower]
+keyframes = 10
+
+[[organ]]
+name = "a"
+"mesh" = "a.obj"
+
+[[organ]]
+name = "b"
+
+[growth.early]
+dg = 0.1
+"""
+
+
+def test_line_of_one_table():
+    style = LineStyle(brackets="pair", dotted=False, key_quotes="", one_table=True)
+    assert line_of(ORGANS, "organ", "name", style, 0) == 5
+    assert line_of(ORGANS, "organ", "name", style, 1) == 9
+    assert line_of(ORGANS, "organ", None, style, 1) == 8
+    assert line_of(ORGANS, "organ", "mesh", style, 0) == 4  # quoted keys not taken: the header's line
+    assert line_of(ORGANS, "organ", "dg", style, 1) == 8  # the search stops at the next header
+    assert line_of(ORGANS, "organ", "name", style, 2) is None  # no third [[organ]]
+    assert line_of(ORGANS, "growth.early", "dg", style) == 12  # the whole dotted name
+    assert line_of(ORGANS, "growth", "dg", style) is None
+    assert line_of("[[[organ]]]\nname = 1\n", "organ", "name", style) is None  # at most two brackets
+    assert line_of("[[[organ]]]\nname = 1\n", "organ", "name", LineStyle()) == 2
