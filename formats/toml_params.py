@@ -113,6 +113,10 @@ class LineStyle:
         Only the ``nth`` header named ``section`` counts (an array of tables, ``[[organ]]``): the
         key is searched from it to the next header of any name, and when absent the header's own
         line is the answer. ``fallback`` does not apply.
+    subtables : bool
+        A header ``[section.key]`` is the line of ``key`` too (a table as a key's value). Without
+        ``one_table``, ``nth`` > 0 searches keys in the ``nth`` table named ``section`` only (0: in
+        any of them).
     """
 
     top: str | None = None
@@ -122,6 +126,7 @@ class LineStyle:
     key_quotes: str = "\"'"
     fallback: str | None = None
     one_table: bool = False
+    subtables: bool = False
 
 
 def line_of(text: str, section: str | None, key: str | None, style: LineStyle = LineStyle(),
@@ -129,7 +134,7 @@ def line_of(text: str, section: str | None, key: str | None, style: LineStyle = 
     """1-based line of ``key`` inside ``section`` (``style.top`` for the top level), or of the
     section's header when ``key`` is None; None when not found. Best effort: the text is searched
     line by line, not parsed (a line of a multi-line value that looks like a header counts as one).
-    ``nth``: which header named ``section`` (from 0), for a ``style.one_table`` search.
+    ``nth``: which header named ``section`` (from 0) is searched (see :class:`LineStyle`).
     """
     header = _HEADERS[style.brackets]
     quotes = f"[{re.escape(style.key_quotes)}]?" if style.key_quotes else ""
@@ -138,6 +143,7 @@ def line_of(text: str, section: str | None, key: str | None, style: LineStyle = 
     if style.one_table:
         return _line_in_table(lines, section, pat, header, style, nth)
     current = style.top
+    seen = -1
     for i, raw in enumerate(lines, 1):
         s = raw.strip()
         m = header.match(s)
@@ -148,10 +154,16 @@ def line_of(text: str, section: str | None, key: str | None, style: LineStyle = 
             if style.dotted:
                 name = name.split(".")[0]
             current = name
-            if key is None and current == section:
+            if current == section:
+                seen += 1
+            if key is None and current == section and seen == nth:
                 return i
+            if key is not None and style.subtables:
+                parts = current.split(".", 1)
+                if len(parts) == 2 and parts[0] == section and parts[1].strip("\"'") == key:
+                    return i
             continue
-        if pat is not None and current == section and pat.match(s):
+        if pat is not None and current == section and (nth == 0 or seen == nth) and pat.match(s):
             return i
     if key is None or section is None or section == style.top:
         return None

@@ -247,3 +247,28 @@ def test_line_of_one_table():
     assert line_of(ORGANS, "growth", "dg", style) is None
     assert line_of("[[[organ]]]\nname = 1\n", "organ", "name", style) is None  # at most two brackets
     assert line_of("[[[organ]]]\nname = 1\n", "organ", "name", LineStyle()) == 2
+
+
+SWEEP = """\
+[[stage]]
+name = "a"
+
+[[stage]]
+cli = "b"
+
+[axes]
+n = [1, 2]
+
+[axes.alpha]
+values = [1]
+"""
+
+
+def test_line_of_subtables_and_nth():
+    style = LineStyle(brackets="pair", dotted=False, subtables=True)
+    assert line_of(SWEEP, "axes", "alpha", style) == 10  # the header [axes.alpha]
+    assert line_of(SWEEP, "axes", "alpha", LineStyle(dotted=False)) is None
+    assert line_of(SWEEP, "stage", "cli", style, 1) == 5
+    assert line_of(SWEEP, "stage", "cli", style, 0) == 5  # 0: a key of any [[stage]]
+    assert line_of(SWEEP, "stage", "name", style, 1) is None  # only the second [[stage]]
+    assert line_of(SWEEP, "stage", None, style, 1) == 4
