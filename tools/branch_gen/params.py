@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, InputError, did_you_mean, parse_toml, read_lines
+from inflo.formats.errors import InputError
+from inflo.formats.toml_params import LineStyle, ParamText, read_toml_lines, show_repr, unknown_name
 
 __all__ = [
     "Params",
@@ -38,6 +38,7 @@ __all__ = [
     "CylinderParams",
     "read_params",
     "params_from_dict",
+    "param_text",
     "ALGORITHMS",
 ]
 
@@ -164,54 +165,15 @@ _SECTIONS = {
 _TOP = ("algorithm", "seed", "base")
 
 
-class _Where:
-    """Finds the line of a key in the TOML text, for error messages."""
-
-    def __init__(self, path, lines):
-        self.path = path
-        self.lines = lines
-
-    def line(self, section: str | None, key: str) -> int | None:
-        cur = None
-        pat = re.compile(rf"^\s*[\"']?{re.escape(key)}[\"']?\s*=")
-        for i, raw in enumerate(self.lines, 1):
-            s = raw.strip()
-            m = re.match(r"^\[+\s*([^\]]+?)\s*\]+", s)
-            if m:
-                cur = m.group(1).split(".")[0]
-                continue
-            if cur == section and pat.match(raw):
-                return i
-        if section is not None:
-            for i, raw in enumerate(self.lines, 1):
-                if re.match(rf"^\s*\[+\s*{re.escape(section)}\s*[\].]", raw.strip()):
-                    return i
-        return None
-
-    def error(self, section, key, expected, found) -> FormatError:
-        name = key if section is None else f"{section}.{key}"
-        return FormatError(self.path, self.line(section, key), f"{expected} for '{name}'", found)
+#: how branch-gen finds a key's line: top-level keys have no section; a key not found points at its
+#: section's header
+LINES = LineStyle(top=None, fallback="prefix")
 
 
-def _num(w, sec, key, v, *, integer=False, allow_inf=False):
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        if allow_inf and isinstance(v, str) and v.strip().lower() in ("inf", "infinity"):
-            return INF
-        raise w.error(sec, key, "an integer" if integer else "a number", repr(v))
-    if integer:
-        if isinstance(v, float):
-            raise w.error(sec, key, "an integer", repr(v))
-        return int(v)
-    v = float(v)
-    if math.isnan(v) or (math.isinf(v) and not allow_inf):
-        raise w.error(sec, key, "a finite number", repr(v))
-    return v
-
-
-def _vec(w, sec, key, v, n=3):
-    if not isinstance(v, list) or len(v) != n:
-        raise w.error(sec, key, f"a list of {n} numbers", repr(v))
-    return [_num(w, sec, key, x) for x in v]
+def param_text(path, lines) -> ParamText:
+    """The wording of branch-gen's (and thyrse's) errors: ``expected <what> for '<section.key>'``,
+    found the value's repr, at the key's line."""
+    return ParamText(path, "\n".join(lines), style=LINES, template="{expected} for '{name}'", show=show_repr)
 
 
 def params_from_dict(data: dict, *, path="<params>", lines=None, folder=None) -> Params:
@@ -222,13 +184,12 @@ def params_from_dict(data: dict, *, path="<params>", lines=None, folder=None) ->
     FormatError
         Unknown key/section (naming the closest known one), wrong type, out-of-range value.
     """
-    w = _Where(path, lines or [])
+    w = param_text(path, lines or [])
     p = Params(source=os.fspath(path), folder=Path(folder) if folder is not None else Path("."))
     known_top = list(_TOP) + list(_SECTIONS)
     for key, v in data.items():
         if key not in known_top:
-            raise FormatError(path, w.line(None, key) or w.line(key, ""),
-                              "a known key or section" + did_you_mean(key, known_top), repr(key))
+            raise unknown_name(path, w.line(None, key) or w.line(key, ""), "a known key or section", key, known_top)
         if key in _SECTIONS:
             if not isinstance(v, dict):
                 raise w.error(None, key, "a [section]", repr(v))
@@ -236,19 +197,18 @@ def params_from_dict(data: dict, *, path="<params>", lines=None, folder=None) ->
             fields = [f for f in obj.__dataclass_fields__ if not f.startswith("_")]
             for k, val in v.items():
                 if k not in fields:
-                    raise FormatError(path, w.line(key, k), f"a key of [{key}]" + did_you_mean(k, fields),
-                                      repr(k))
+                    raise unknown_name(path, w.line(key, k), f"a key of [{key}]", k, fields)
                 setattr(obj, k, _convert(w, key, k, val, getattr(obj, k)))
         elif key == "algorithm":
             if v not in ALGORITHMS:
                 raise w.error(None, key, "'rodkaew' or 'sca'", repr(v))
             p.algorithm = v
         elif key == "seed":
-            p.seed = _num(w, None, key, v, integer=True)
+            p.seed = w.integer(None, key, v)
             if not 0 <= p.seed <= 2**32 - 1:
                 raise w.error(None, key, "a seed in [0, 4294967295]", repr(v))
         elif key == "base":
-            p.base = _vec(w, None, key, v)
+            p.base = w.vector(None, key, v)
     _validate(p, w)
     return p
 
@@ -261,21 +221,21 @@ def _convert(w, sec, key, val, default):
         for item in val:
             if not isinstance(item, dict) or set(item) != {"file", "angle"} or not isinstance(item["file"], str):
                 raise w.error(sec, key, "tables {file = \"name.con\", angle = degrees}", repr(item))
-            out.append(ContourSpec(item["file"], _num(w, sec, key, item["angle"])))
+            out.append(ContourSpec(item["file"], w.number(sec, key, item["angle"])))
         return out
     if sec == "sca" and key in ("roots", "obstacles"):
         n = 3 if key == "roots" else 4
         if not isinstance(val, list):
             raise w.error(sec, key, f"a list of [{'x, y, z' if n == 3 else 'nx, ny, nz, c'}] lists", repr(val))
-        return [_vec(w, sec, key, x, n) for x in val]
+        return [w.vector(sec, key, x, n) for x in val]
     if isinstance(default, bool):
         if not isinstance(val, bool):
             raise w.error(sec, key, "true or false", repr(val))
         return val
     if isinstance(default, int):
-        return _num(w, sec, key, val, integer=True)
+        return w.integer(sec, key, val)
     if isinstance(default, float):
-        return _num(w, sec, key, val, allow_inf=math.isinf(default) or key in ("perception_radius", "influence_radius"))
+        return w.number(sec, key, val, allow_inf=math.isinf(default) or key in ("perception_radius", "influence_radius"))
     if isinstance(default, str):
         if not isinstance(val, str):
             raise w.error(sec, key, "a string", repr(val))
@@ -285,11 +245,11 @@ def _convert(w, sec, key, val, default):
             raise w.error(sec, key, "three .func file names (X, Y, Z scale)", repr(val))
         return list(val)
     if isinstance(default, list):
-        return _vec(w, sec, key, val, len(default))
+        return w.vector(sec, key, val, len(default))
     raise AssertionError(key)  # pragma: no cover
 
 
-def _validate(p: Params, w: _Where) -> None:
+def _validate(p: Params, w: ParamText) -> None:
     r = p.rodkaew
 
     def need(ok, sec, key, expected, found):
@@ -343,18 +303,11 @@ def _validate(p: Params, w: _Where) -> None:
     need(3 <= p.cylinder.sides <= 64, "cylinder", "sides", "3..64 sides", p.cylinder.sides)
 
 
-def load_toml(path) -> tuple[dict, list]:
-    """The parsed TOML mapping of ``path`` and its lines (for the key lines of error messages);
-    invalid TOML is a :class:`FormatError` naming its line. Also read by ``thyrse``'s parameters."""
-    lines = read_lines(path)
-    return parse_toml("\n".join(lines), path), lines
-
-
 def read_params(path=None) -> Params:
     """Read a branch-gen TOML parameter file (None: all defaults)."""
     if path is None:
         return params_from_dict({})
-    data, lines = load_toml(path)
+    data, lines = read_toml_lines(path)
     return params_from_dict(data, path=path, lines=lines, folder=Path(path).parent)
 
 

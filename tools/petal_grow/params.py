@@ -13,7 +13,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, did_you_mean, parse_toml, read_bytes, shorten
+from inflo.formats.errors import FormatError, did_you_mean, parse_toml, shorten
+from inflo.formats.toml_params import LineStyle, line_of, read_toml_text, unknown_name
 
 from .maps import DirectionMap, ScalarMap, parse_direction_map, parse_scalar_map
 
@@ -102,33 +103,21 @@ MAX_STEPS = 5_000_000
 MAX_COLLISION_ITERATIONS = 1_000
 
 
+#: how petal-grow finds a key's line: in the ``index``-th ``[table]``/``[[table]]`` of that exact
+#: name (``growth.NAME`` whole), bare keys, up to the next header; absent: the header's line
+LINES = LineStyle(brackets="pair", dotted=False, key_quotes="", one_table=True)
+
+
 def _line(text: str, table: str, key: str | None, index: int = 0) -> int | None:
     """1-based line of ``key`` in the ``index``-th ``[table]``/``[[table]]`` header's body (or the
     header's own line when ``key`` is None or absent)."""
-    header = None
-    seen = -1
-    hdr = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?")
-    lines = text.splitlines()
-    for i, raw in enumerate(lines, 1):
-        m = hdr.match(raw)
-        if m:
-            if header is not None:
-                break
-            if m.group(1) == table:
-                seen += 1
-                if seen == index:
-                    header = i
-            continue
-        if header is not None and key is not None and re.match(rf"^\s*{re.escape(key)}\s*=", raw):
-            return i
-    return header
+    return line_of(text, table, key, LINES, index)
 
 
 def _check_keys(data: dict, known: dict, path, text, table, index=0):
     for k in data:
         if k not in known:
-            raise FormatError(path, _line(text, table, k, index),
-                              f"a key of [{table}] ({', '.join(known)}){did_you_mean(k, known)}", repr(k))
+            raise unknown_name(path, _line(text, table, k, index), f"a key of [{table}] ({', '.join(known)})", k, known)
 
 
 def _num(value, path, line, what, lo=None, hi=None, integer=False):
@@ -164,11 +153,11 @@ def _schedule(value, path, line, what, kind):
 
 def read_params(path) -> Params:
     """Read and check a parameter file; maps and paths are relative to its folder."""
-    try:
-        text = read_bytes(path).decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise FormatError(path, None, "UTF-8 TOML text", f"a byte that is not UTF-8 at offset {exc.start}") from None
-    return parse_params(text, os.fspath(path))
+    return parse_params(read_toml_text(path, _undecodable), os.fspath(path))
+
+
+def _undecodable(path, data: bytes, exc: UnicodeDecodeError) -> FormatError:
+    return FormatError(path, None, "UTF-8 TOML text", f"a byte that is not UTF-8 at offset {exc.start}")
 
 
 def parse_params(text: str, path="<params>") -> Params:
@@ -178,9 +167,8 @@ def parse_params(text: str, path="<params>") -> Params:
     base = Path(path).resolve().parent
     for k in raw:
         if k not in ("flower", "growth", "organ"):
-            raise FormatError(path, _line(text, k, None) or _line(text, "", k),
-                              f"a section [flower], [growth.NAME] or [[organ]]{did_you_mean(k, ['flower', 'growth', 'organ'])}",
-                              repr(k))
+            raise unknown_name(path, _line(text, k, None) or _line(text, "", k),
+                               "a section [flower], [growth.NAME] or [[organ]]", k, ["flower", "growth", "organ"])
     fl = raw.get("flower", {})
     if not isinstance(fl, dict):
         raise FormatError(path, None, "[flower] as a table", shorten(repr(fl)))

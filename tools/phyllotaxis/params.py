@@ -19,11 +19,11 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, InputError, did_you_mean, parse_toml, shorten
+from inflo.formats.errors import FormatError, InputError, parse_toml, shorten
+from inflo.formats.toml_params import LineStyle, ParamText, show_short, unknown_name
 
 from .receptacle import ReceptacleOptions
 
@@ -184,21 +184,15 @@ MIN_INTERVAL = 1e-3
 _WHEN_GIVEN = ("receptacle",)
 
 
-def _line_of(text: str, section: str | None, key: str | None) -> int | None:
-    """1-based line of ``key`` inside ``[section]`` (or of the section header), best effort."""
-    lines = text.splitlines()
-    current = None
-    for i, raw in enumerate(lines, 1):
-        s = raw.strip()
-        m = re.match(r"^\[\s*([^\]]+?)\s*\]", s)
-        if m:
-            current = m.group(1).strip().strip('"')
-            if key is None and current == section:
-                return i
-            continue
-        if key is not None and current == section and re.match(rf"^\"?{re.escape(key)}\"?\s*=", s):
-            return i
-    return None
+#: how phyllotaxis finds a key's line: ``[table]`` headers (double quotes dropped, dots kept), keys
+#: bare or in double quotes; no line when the key is absent
+LINES = LineStyle(brackets="single", unquote=True, dotted=False, key_quotes='"')
+
+
+def _text(path, text: str) -> ParamText:
+    """The wording of phyllotaxis' errors: ``expected <section.key> as <what>``, found the
+    value's repr (shortened)."""
+    return ParamText(path, text, style=LINES, template="{name} as {expected}", show=show_short)
 
 
 def _resolve(base: Path, value: str) -> str:
@@ -220,19 +214,19 @@ def parse_params(text: str, path="<params>") -> Params:
         the wrong type or out of range, both ``[dynamics]`` and ``[hierarchy]``.
     """
     raw = parse_toml(text, path)
+    w = _text(path, text)
     base = Path(os.fspath(path)).resolve().parent
     out: dict = {}
     for section, table in raw.items():
         if section not in SCHEMA:
-            raise FormatError(path, _line_of(text, section, None),
-                              f"a section of {list(SCHEMA)}{did_you_mean(section, SCHEMA)}", f"[{section}]")
+            raise unknown_name(path, w.line(section, None), f"a section of {list(SCHEMA)}", section, SCHEMA,
+                               found=f"[{section}]")
         if not isinstance(table, dict):
             raise FormatError(path, None, f"[{section}] as a table", shorten(repr(table)))
         schema = SCHEMA[section]
         for key in table:
             if key not in schema:
-                raise FormatError(path, _line_of(text, section, key),
-                                  f"a key of [{section}]{did_you_mean(key, schema)}", repr(key))
+                raise unknown_name(path, w.line(section, key), f"a key of [{section}]", key, schema)
     for section, schema in SCHEMA.items():
         if section in _OPTIONAL + _WHEN_GIVEN and section not in raw:
             continue
@@ -242,42 +236,30 @@ def parse_params(text: str, path="<params>") -> Params:
             if key not in table:
                 values[key] = list(default) if isinstance(default, list) else default
                 continue
-            values[key] = _check(table[key], kind, section, key, text, path, base)
+            values[key] = _check(table[key], kind, section, key, w, base)
         out[section] = values
     present = [sec for sec in _OPTIONAL if sec in out]
     if len(present) > 1:
-        raise FormatError(path, _line_of(text, present[1], None),
+        raise FormatError(path, w.line(present[1], None),
                           "at most one of [dynamics], [compound], [hierarchy]", f"[{present[0]}] and [{present[1]}]")
-    _check_ranges(out, text, path)
+    _check_ranges(out, w)
     return Params(**{section: _SECTIONS[section](**values) for section, values in out.items()})
 
 
-def _check(value, kind, section, key, text, path, base):
-    line = _line_of(text, section, key)
-
+def _check(value, kind, section, key, w: ParamText, base):
     def bad(expected):
-        return FormatError(path, line, f"{section}.{key} as {expected}", shorten(repr(value)))
+        return w.bad(section, key, expected, value)
 
     if isinstance(kind, tuple) and kind[0] == "choice":
-        if value not in kind[1]:
-            raise bad(f"one of {list(kind[1])}{did_you_mean(str(value), kind[1])}")
-        return value
+        return w.choice(section, key, value, kind[1])
     if kind == "float":
-        if isinstance(value, bool) or not isinstance(value, _NUM) or not math.isfinite(value):
-            raise bad("a finite number")
-        return float(value)
+        return w.number(section, key, value, not_a_number="a finite number")
     if kind == "int":
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise bad("an integer")
-        return int(value)
+        return w.integer(section, key, value)
     if kind == "bool":
-        if not isinstance(value, bool):
-            raise bad("true or false")
-        return value
+        return w.boolean(section, key, value)
     if kind == "str":
-        if not isinstance(value, str):
-            raise bad("a string")
-        return value
+        return w.string(section, key, value)
     if kind == _FUNC:
         if isinstance(value, str):
             return _resolve(base, value)
@@ -302,10 +284,9 @@ def _check(value, kind, section, key, text, path, base):
     raise AssertionError(kind)  # pragma: no cover
 
 
-def _check_ranges(p: dict, text: str, path) -> None:
+def _check_ranges(p: dict, w: ParamText) -> None:
     def fail(section, key, expected):
-        raise FormatError(path, _line_of(text, section, key), f"{section}.{key} {expected}",
-                          shorten(repr(p[section][key])))
+        raise w.error(section, key, expected, show_short(p[section][key]), template="{name} {expected}")
 
     s, pr = p["surface"], p["primordia"]
     if not 0 < s["radius"] <= 1e6:

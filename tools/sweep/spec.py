@@ -17,11 +17,11 @@ import json
 import math
 import os
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, did_you_mean, read_bytes, shorten
+from inflo.formats.errors import FormatError, did_you_mean, parse_toml, shorten
+from inflo.formats.toml_params import LineStyle, line_of, read_toml_text, unknown_name
 
 __all__ = ["Target", "Axis", "Stage", "Pipeline", "Metric", "Sweep", "Variant", "parse_sweep", "read_sweep",
            "variants", "parse_target", "format_value"]
@@ -159,27 +159,14 @@ _AXIS_KEYS = {"target", "values", "range", "linspace", "uniform"}
 _METRIC_KEYS = {"log", "file", "regex", "count", "column", "reduce"}
 
 
+#: how a sweep file's lines are found: ``[table]``/``[[table]]`` headers named whole (dots kept), a
+#: header ``[section.key]`` as the key's line, keys of the ``nth`` ``[[stage]]`` (0: of any)
+LINES = LineStyle(brackets="pair", dotted=False, subtables=True)
+
+
 def _line_of(text: str, section: str | None, key: str | None, nth: int = 0) -> int | None:
     """1-based line of ``key`` inside ``[section]`` (or ``[section.key]``, or the header), best effort."""
-    current = None
-    seen = -1
-    for i, raw in enumerate(text.splitlines(), 1):
-        s = raw.strip()
-        m = re.match(r"^\[\[?\s*([^\]]+?)\s*\]\]?", s)
-        if m:
-            current = m.group(1).strip()
-            name = current.split(".", 1)
-            if current == section:
-                seen += 1
-            if key is None and current == section and seen == nth:
-                return i
-            if key is not None and len(name) == 2 and name[0] == section and name[1].strip('"\'') == key:
-                return i
-            continue
-        if key is not None and current == section and (nth == 0 or seen == nth) and re.match(
-                rf"^[\"']?{re.escape(key)}[\"']?\s*=", s):
-            return i
-    return None
+    return line_of(text, section, key, LINES, nth)
 
 
 def parse_target(spec: str, stages: tuple[str, ...], pipeline: bool, path, line) -> Target:
@@ -263,7 +250,7 @@ def _parse_axis(name, raw, stages, pipeline, text, path) -> Axis:
         table = raw
         for k in table:
             if k not in _AXIS_KEYS:
-                raise FormatError(path, line, f"a key of an axis{did_you_mean(k, _AXIS_KEYS)}", repr(k))
+                raise unknown_name(path, line, "a key of an axis", k, _AXIS_KEYS)
     else:
         raise FormatError(path, line, f"axis {name!r} as a list of values or a table with target and "
                           "values, range, linspace or uniform", shorten(repr(raw)))
@@ -318,15 +305,11 @@ def _strlist(table, key, path, line):
 def parse_sweep(text: str, path="<sweep>") -> Sweep:
     """Parse and check a sweep file's text; see formats/sweep.md."""
     path = Path(os.fspath(path))
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        m = re.search(r"line (\d+)", str(exc))
-        raise FormatError(path, int(m.group(1)) if m else None, "valid TOML", str(exc)) from None
+    raw = parse_toml(text, path)
     for section, table in raw.items():
         if section not in _SECTIONS:
-            raise FormatError(path, _line_of(text, section, None),
-                              f"a section of {list(_SECTIONS)}{did_you_mean(section, _SECTIONS)}", f"[{section}]")
+            raise unknown_name(path, _line_of(text, section, None), f"a section of {list(_SECTIONS)}", section,
+                               _SECTIONS, found=f"[{section}]")
         if section == "stage":
             if not (isinstance(table, list) and all(isinstance(t, dict) for t in table)):
                 raise FormatError(path, _line_of(text, section, None), "[[stage]] tables", shorten(repr(table)))
@@ -342,8 +325,7 @@ def parse_sweep(text: str, path="<sweep>") -> Sweep:
         for nth, t in enumerate(tables):
             for k in t:
                 if k not in keys:
-                    raise FormatError(path, _line_of(text, section, k, nth),
-                                      f"a key of [{section}]{did_you_mean(k, keys)}", repr(k))
+                    raise unknown_name(path, _line_of(text, section, k, nth), f"a key of [{section}]", k, keys)
     sw = raw.get("sweep", {})
     L = lambda key, section="sweep", nth=0: _line_of(text, section, key, nth)
     if "stage" in raw and "pipeline" in raw:
@@ -424,7 +406,7 @@ def parse_sweep(text: str, path="<sweep>") -> Sweep:
                               shorten(repr(v)))
         for kk in v:
             if kk not in _METRIC_KEYS:
-                raise FormatError(path, line, f"a key of a metric{did_you_mean(kk, _METRIC_KEYS)}", repr(kk))
+                raise unknown_name(path, line, "a key of a metric", kk, _METRIC_KEYS)
         m = Metric(k, **{kk: v[kk] for kk in v})
         if not all(isinstance(getattr(m, f), (str, type(None))) for f in _METRIC_KEYS):
             raise FormatError(path, line, "metric keys as strings", shorten(repr(v)))
@@ -498,13 +480,11 @@ def parse_sweep(text: str, path="<sweep>") -> Sweep:
 
 
 def read_sweep(path) -> Sweep:
-    data = read_bytes(path)
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise FormatError(path, data[: exc.start].count(b"\n") + 1, "UTF-8 text",
-                          f"byte 0x{data[exc.start]:02x}") from None
-    return parse_sweep(text, path)
+    return parse_sweep(read_toml_text(path, _undecodable), path)
+
+
+def _undecodable(path, data: bytes, exc: UnicodeDecodeError) -> FormatError:
+    return FormatError(path, data[: exc.start].count(b"\n") + 1, "UTF-8 text", f"byte 0x{data[exc.start]:02x}")
 
 
 # ---------------------------------------------------------------------------------------------

@@ -21,10 +21,10 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from inflo.formats.errors import FormatError, did_you_mean
 from inflo.formats.func import Function, read_func
+from inflo.formats.toml_params import read_toml_lines, unknown_name
 from inflo.tools.branch_gen.params import Params as BranchParams
-from inflo.tools.branch_gen.params import _num, _vec, _Where, load_toml, params_from_dict
+from inflo.tools.branch_gen.params import param_text, params_from_dict
 
 __all__ = ["ThyrseParams", "DevelopmentParams", "Params", "read_params", "params_from_toml", "POSITIONAL"]
 
@@ -113,7 +113,7 @@ def _positional(w, sec, key, v, folder: Path):
         if not q.is_file():
             raise w.error(sec, key, "a number or an existing .func file", repr(v))
         return read_func(q)
-    return Function.constant(_num(w, sec, key, v), name=key)
+    return Function.constant(w.number(sec, key, v), name=key)
 
 
 def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) -> Params:
@@ -125,17 +125,16 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
         Unknown key/section (naming the closest known one), wrong type, out-of-range value, a
         positional key naming no file.
     """
-    w = _Where(path, lines or [])
+    w = param_text(path, lines or [])
     folder = Path(folder) if folder is not None else Path(".")
     p = Params(source=str(path), folder=folder)
     known = list(_TOP) + list(_OWN) + list(_BRANCH)
     rest = {}
     for key, v in data.items():
         if key not in known:
-            raise FormatError(path, w.line(None, key) or w.line(key, ""),
-                              "a known key or section" + did_you_mean(key, known), repr(key))
+            raise unknown_name(path, w.line(None, key) or w.line(key, ""), "a known key or section", key, known)
         if key == "base":
-            p.base = _vec(w, None, key, v)
+            p.base = w.vector(None, key, v)
         elif key in _BRANCH:
             rest[key] = v
         else:
@@ -145,7 +144,7 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
             names = list(obj.__dataclass_fields__)
             for k, val in v.items():
                 if k not in names:
-                    raise FormatError(path, w.line(key, k), f"a key of [{key}]" + did_you_mean(k, names), repr(k))
+                    raise unknown_name(path, w.line(key, k), f"a key of [{key}]", k, names)
                 default = getattr(obj, k)
                 if k in POSITIONAL:
                     setattr(obj, k, val)
@@ -158,9 +157,9 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
                         raise w.error(key, k, "true or false", repr(val))
                     setattr(obj, k, val)
                 elif isinstance(default, int) and not isinstance(default, bool):
-                    setattr(obj, k, _num(w, key, k, val, integer=True))
+                    setattr(obj, k, w.integer(key, k, val))
                 else:
-                    setattr(obj, k, _num(w, key, k, val))
+                    setattr(obj, k, w.number(key, k, val))
     p.branches = params_from_dict(rest, path=path, lines=lines, folder=folder)
     t, d = p.thyrse, p.development
     for sec, obj in (("thyrse", t), ("development", d)):
@@ -214,5 +213,5 @@ def read_params(path=None) -> Params:
     """Read a thyrse TOML parameter file (None: all defaults)."""
     if path is None:
         return params_from_toml({})
-    data, lines = load_toml(path)
+    data, lines = read_toml_lines(path)
     return params_from_toml(data, path=path, lines=lines, folder=Path(path).parent)

@@ -31,7 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from inflo.formats.errors import FormatError, InputError, did_you_mean, parse_toml, read_bytes, shorten
+from inflo.formats.errors import FormatError, InputError, did_you_mean, parse_toml, shorten
+from inflo.formats.toml_params import LineStyle, ParamText, line_of, read_toml_text, show_short, unknown_name
 
 from .blade import GROWTH_TYPES, Blade, Growth, blade_from_points
 
@@ -192,22 +193,15 @@ def _schema(cls) -> dict[str, tuple]:
 SCHEMA: dict[str, dict[str, tuple]] = {"": _schema(Run), **{n: _schema(c) for n, c in _SECTIONS.items()}}
 
 
-def _line_of(text: str, section: str | None, key: str | None) -> int | None:
-    """1-based line of ``key`` in ``[section]`` ("" = top level), or of the section header."""
-    current = ""
-    for i, raw in enumerate(text.splitlines(), 1):
-        s = raw.strip()
-        m = re.match(r"^\[+\s*([^\]]+?)\s*\]+", s)
-        if m:
-            current = m.group(1).strip().strip('"').split(".")[0]
-            if key is None and current == section:
-                return i
-            continue
-        if key is not None and current == section and re.match(rf"^[\"']?{re.escape(key)}[\"']?\s*=", s):
-            return i
-    if key is not None and section:
-        return _line_of(text, section, None)
-    return None
+#: how venation finds a key's line: top-level keys are section "", headers lose their double quotes
+#: and count by the name before the first dot; an absent key points at its section's header
+LINES = LineStyle(top="", unquote=True, fallback="header")
+
+
+def _text(path, text: str) -> ParamText:
+    """The wording of venation's errors: ``expected <key or section.key> as <what>``, found the
+    value's repr (shortened)."""
+    return ParamText(path, text, style=LINES, template="{name} as {expected}", show=show_short)
 
 
 def parse_params(text: str, path="<params>") -> Params:
@@ -221,70 +215,53 @@ def parse_params(text: str, path="<params>") -> Params:
     """
     path = os.fspath(path)
     raw = parse_toml(text, path)
+    w = _text(path, text)
     base = Path(path).resolve().parent
     known = [k for k in SCHEMA[""]] + list(_SECTIONS)
     tables = {"": {}}
     for key, value in raw.items():
         if key in _SECTIONS:
             if not isinstance(value, dict):
-                raise FormatError(path, _line_of(text, "", key), f"[{key}] as a table", shorten(repr(value)))
+                raise FormatError(path, w.line("", key), f"[{key}] as a table", shorten(repr(value)))
             tables[key] = value
         elif key in SCHEMA[""]:
             tables[""][key] = value
         else:
-            line = _line_of(text, key, None) or _line_of(text, "", key)
-            raise FormatError(path, line, f"a known key or section{did_you_mean(key, known)}", repr(key))
+            raise unknown_name(path, w.line(key, None) or w.line("", key), "a known key or section", key, known)
     values: dict[str, dict] = {}
     for section, schema in SCHEMA.items():
         table = tables.get(section, {})
         for key in table:
             if key not in schema:
                 where = f"[{section}]" if section else "the top level"
-                raise FormatError(path, _line_of(text, section, key),
-                                  f"a key of {where}{did_you_mean(key, schema)}", repr(key))
+                raise unknown_name(path, w.line(section, key), f"a key of {where}", key, schema)
         values[section] = {}
         for key, (kind, default) in schema.items():
             if key in table:
-                values[section][key] = _check(table[key], kind, section, key, text, path, base)
+                values[section][key] = _check(table[key], kind, section, key, w, base)
             else:
                 values[section][key] = list(default) if isinstance(default, list) else default
-    _check_ranges(values, text, path)
+    _check_ranges(values, w)
     return Params(run=Run(**values[""]), **{s: c(**values[s]) for s, c in _SECTIONS.items()}, source=path, text=text)
 
 
-def _name(section, key):
-    return f"{section}.{key}" if section else key
-
-
-def _check(value, kind, section, key, text, path, base):
-    line = _line_of(text, section, key)
-
+def _check(value, kind, section, key, w: ParamText, base):
     def bad(expected):
-        return FormatError(path, line, f"{_name(section, key)} as {expected}", shorten(repr(value)))
+        return w.bad(section, key, expected, value)
 
     def number(v):
         return isinstance(v, _NUM) and not isinstance(v, bool) and math.isfinite(v)
 
     if isinstance(kind, tuple) and kind[0] == "choice":
-        if not isinstance(value, str) or value not in kind[1]:
-            raise bad(f"one of {list(kind[1])}{did_you_mean(str(value), kind[1])}")
-        return value
+        return w.choice(section, key, value, kind[1])
     if kind == "float":
-        if not number(value):
-            raise bad("a finite number")
-        return float(value)
+        return w.number(section, key, value, not_a_number="a finite number")
     if kind == "int":
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise bad("an integer")
-        return int(value)
+        return w.integer(section, key, value)
     if kind == "bool":
-        if not isinstance(value, bool):
-            raise bad("true or false")
-        return value
+        return w.boolean(section, key, value)
     if kind == "str":
-        if not isinstance(value, str):
-            raise bad("a string")
-        return value
+        return w.string(section, key, value)
     if kind == "path":
         if not isinstance(value, str):
             raise bad("a file name")
@@ -319,10 +296,9 @@ def _check(value, kind, section, key, text, path, base):
     raise AssertionError(kind)  # pragma: no cover
 
 
-def _check_ranges(p: dict, text: str, path) -> None:
+def _check_ranges(p: dict, where: ParamText) -> None:
     def fail(section, key, expected):
-        raise FormatError(path, _line_of(text, section, key), f"{_name(section, key)} {expected}",
-                          shorten(repr(p[section][key])))
+        raise where.error(section, key, expected, show_short(p[section][key]), template="{name} {expected}")
 
     r = p[""]
     if r["max_iterations"] < 1:
@@ -335,7 +311,7 @@ def _check_ranges(p: dict, text: str, path) -> None:
     if b["contour"] and b["polygon"]:
         fail("blade", "polygon", "absent when blade.contour is given (one blade)")
     if not b["contour"] and not b["polygon"]:
-        raise FormatError(path, _line_of(text, "blade", None), "a blade: [blade] contour = \"leaf.con\" or "
+        raise FormatError(where.path, where.line("blade", None), "a blade: [blade] contour = \"leaf.con\" or "
                           "polygon = [[x, y], ...]", "neither")
     if b["polygon"] and len(b["polygon"]) < 3:
         fail("blade", "polygon", "with at least 3 points")
@@ -437,12 +413,7 @@ def _check_ranges(p: dict, text: str, path) -> None:
 def read_params(path) -> Params:
     """Read and check a venation parameter file (see :func:`parse_params`)."""
     path = os.fspath(path)
-    data = read_bytes(path)
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise FormatError(path, None, "UTF-8 TOML text", "undecodable bytes") from None
-    return parse_params(text, path)
+    return parse_params(read_toml_text(path), path)
 
 
 # --------------------------------------------------------------------------------------------
@@ -461,7 +432,7 @@ class Inputs:
 
 def _margin(p: Params) -> np.ndarray:
     b = p.blade
-    line = _line_of(p.text, "blade", "contour")
+    line = line_of(p.text, "blade", "contour", LINES)
     if b.polygon:
         return np.asarray(b.polygon, dtype=np.float64) * b.size
     from inflo.formats.contour import read_con, read_cset
@@ -472,7 +443,7 @@ def _margin(p: Params) -> np.ndarray:
         if b.contour_name:
             names = [c.name for c in items]
             if b.contour_name not in names:
-                raise FormatError(p.source, _line_of(p.text, "blade", "contour_name"),
+                raise FormatError(p.source, line_of(p.text, "blade", "contour_name", LINES),
                                   f"blade.contour_name as a contour of {Path(name).name}"
                                   f"{did_you_mean(b.contour_name, names)}", repr(b.contour_name))
             con = items[names.index(b.contour_name)]
@@ -501,12 +472,12 @@ def load_inputs(p: Params) -> Inputs:
         blade = blade_from_points(margin, base=p.blade.base)
     except ValueError as exc:
         key = "polygon" if p.blade.polygon else "contour"
-        raise FormatError(p.source, _line_of(p.text, "blade", key), f"a simple closed margin for blade.{key}",
+        raise FormatError(p.source, line_of(p.text, "blade", key, LINES), f"a simple closed margin for blade.{key}",
                           str(exc)) from None
     ext = float(np.ptp(blade.polygon, axis=0).max())
     tol = max(1e-6 * ext, p.veins.step)  # within D of the sampled margin counts as on it
     if p.blade.base is not None and not _in_or_on(blade, blade.base[None], 1.0, tol)[0]:
-        raise FormatError(p.source, _line_of(p.text, "blade", "base"), "blade.base inside the blade or within veins.step of its margin",
+        raise FormatError(p.source, line_of(p.text, "blade", "base", LINES), "blade.base inside the blade or within veins.step of its margin",
                           repr(p.blade.base))
     growth = _growth(p)
     s0 = growth.scale_at(0)
@@ -516,7 +487,7 @@ def load_inputs(p: Params) -> Inputs:
     ok = _in_or_on(blade, at_start, s0 if kind != "none" else np.ones(2), tol)
     if not ok.all():
         bad = roots[np.flatnonzero(~ok)[0]].tolist()
-        raise FormatError(p.source, _line_of(p.text, "veins", "roots") if p.veins.roots else _line_of(p.text, "blade", "base"),
+        raise FormatError(p.source, line_of(p.text, "veins", "roots", LINES) if p.veins.roots else line_of(p.text, "blade", "base", LINES),
                           "initial vein nodes inside the blade at its initial size (or within veins.step of its margin)", repr(bad))
     _check_work(p, blade, growth)
     return Inputs(blade=blade, growth=growth, roots=roots)
@@ -534,7 +505,7 @@ def _check_work(p: Params, blade: Blade, growth: Growth) -> None:
     small, a dart density so high or a growth so slow that the run would not end in reasonable time
     or would ask for more memory than a machine has."""
     def fail(section, key, expected, found):
-        raise FormatError(p.source, _line_of(p.text, section, key), expected, found)
+        raise FormatError(p.source, line_of(p.text, section, key, LINES), expected, found)
 
     if p.run.max_iterations > MAX_ITERATIONS:
         fail("", "max_iterations", f"max_iterations <= {MAX_ITERATIONS}", f"{p.run.max_iterations}")
@@ -584,7 +555,7 @@ def frame_limit_error(p: Params, step: int, textures: bool, *, option: bool, fou
     expected = f"a frame step of {what}"
     if option:
         return InputError(f"--frame-step: expected {expected}, found {step}: {found}")
-    return FormatError(p.source, _line_of(p.text, "output", "frame_step"), f"output.frame_step: {expected}",
+    return FormatError(p.source, line_of(p.text, "output", "frame_step", LINES), f"output.frame_step: {expected}",
                        f"{step}: {found}")
 
 
@@ -627,7 +598,7 @@ def _growth(p: Params) -> Growth:
         for f, name in zip(fns, files * (2 if len(files) == 1 else 1)):
             ys = np.asarray(f.sampled()[1])
             if np.any(ys <= 0) or np.any(np.diff(ys) < -1e-12 * np.abs(ys).max()):
-                raise FormatError(p.source, _line_of(p.text, "growth", "scale"),
+                raise FormatError(p.source, line_of(p.text, "growth", "scale", LINES),
                                   "growth.scale as a positive, non-decreasing function (a scale of the blade)",
                                   f"{Path(name).name} from {ys[0]:g} to {ys[-1]:g}, least {ys.min():g}")
         if g.type == "uniform" or g.type == "marginal":
