@@ -324,3 +324,39 @@ class ParamText:
         if not isinstance(value, list) or len(value) != n:
             raise self.bad(section, key, f"a list of {n} numbers", value)
         return [self.number(section, key, x) for x in value]
+
+
+def referenced_files(path) -> list:
+    """The files a TOML parameter file names: every string value (at any depth, in tables and
+    lists) that is the path of an existing file, relative to the parameter file's folder or the
+    working folder. A tool passes them, with the parameter file, to the output rule
+    (:func:`inflo.formats.atomic.staged_output`), so an output never replaces a ``.func``,
+    contour or map it reads. A file that is not TOML gives none (its reader says why)."""
+    import tomllib
+    from pathlib import Path
+
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return []
+    found: list = []
+
+    def walk(value):
+        if isinstance(value, dict):
+            for v in value.values():
+                walk(v)
+        elif isinstance(value, list):
+            for v in value:
+                walk(v)
+        elif isinstance(value, str) and value and len(value) < 4096 and "\n" not in value:
+            for base in (path.parent, Path.cwd()):
+                try:
+                    q = base / value
+                    if q.is_file() and q not in found:
+                        found.append(q)
+                except (OSError, ValueError):
+                    pass
+
+    walk(data)
+    return found

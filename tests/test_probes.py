@@ -465,3 +465,52 @@ def test_phyllotaxis_rerun_is_whole_or_not_at_all(hostile):
     assert (out / "scene.scn").read_bytes() != first
     assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == ["mine.txt", "scene.scn"]
     assert not any(p.name.startswith(".staging") for p in out.iterdir())
+
+
+FUNC = "fver 1 1\nname: f\nsamples: 100\nflip: off\npoints: 2\n0 0.5\n1 0.5\n"
+TRI = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+
+
+@pytest.mark.parametrize("case", ["thyrse", "phyllotaxis", "branch-gen", "render-colors", "render-input",
+                                  "export-colors"])
+def test_an_output_never_replaces_a_file_the_run_reads(tmp_path, case):
+    """A .func a parameter file names, a colour file or an input mesh, named like the output (or
+    in the output folder under an output's name): one line, exit 2, the file as it was."""
+    if case == "thyrse":
+        (tmp_path / "t").mkdir()
+        victim = tmp_path / "t" / "scene.scn"
+        victim.write_text(FUNC)
+        (tmp_path / "t.toml").write_text('[thyrse]\nnodes = 4\nlateral_length = "t/scene.scn"\n')
+        args = ["thyrse", "-q", "t.toml", "-o", "t"]
+    elif case == "phyllotaxis":
+        (tmp_path / "p").mkdir()
+        victim = tmp_path / "p" / "scene.scn"
+        victim.write_text(FUNC.replace("0.5", "0.003"))
+        (tmp_path / "p.toml").write_text('[surface]\ncurve = "disk"\n[primordia]\narea = "p/scene.scn"\ncount = 100\n')
+        args = ["phyllotaxis", "-q", "p.toml", "-o", "p"]
+    elif case == "branch-gen":
+        (tmp_path / "b").mkdir()
+        victim = tmp_path / "b" / "branches.obj"
+        victim.write_text(FUNC)
+        (tmp_path / "b.toml").write_text('[rodkaew]\nw_b_func = "b/branches.obj"\n')
+        args = ["branch-gen", "-q", REPO / "pipelines" / "examples" / "branch_gen" / "corymb.scn", "b.toml", "-o", "b"]
+    elif case == "render-colors":
+        (tmp_path / "m.obj").write_text(TRI)
+        victim = tmp_path / "col.png"
+        victim.write_text("0 = [1, 0, 0]\n")
+        args = ["canopy-render", "-q", "m.obj", "--colors", "col.png", "-o", "col.png"]
+    elif case == "render-input":
+        victim = tmp_path / "m.png"
+        victim.write_text(TRI)
+        args = ["canopy-render", "-q", "m.png", "-o", "m.png"]
+    else:
+        (tmp_path / "s").mkdir()
+        (tmp_path / "s" / "frame_0000.obj").write_text(TRI)
+        victim = tmp_path / "c.usda"
+        victim.write_text("0 = [1, 0, 0]\n")
+        args = ["canopy-export", "-q", "s", "--colors", "c.usda", "-o", "c.usda"]
+    before = victim.read_bytes()
+    r = run_cli(args[0], *args[1:], cwd=tmp_path)
+    assert r.returncode == 2, r.stderr
+    assert "expected an output that is no input" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert victim.read_bytes() == before

@@ -17,6 +17,7 @@ import click
 from inflo.formats.atomic import staged_output
 from inflo.formats.rba import read_rba_sequence
 from inflo.formats.scn import read_scn
+from inflo.formats.toml_params import referenced_files
 from inflo.tools.common.cli import SEED, inflo_command, progress
 
 from .generate import OUTPUT_FILES, branch_gen, write_branch_gen
@@ -61,6 +62,7 @@ def _run(scene, params, output, rba, frame_step, algorithm, seed, base, quiet):
     frames = read_rba_sequence(rba, sc)[1] if rba and algo == "rodkaew" else None
     total = len(sc) if sc is not None else p.sca.n_points
     inputs = [(scene, "scene"), (params, "parameter file"), (rba, "RBA folder")]
+    inputs += [(f, "input") for f in (referenced_files(params) if params else [])]
     # a rerun replaces the earlier run's files only when it completes (never new branches with an
     # old run's frames)
     with staged_output(output, "branch-gen", stale_patterns=OUTPUT_FILES, inputs=inputs) as stage:

@@ -114,6 +114,14 @@ def _translate(ctx, param, values):
               help=".glb: also write the viewer page beside it (index.html and three.js; formats/gltf.md).")
 def main(inputs, output, color_file, units, fps, start_frame, normals, constant_topology, subsets, mtl, translate,
          pc2_dir, quantize, title, figures, every, max_mb, viewer, quiet, debug):
+    if color_file:  # the colour file is read, never written over
+        from inflo.formats.atomic import refuse_output_over_inputs
+
+        refuse_output_over_inputs(output, [(color_file, "colour file")], folder=False)
+    if abs(start_frame) > 10_000_000:
+        from inflo.formats.errors import InputError
+
+        raise InputError(f"--start-frame: expected a frame within +-10000000, found {start_frame}")
     colors = None
     if color_file:
         from inflo.formats.colors import load_color_file

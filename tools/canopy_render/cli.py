@@ -172,6 +172,7 @@ def main(*, inputs, output, frame, sheet_frames, sheet_every, columns, label_for
     if frame is not None and kind != "still":
         raise click.UsageError(f"--frame chooses the frame of a .png still; a {kind} shows "
                                f"{'the frames of --sheet' if kind == 'sheet' else 'every frame'}")
+    _refuse_output_over_inputs(output, inputs, color_file, fcc, textures, mtl_textures)
     files_only = len(inputs) > 1 and all(Path(p).is_file() for p in inputs)
     if not as_sequence and files_only and kind != "still":
         as_sequence = True
@@ -204,3 +205,21 @@ def main(*, inputs, output, frame, sheet_frames, sheet_every, columns, label_for
     summary = run_job(job)
     if not quiet:
         click.echo(f"canopy-render: {summary}", err=True)
+
+
+def _refuse_output_over_inputs(output, inputs, color_file, fcc, textures, mtl_textures) -> None:
+    """One line, exit 2, before any work: the picture would replace a file the run reads (an input
+    mesh, the colour file, the .fcc, a texture given or named by an input's .mtl)."""
+    import re
+
+    from inflo.formats.atomic import refuse_output_over_inputs
+
+    read = [(p, "input") for p in inputs if Path(p).is_file()]
+    read += [(color_file, "colour file"), (fcc, ".fcc file")]
+    read += [(t.split("=", 1)[1] if "=" in t and not Path(t).exists() else t, "texture") for t in textures]
+    if mtl_textures:
+        for folder in {Path(p) if Path(p).is_dir() else Path(p).parent for p in inputs}:
+            for mtl in sorted(folder.glob("*.mtl")) if folder.is_dir() else ():
+                for m in re.finditer(r"^\s*map_Kd\s+(.+?)\s*$", mtl.read_text(errors="replace"), re.M):
+                    read.append((mtl.parent / m.group(1), "texture"))
+    refuse_output_over_inputs(output, read, folder=False)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import click
 
 from inflo.formats.atomic import staged_output
+from inflo.formats.toml_params import referenced_files
 from inflo.tools.common.cli import inflo_command, portable_path, progress
 
 from .generate import OUTPUT_FILES, generate
@@ -22,7 +23,7 @@ def main(params, output, png, quiet, debug):
 
     # a rerun replaces the earlier run's files only when it completes (never a new scene.scn with
     # an old run's RBA frames)
-    with staged_output(output, "phyllotaxis", stale_patterns=OUTPUT_FILES, inputs=[(params, "parameter file")]) as stage:
+    with staged_output(output, "phyllotaxis", stale_patterns=OUTPUT_FILES, inputs=[(params, "parameter file")] + [(f, "input") for f in referenced_files(params)]) as stage:
         summary = generate(p, stage, progress=bar, header=f"phyllotaxis {portable_path(params)}")
     for msg in summary.messages:
         click.echo(f"phyllotaxis: warning: {msg}", err=True)

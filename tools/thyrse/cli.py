@@ -17,6 +17,7 @@ import click
 from inflo.formats.atomic import staged_output
 from inflo.formats.errors import InputError
 from inflo.formats.obj import read_obj
+from inflo.formats.toml_params import referenced_files
 from inflo.tools.common.cli import inflo_command
 
 from .generate import OUTPUT_FILES, thyrse, write_thyrse
@@ -44,6 +45,7 @@ def main(params, output, base, rooms, quiet, debug):
             raise InputError(f"{path}: expected a floret model with triangles (--room), found none")
         models.append((m.vertices, m.faces))
     inputs = [(params, "parameter file")] + [(r, "floret model") for r in rooms]
+    inputs += [(f, "input") for f in (referenced_files(params) if params else [])]
     # a rerun replaces the earlier run's files only when it completes
     with staged_output(output, "thyrse", stale_patterns=OUTPUT_FILES, inputs=inputs) as stage:
         result = thyrse(p, models)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import click
 
 from inflo.formats.atomic import staged_output
+from inflo.formats.toml_params import referenced_files
 from inflo.tools.common.cli import SEED, inflo_command, progress, stall_notice
 
 from .generate import run_venation, summary
@@ -39,7 +40,7 @@ def main(params, output, seed, frame_step, frame_textures, quiet, debug):
     # the earlier run's files are replaced only when this one completes (no new veins on an old texture)
     stale = (r"veins\.obj", r"veins\.widths", r"blade\.obj", r"blade\.mtl", r"texture\.png",
              r"frames/(veins|blade|texture)_\d+\.(obj|widths|png|mtl)")
-    with staged_output(output, "venation", stale_patterns=stale, inputs=[(f, "input") for f in files]) as stage, \
+    with staged_output(output, "venation", stale_patterns=stale, inputs=[(f, "input") for f in files + referenced_files(params)]) as stage, \
             stall_notice("venation") as tick, \
             progress(length=min(limit, max(inputs.growth.steps, 1) + 50), label="venation", quiet=quiet) as bar:
         done = [0]
