@@ -514,3 +514,36 @@ def test_an_output_never_replaces_a_file_the_run_reads(tmp_path, case):
     assert r.returncode == 2, r.stderr
     assert "expected an output that is no input" in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert victim.read_bytes() == before
+
+
+@pytest.mark.parametrize("args", [
+    ["fccompose", REPO / "pipelines" / "examples" / "fccompose" / "dense.fcc", "--frames", "100000000000", "-o", "{d}/o"],
+    ["floret-animate", REPO / "pipelines" / "examples" / "disk_bud.floret",
+     REPO / "pipelines" / "examples" / "disk_open.floret", "--frames", "100000000000", "-o", "{d}/o"],
+    ["dimorph", "sweep", "--n-max", "1000000000000", "-o", "{d}/o"],
+    ["dimorph", "sweep", "--alpha-step", "1e-300", "-o", "{d}/o"],
+])
+def test_counts_asking_for_more_memory_than_a_machine_has_are_refused(tmp_path, args):
+    """Frame and sweep counts of 1e11 and more (a MemoryError, exit 1, before): exit 2, nothing written."""
+    r = run_cli(args[0], *[str(a).format(d=tmp_path) for a in args[1:]])
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr and "MemoryError" not in r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_memory_error_is_one_line_and_exit_2(monkeypatch):
+    """The CLI layer's net for a count no bound caught: one line naming the cause, exit 2."""
+    import click
+    from click.testing import CliRunner
+
+    from inflo.tools.common.cli import inflo_command
+
+    @inflo_command("greedy")
+    @click.option("-o", "--output", default=None)
+    def greedy(output, quiet, debug):
+        raise MemoryError
+
+    r = CliRunner().invoke(greedy, [])
+    assert r.exit_code == 2
+    assert r.output.strip() == ("greedy: error: expected input whose work fits in memory, found more than this "
+                                "machine can allocate (a count or size too large)")

@@ -82,6 +82,12 @@ def inflo_command(name: str, **command_kwargs):
                     raise
                 click.echo(f"{name}: error: {_path_error(exc)}", err=True)
                 sys.exit(2)
+            except MemoryError:  # a count beyond what the machine holds that no bound caught
+                if debug:
+                    raise
+                click.echo(f"{name}: error: expected input whose work fits in memory, found more than this "
+                           f"machine can allocate (a count or size too large)", err=True)
+                sys.exit(2)
             except (OverflowError, FloatingPointError, ZeroDivisionError) as exc:
                 if debug:
                     raise

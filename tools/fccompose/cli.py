@@ -23,7 +23,7 @@ from .compose import compose_canopy
                                              "or the sanity check finds intersections.")
 @click.option("--allow-initial-intersections", is_flag=True,
               help="Go on even when the first frame is not collision-free.")
-@click.option("--frames", "frames", type=click.IntRange(min=0), default=None, metavar="N",
+@click.option("--frames", "frames", type=click.IntRange(min=0, max=100_000), default=None, metavar="N",
               help="Frames to simulate; overrides the file's 'run for number of frames' (a pipeline's "
                    "draft and final builds share one .fcc).")
 @click.option("--updates", "updates", type=click.IntRange(min=1, max=1000), default=None, metavar="N",

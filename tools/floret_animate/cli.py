@@ -21,7 +21,7 @@ from inflo.tools.common.cli import SEED, inflo_command
 @click.argument("key_poses", nargs=-1, required=True, type=click.Path())
 @click.option("-o", "--output", "output", required=True, type=click.Path(file_okay=False),
               help="Folder for the frame .floret files.")
-@click.option("--frames", default=100, show_default=True, type=click.IntRange(min=1),
+@click.option("--frames", default=100, show_default=True, type=click.IntRange(min=1, max=100_000),
               help="Number of frames to write.")
 @click.option("--growth", "growth", type=click.Path(), default=None,
               help="Growth function .func: frame time (x in [0, 1]) -> developmental time "
