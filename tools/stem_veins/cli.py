@@ -30,7 +30,7 @@ def main(params, output, seed, quiet, debug):
     growth = check_growth_map(p)
     inputs = [(params, "input")] + ([(p.diagram.growth_map, "growth map")] if p.diagram.growth_map else [])
     m = p.model
-    expected = m.count * m.plastochron + 200
+    expected = -(-m.count // m.whorl) * m.plastochron + 100  # the last whorl plus settling, about
     with staged_output(output, "stem-veins", stale_patterns=OUTPUT_FILES, inputs=inputs) as stage, \
             stall_notice("stem-veins") as tick, \
             progress(length=expected, label="stem-veins", quiet=quiet) as bar:
@@ -39,7 +39,7 @@ def main(params, output, seed, quiet, debug):
         def advance(n):
             bar.update(n)
             done[0] += n
-            tick(done[0], m.max_iterations, "iterations")
+            tick(done[0], max(expected, done[0]), "iterations")
 
         run = simulate(m, progress=advance)
         write_outputs(stage, run, p, growth)

@@ -160,14 +160,26 @@ def _lune_empty(pos, pairs, cand_ptr, cand):
 
 
 def _delaunay_pairs(pos: np.ndarray) -> np.ndarray | None:
+    """The Delaunay edges (i < j) that are not the strictly longest side of any Delaunay triangle:
+    the Urquhart graph, a superset of the relative neighbourhood graph (the third corner of a
+    triangle lies in the lune of its strictly longest side). None when qhull cannot triangulate."""
     try:
         tri = Delaunay(pos)
     except (QhullError, ValueError):
         return None
-    s = tri.simplices
-    pairs = np.concatenate([s[:, [a, b]] for a in range(4) for b in range(a + 1, 4)])
-    pairs.sort(axis=1)
-    return np.unique(pairs, axis=0)
+    s = np.sort(tri.simplices.astype(np.int64), axis=1)
+    faces = np.concatenate([s[:, [0, 1, 2]], s[:, [0, 1, 3]], s[:, [0, 2, 3]], s[:, [1, 2, 3]]])
+    sides = np.stack([faces[:, [0, 1]], faces[:, [0, 2]], faces[:, [1, 2]]], axis=1)   # (f, 3, 2)
+    length = np.linalg.norm(pos[sides[:, :, 0]] - pos[sides[:, :, 1]], axis=2)
+    order = np.sort(length, axis=1)
+    strict = order[:, 2] > order[:, 1] * (1.0 + 1e-12)
+    longest = sides[np.arange(len(sides)), length.argmax(axis=1)][strict]
+    n = np.int64(len(pos))
+    flat = sides.reshape(-1, 2).astype(np.int64)
+    keys = np.unique(flat[:, 0] * n + flat[:, 1])
+    if len(longest):
+        keys = np.setdiff1d(keys, longest[:, 0].astype(np.int64) * n + longest[:, 1], assume_unique=False)
+    return np.column_stack([keys // n, keys % n])
 
 
 def relative_neighbour_pairs(pos: np.ndarray, tree: cKDTree | None = None) -> np.ndarray:
