@@ -11,11 +11,28 @@ from pathlib import Path
 import click
 
 from inflo.formats.atomic import check_output_path, refuse_output_over_inputs, staged_output
-from inflo.formats.scn import read_scn, write_scn
+from inflo.formats.scn import MAX_FRAME, MAX_WRITTEN, read_scn, write_scn
 from inflo.tools.common.cli import inflo_command
 
 from .dimorph import DimorphOptions, check_window_options, dimorph_scene
-from .sweep import write_sweep
+from .sweep import MAX_SWEEP_WORK, sweep_work, write_sweep
+
+#: a floret type id: the scene arrays hold ids as int32
+MAX_ID = 2**31 - 1
+#: --bracts and --marginal: placements of one head (phyllotaxis places at most a million)
+MAX_COUNT = 1_000_000
+
+
+def refuse_far_placements(path, sc) -> None:
+    """InputError for a placement whose position or scale lies beyond +-MAX_WRITTEN (the most a scene
+    writer puts in a file): the cone tests would overflow, and the typed scene could not be written."""
+    from inflo.formats.errors import InputError
+
+    for k, p in enumerate(sc.placements):
+        big = max(abs(float(x)) for v in (p.pos, p.scale) for x in v)
+        if not big <= MAX_WRITTEN:
+            raise InputError(f"{path}: expected placements with positions and scales within +-{MAX_WRITTEN:g} "
+                             f"(inputs of a sensible size), found {big:g} in placement {k} (id {p.id})")
 
 
 @inflo_command("dimorph", help="Set floret types and sizes by cones (thesis ch. 6), and optionally each type's "
@@ -24,12 +41,12 @@ from .sweep import write_sweep
 @click.argument("scene", type=click.Path())
 @click.option("--alpha", type=float, required=True, help="Cone opening angle in degrees.")
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output scene file.")
-@click.option("--threshold", "thresholds", type=float, multiple=True,
+@click.option("--threshold", "thresholds", type=click.FloatRange(0, MAX_WRITTEN), multiple=True,
               help="Distance threshold(s): once: ray iff d_min > Th (fig. 6.4a,b); twice: Th_a < Th_b, "
                    "large rays above Th_b, small rays (size ~ d_min) between (fig. 6.4c). Default: ray iff the cone is empty.")
-@click.option("--ray-id", type=int, default=1, show_default=True, help="Floret type id of ray florets.")
-@click.option("--disk-id", type=int, default=0, show_default=True, help="Floret type id of disk florets.")
-@click.option("--small-ray-id", type=int, default=None, help="Type id of small ray florets (default: --ray-id).")
+@click.option("--ray-id", type=click.IntRange(0, MAX_ID), default=1, show_default=True, help="Floret type id of ray florets.")
+@click.option("--disk-id", type=click.IntRange(0, MAX_ID), default=0, show_default=True, help="Floret type id of disk florets.")
+@click.option("--small-ray-id", type=click.IntRange(0, MAX_ID), default=None, help="Type id of small ray florets (default: --ray-id).")
 @click.option("--ray-scale", type=float, default=1.0, show_default=True, help="Scale factor of ray florets.")
 @click.option("--small-ray-scale", type=float, default=None,
               help="With two thresholds: a small ray floret's factor is this x d_min / Th_b (default: --ray-scale).")
@@ -37,24 +54,24 @@ from .sweep import write_sweep
 @click.option("--centre", type=click.Choice(["group", "top"]), default="group", show_default=True,
               help="Cone axis away from the floret's own head/umbellet centre, or its top-level group's.")
 @click.option("--half-angle", is_flag=True, help="Read --alpha as the cone's half-angle (eq. 6.1 as printed).")
-@click.option("--ray-lead", type=float, default=0.0, show_default=True, metavar="FRAMES",
+@click.option("--ray-lead", type=click.FloatRange(-MAX_FRAME, MAX_FRAME), default=0.0, show_default=True, metavar="FRAMES",
               help="Ray and small ray florets develop this many frames ahead of the disk florets: their "
                    "frameStart and frameEnd move that much earlier (negative: later), rounded to whole "
                    "frames, frameStart kept >= 0 and frameEnd >= frameStart + 1. Only placements with a "
                    "window (ca, ta, ra, rba); o and i are untouched.")
-@click.option("--ray-development-frames", type=int, default=None, metavar="N",
+@click.option("--ray-development-frames", type=click.IntRange(1, MAX_FRAME), default=None, metavar="N",
               help="Ray and small ray florets: frameEnd = frameStart + N (applied before --ray-lead).")
-@click.option("--disk-development-frames", type=int, default=None, metavar="N",
+@click.option("--disk-development-frames", type=click.IntRange(1, MAX_FRAME), default=None, metavar="N",
               help="Disk florets: frameEnd = frameStart + N.")
-@click.option("--bract-development-frames", type=int, default=None, metavar="N",
+@click.option("--bract-development-frames", type=click.IntRange(1, MAX_FRAME), default=None, metavar="N",
               help="Involucral bracts: frameEnd = frameStart + N (they open with the head, not round a naked "
                    "meristem).")
-@click.option("--bracts", type=int, default=0, show_default=True, metavar="N",
+@click.option("--bracts", type=click.IntRange(0, MAX_COUNT), default=0, show_default=True, metavar="N",
               help="The N outermost placements of each head are involucral bracts (type 'bract', "
                    "--bract-id), left out of the other florets' cone tests.")
-@click.option("--bract-id", type=int, default=2, show_default=True, help="Type id of involucral bracts.")
+@click.option("--bract-id", type=click.IntRange(0, MAX_ID), default=2, show_default=True, help="Type id of involucral bracts.")
 @click.option("--bract-scale", type=float, default=1.0, show_default=True, help="Scale factor of bracts.")
-@click.option("--marginal", type=int, default=0, show_default=True, metavar="N",
+@click.option("--marginal", type=click.IntRange(0, MAX_COUNT), default=0, show_default=True, metavar="N",
               help="Only the N outermost florets of each head (after its bracts) may be ray florets, as "
                    "in Asteraceae, whose ray florets are marginal; the others are disk florets whatever "
                    "their cones. 0: any floret.")
@@ -89,6 +106,7 @@ def run(*, scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_
     check_output_path(output, folder=False)
     refuse_output_over_inputs(output, [(scene, "input scene")], folder=False)
     sc = read_scn(scene)
+    refuse_far_placements(scene, sc)
     out, counts = dimorph_scene(sc, opts)
     write_scn(output, out)
     if not quiet:
@@ -104,7 +122,7 @@ def run(*, scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_
 @click.option("--alpha", type=float, default=75.0, show_default=True, help="Cone angle of the n sweep (fig. 6.2).")
 @click.option("--n-min", type=click.IntRange(min=2, max=100_000), default=10, show_default=True)
 @click.option("--n-max", type=click.IntRange(min=2, max=100_000), default=300, show_default=True)
-@click.option("--n", "n_fixed", type=int, default=82, show_default=True, help="Head size of the alpha sweep (fig. 6.3).")
+@click.option("--n", "n_fixed", type=click.IntRange(2, 100_000), default=82, show_default=True, help="Head size of the alpha sweep (fig. 6.3).")
 @click.option("--alpha-min", type=float, default=20.0, show_default=True)
 @click.option("--alpha-max", type=float, default=120.0, show_default=True)
 @click.option("--alpha-step", type=click.FloatRange(min=1e-3, max=180), default=0.5, show_default=True)
@@ -123,6 +141,10 @@ def sweep(output, alpha, n_min, n_max, n_fixed, alpha_min, alpha_max, alpha_step
         raise InputError(f"cone angles must lie in (0, {top}] degrees with --alpha-min <= --alpha-max and --alpha-step > 0")
     if not 0 < divergence < 360:
         raise InputError(f"--divergence {divergence} outside (0, 360) degrees")
+    work = sweep_work((n_min, n_max), n_fixed, (alpha_min, alpha_max), alpha_step)
+    if work > MAX_SWEEP_WORK:
+        raise InputError(f"expected a sweep of at most {MAX_SWEEP_WORK:.3g} cone tests (the sum over its heads of "
+                         f"max(n, 100)^1.5: --n-min..--n-max, and --n once per alpha step), found {work:.3g}")
     own = (r"sweep_n\.csv", r"sweep_n\.png", r"sweep_alpha\.csv", r"sweep_alpha\.png")
     with staged_output(output, "dimorph-sweep", stale_patterns=own) as stage:  # the four files of one run
         res = write_sweep(stage, alpha=alpha, n_range=(n_min, n_max), n_fixed=n_fixed,
