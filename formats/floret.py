@@ -45,6 +45,8 @@ __all__ = [
 
 FORMAT_VERSION = 1
 MAX_DEGREE = 5
+#: the largest tilt of a petal (degrees): a turn either way; 1e308 would be a finite garbage angle
+MAX_TILT = 360
 MAX_COORDINATE = 1e12
 """Largest control-point coordinate accepted: interpolating and meshing squares coordinates, so
 1e300 overflowed (exit 1) instead of being refused."""
@@ -221,8 +223,8 @@ class Organ:
                 "symmetry, thesis 2.2)",
                 str(self.fused),
             )
-        if not math.isfinite(self.tilt_deg):
-            return ("tilt", "a finite angle", repr(self.tilt_deg))
+        if not (math.isfinite(self.tilt_deg) and abs(self.tilt_deg) <= MAX_TILT):
+            return ("tilt", f"a finite angle within +-{MAX_TILT} degrees", repr(self.tilt_deg))
         if isinstance(self.material, bool) or not isinstance(self.material, (int, np.integer)):
             return ("material", "an integer id", repr(self.material))
         if self.material < 0:
