@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 
 from inflo.formats.atomic import check_output_path, refuse_output_over_inputs, staged_output
-from inflo.formats.scn import MAX_FRAME, MAX_WRITTEN, read_scn, write_scn
+from inflo.formats.scn import MAX_WRITTEN, read_scn, write_scn
 from inflo.tools.common.cli import inflo_command
 
 from .dimorph import DimorphOptions, check_window_options, dimorph_scene
@@ -41,12 +41,12 @@ def refuse_far_placements(path, sc) -> None:
 @click.argument("scene", type=click.Path())
 @click.option("--alpha", type=float, required=True, help="Cone opening angle in degrees.")
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output scene file.")
-@click.option("--threshold", "thresholds", type=click.FloatRange(0, MAX_WRITTEN), multiple=True,
+@click.option("--threshold", "thresholds", type=float, multiple=True,
               help="Distance threshold(s): once: ray iff d_min > Th (fig. 6.4a,b); twice: Th_a < Th_b, "
-                   "large rays above Th_b, small rays (size ~ d_min) between (fig. 6.4c). Default: ray iff the cone is empty.")
-@click.option("--ray-id", type=click.IntRange(0, MAX_ID), default=1, show_default=True, help="Floret type id of ray florets.")
-@click.option("--disk-id", type=click.IntRange(0, MAX_ID), default=0, show_default=True, help="Floret type id of disk florets.")
-@click.option("--small-ray-id", type=click.IntRange(0, MAX_ID), default=None, help="Type id of small ray florets (default: --ray-id).")
+                   "large rays above Th_b, small rays (size ~ d_min) between (fig. 6.4c); each in [0, 1e12]. Default: ray iff the cone is empty.")
+@click.option("--ray-id", type=int, default=1, show_default=True, help="Floret type id of ray florets (ids: 0 .. 2^31-1).")
+@click.option("--disk-id", type=int, default=0, show_default=True, help="Floret type id of disk florets.")
+@click.option("--small-ray-id", type=int, default=None, help="Type id of small ray florets (default: --ray-id).")
 @click.option("--ray-scale", type=float, default=1.0, show_default=True, help="Scale factor of ray florets.")
 @click.option("--small-ray-scale", type=float, default=None,
               help="With two thresholds: a small ray floret's factor is this x d_min / Th_b (default: --ray-scale).")
@@ -54,25 +54,26 @@ def refuse_far_placements(path, sc) -> None:
 @click.option("--centre", type=click.Choice(["group", "top"]), default="group", show_default=True,
               help="Cone axis away from the floret's own head/umbellet centre, or its top-level group's.")
 @click.option("--half-angle", is_flag=True, help="Read --alpha as the cone's half-angle (eq. 6.1 as printed).")
-@click.option("--ray-lead", type=click.FloatRange(-MAX_FRAME, MAX_FRAME), default=0.0, show_default=True, metavar="FRAMES",
+@click.option("--ray-lead", type=float, default=0.0, show_default=True, metavar="FRAMES",
               help="Ray and small ray florets develop this many frames ahead of the disk florets: their "
                    "frameStart and frameEnd move that much earlier (negative: later), rounded to whole "
-                   "frames, frameStart kept >= 0 and frameEnd >= frameStart + 1. Only placements with a "
+                   "frames (within +-1e7), frameStart kept >= 0 and frameEnd >= frameStart + 1 (a window ending past frame 1e7 "
+                   "is refused). Only placements with a "
                    "window (ca, ta, ra, rba); o and i are untouched.")
-@click.option("--ray-development-frames", type=click.IntRange(1, MAX_FRAME), default=None, metavar="N",
-              help="Ray and small ray florets: frameEnd = frameStart + N (applied before --ray-lead).")
-@click.option("--disk-development-frames", type=click.IntRange(1, MAX_FRAME), default=None, metavar="N",
-              help="Disk florets: frameEnd = frameStart + N.")
-@click.option("--bract-development-frames", type=click.IntRange(1, MAX_FRAME), default=None, metavar="N",
+@click.option("--ray-development-frames", type=int, default=None, metavar="N",
+              help="Ray and small ray florets: frameEnd = frameStart + N, N in 1..1e7 (applied before --ray-lead).")
+@click.option("--disk-development-frames", type=int, default=None, metavar="N",
+              help="Disk florets: frameEnd = frameStart + N, N in 1..1e7.")
+@click.option("--bract-development-frames", type=int, default=None, metavar="N",
               help="Involucral bracts: frameEnd = frameStart + N (they open with the head, not round a naked "
                    "meristem).")
-@click.option("--bracts", type=click.IntRange(0, MAX_COUNT), default=0, show_default=True, metavar="N",
-              help="The N outermost placements of each head are involucral bracts (type 'bract', "
+@click.option("--bracts", type=int, default=0, show_default=True, metavar="N",
+              help="The N outermost placements of each head (N at most 1e6) are involucral bracts (type 'bract', "
                    "--bract-id), left out of the other florets' cone tests.")
-@click.option("--bract-id", type=click.IntRange(0, MAX_ID), default=2, show_default=True, help="Type id of involucral bracts.")
+@click.option("--bract-id", type=int, default=2, show_default=True, help="Type id of involucral bracts.")
 @click.option("--bract-scale", type=float, default=1.0, show_default=True, help="Scale factor of bracts.")
-@click.option("--marginal", type=click.IntRange(0, MAX_COUNT), default=0, show_default=True, metavar="N",
-              help="Only the N outermost florets of each head (after its bracts) may be ray florets, as "
+@click.option("--marginal", type=int, default=0, show_default=True, metavar="N",
+              help="Only the N outermost florets of each head (after its bracts; N at most 1e6) may be ray florets, as "
                    "in Asteraceae, whose ray florets are marginal; the others are disk florets whatever "
                    "their cones. 0: any floret.")
 @click.option("--petal-size", is_flag=True,
@@ -88,10 +89,16 @@ def run(*, scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_
 
     if len(thresholds) > 2:
         raise InputError(f"--threshold given {len(thresholds)} times; expected at most 2")
-    for name, v in (("--ray-id", ray_id), ("--disk-id", disk_id), ("--small-ray-id", small_ray_id),
-                    ("--bracts", bracts), ("--bract-id", bract_id), ("--marginal", marginal)):
+    for name, v, top in (("--ray-id", ray_id, MAX_ID), ("--disk-id", disk_id, MAX_ID),
+                         ("--small-ray-id", small_ray_id, MAX_ID), ("--bracts", bracts, MAX_COUNT),
+                         ("--bract-id", bract_id, MAX_ID), ("--marginal", marginal, MAX_COUNT)):
         if v is not None and v < 0:
             raise InputError(f"{name} must be >= 0, found {v}")
+        if v is not None and v > top:
+            raise InputError(f"{name} must be in [0, {top}], found {v}")
+    if any(t > MAX_WRITTEN for t in thresholds):  # NaN and negative ones: dimorph_scene
+        raise InputError(f"--threshold must be in [0, {MAX_WRITTEN:g}] (a distance in scene units), "
+                         f"found {max(thresholds):g}")
     for name, v in (("--ray-scale", ray_scale), ("--disk-scale", disk_scale), ("--bract-scale", bract_scale),
                     ("--small-ray-scale", ray_scale if small_ray_scale is None else small_ray_scale)):
         if not v > 0:
@@ -122,7 +129,7 @@ def run(*, scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_
 @click.option("--alpha", type=float, default=75.0, show_default=True, help="Cone angle of the n sweep (fig. 6.2).")
 @click.option("--n-min", type=click.IntRange(min=2, max=100_000), default=10, show_default=True)
 @click.option("--n-max", type=click.IntRange(min=2, max=100_000), default=300, show_default=True)
-@click.option("--n", "n_fixed", type=click.IntRange(2, 100_000), default=82, show_default=True, help="Head size of the alpha sweep (fig. 6.3).")
+@click.option("--n", "n_fixed", type=int, default=82, show_default=True, help="Head size of the alpha sweep (fig. 6.3), in [2, 100000]; a sweep runs at most 2e7 cone tests (the sum over its heads of max(n, 100)^1.5).")
 @click.option("--alpha-min", type=float, default=20.0, show_default=True)
 @click.option("--alpha-max", type=float, default=120.0, show_default=True)
 @click.option("--alpha-step", type=click.FloatRange(min=1e-3, max=180), default=0.5, show_default=True)
@@ -134,8 +141,8 @@ def sweep(output, alpha, n_min, n_max, n_fixed, alpha_min, alpha_max, alpha_step
 
     if not 2 <= n_min <= n_max:
         raise InputError(f"expected 2 <= --n-min <= --n-max, found {n_min}, {n_max}")
-    if n_fixed < 2:
-        raise InputError(f"--n must be >= 2, found {n_fixed}")
+    if not 2 <= n_fixed <= 100_000:
+        raise InputError(f"--n must be in [2, 100000], found {n_fixed}")
     top = 90 if half_angle else 180
     if not (0 < alpha_min <= alpha_max <= top and 0 < alpha <= top and alpha_step > 0):
         raise InputError(f"cone angles must lie in (0, {top}] degrees with --alpha-min <= --alpha-max and --alpha-step > 0")

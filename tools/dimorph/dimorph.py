@@ -172,13 +172,17 @@ def outermost(pos: np.ndarray, centre: np.ndarray, group: np.ndarray, count: int
 
 def check_window_options(opts: DimorphOptions) -> None:
     """InputError (one line) for a non-finite lead or a development window that is not > 0."""
+    if not math.isfinite(opts.ray_lead):
+        raise InputError(f"--ray-lead must be a finite number of frames, found {opts.ray_lead}")
     if not abs(opts.ray_lead) <= MAX_FRAME:
-        raise InputError(f"--ray-lead must be a number of frames within +-{MAX_FRAME}, found {opts.ray_lead}")
+        raise InputError(f"--ray-lead must be a number of frames within +-{MAX_FRAME}, found {opts.ray_lead:g}")
     for name, v in (("--ray-development-frames", opts.ray_development_frames),
                     ("--disk-development-frames", opts.disk_development_frames),
                     ("--bract-development-frames", opts.bract_development_frames)):
-        if v is not None and (isinstance(v, bool) or int(v) != v or not 0 < v <= MAX_FRAME):
-            raise InputError(f"{name} must be an integer in [1, {MAX_FRAME}], found {v}")
+        if v is not None and (isinstance(v, bool) or int(v) != v or v <= 0):
+            raise InputError(f"{name} must be an integer > 0, found {v}")
+        if v is not None and v > MAX_FRAME:
+            raise InputError(f"{name} must be an integer <= {MAX_FRAME} (a scene's frames), found {v}")
 
 
 def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:
