@@ -127,20 +127,23 @@ def run(*, scene, alpha, output, thresholds, ray_id, disk_id, small_ray_id, ray_
                short_help="Ray counts vs n and vs alpha (figs. 6.2, 6.3): CSV + PNG.")
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output folder.")
 @click.option("--alpha", type=float, default=75.0, show_default=True, help="Cone angle of the n sweep (fig. 6.2).")
-@click.option("--n-min", type=click.IntRange(min=2, max=100_000), default=10, show_default=True)
-@click.option("--n-max", type=click.IntRange(min=2, max=100_000), default=300, show_default=True)
+@click.option("--n-min", type=int, default=10, show_default=True, help="Smallest head of the n sweep (fig. 6.2).")
+@click.option("--n-max", type=int, default=300, show_default=True,
+              help="Largest head of the n sweep, at most 100000.")
 @click.option("--n", "n_fixed", type=int, default=82, show_default=True, help="Head size of the alpha sweep (fig. 6.3), in [2, 100000]; a sweep runs at most 2e7 cone tests (the sum over its heads of max(n, 100)^1.5).")
 @click.option("--alpha-min", type=float, default=20.0, show_default=True)
 @click.option("--alpha-max", type=float, default=120.0, show_default=True)
-@click.option("--alpha-step", type=click.FloatRange(min=1e-3, max=180), default=0.5, show_default=True)
+@click.option("--alpha-step", type=float, default=0.5, show_default=True, help="In [0.001, 180] degrees.")
 @click.option("--divergence", type=float, default=137.5, show_default=True, help="Divergence angle (degrees).")
 @click.option("--half-angle", is_flag=True, help="Read cone angles as half-angles (eq. 6.1 as printed).")
 def sweep(output, alpha, n_min, n_max, n_fixed, alpha_min, alpha_max, alpha_step, divergence, half_angle,
           quiet, debug):
     from inflo.formats.errors import InputError
 
-    if not 2 <= n_min <= n_max:
-        raise InputError(f"expected 2 <= --n-min <= --n-max, found {n_min}, {n_max}")
+    if not 2 <= n_min <= n_max <= 100_000:
+        raise InputError(f"expected 2 <= --n-min <= --n-max <= 100000, found {n_min}, {n_max}")
+    if not 1e-3 <= alpha_step <= 180:
+        raise InputError(f"--alpha-step must be in [0.001, 180] degrees, found {alpha_step:g}")
     if not 2 <= n_fixed <= 100_000:
         raise InputError(f"--n must be in [2, 100000], found {n_fixed}")
     top = 90 if half_angle else 180

@@ -56,10 +56,10 @@ MAX_COLLISION_PASSES = 1_000
 @click.option("--no-collisions", is_flag=True, help="Plain Loop subdivision, no collision handling.")
 @click.option("--spacing", type=click.FloatRange(min=0.0, min_open=True), default=None,
               help="Collision thickness h (the .fcc 'spacing'); default 1/2000 of the bounding-box diagonal.")
-@click.option("--collision-iterations", type=click.IntRange(1, MAX_COLLISION_PASSES), default=10, show_default=True,
-              help="Sweeps over the collision constraints per round.")
-@click.option("--max-collision-retries", type=click.IntRange(0, MAX_COLLISION_PASSES), default=20, show_default=True,
-              help="Detect/solve rounds after the first.")
+@click.option("--collision-iterations", type=int, default=10, show_default=True,
+              help="Sweeps over the collision constraints per round, in 1..1000.")
+@click.option("--max-collision-retries", type=int, default=20, show_default=True,
+              help="Detect/solve rounds after the first, in 0..1000.")
 @click.option("--check", is_flag=True, help="Count intersecting triangle pairs of each output frame (exact test).")
 def main(source, levels, output, no_collisions, spacing, collision_iterations, max_collision_retries, check,
          quiet, debug):
@@ -67,6 +67,10 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
 
     if spacing is not None and not math.isfinite(spacing):
         raise InputError(f"--spacing must be a finite number > 0, found {spacing}")
+    for name, v, low in (("--collision-iterations", collision_iterations, 1),
+                         ("--max-collision-retries", max_collision_retries, 0)):
+        if not low <= v <= MAX_COLLISION_PASSES:
+            raise InputError(f"{name} must be in [{low}, {MAX_COLLISION_PASSES}], found {v}")
     paths = list_obj_sequence(source)
     single = os.path.isfile(source)
     # checked before reading: the output never overwrites the input (IN.obj -o IN.obj) and a
