@@ -100,6 +100,8 @@ def probes(tmp_path):
     (d / "fcc" / "scale.fcc").write_text(fcc.replace("animation: 0 1 1 1", "animation: 0 1e308 1 1"))
     text = (EXAMPLES / "disk_bud.floret").read_text()
     (d / "tilt.floret").write_text(text.replace("tilt: 0.0", "tilt: 1e308", 1))
+    (d / "petals.floret").write_text(text.replace("symmetry: 5", "symmetry: 1000000000", 1))
+    (d / "material.floret").write_text(text.replace("material: 1", "material: 99999999999999999999", 1))
     # subdivide
     tri = ObjMesh(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.2]]), np.array([[0, 1, 2], [1, 3, 2]], np.int32))
     write_obj(d / "tri.obj", tri)
@@ -140,6 +142,8 @@ PROBES = [
     ("fccompose", ["{d}/fcc/scale.fcc", "-o", "{d}/fcc/o"], "scales in [1e-06, 1e+06] for 'animation'"),
     ("floret-animate", ["{d}/tilt.floret", EXAMPLES / "disk_open.floret", "-o", "{d}/fa"],
      "a finite angle within +-360 degrees"),
+    ("floret-animate", ["{d}/petals.floret", EXAMPLES / "disk_open.floret", "-o", "{d}/fa"], "n <= 10000"),
+    ("floret-animate", ["{d}/material.floret", EXAMPLES / "disk_open.floret", "-o", "{d}/fa"], "an id <= 255"),
     ("subdivide", ["{d}/tri.obj", "--collision-iterations", "1000000000", "-o", "{d}/s.obj"], "--collision-iterations"),
     ("subdivide", ["{d}/tri.obj", "--max-collision-retries", "1000000000", "-o", "{d}/s.obj"],
      "--max-collision-retries"),
