@@ -56,7 +56,7 @@ class AnimationEntry:
     id : int
         Non-negative id, unique across animation, obj and rigid body animation entries.
     scale : tuple of 3 float
-        Initial scale in x, y, z applied to the geometry on load (each > 0).
+        Initial scale in x, y, z applied to the geometry on load (each in [1e-6, 1e6]).
     path : FilePath
         ``kind == 'animation'``: a folder (or glob) of an OBJ sequence; ``kind == 'obj'``: one OBJ.
     kind : {'animation', 'obj'}
@@ -86,7 +86,7 @@ class RigidBodyAnimationEntry:
     id : int
         Non-negative id, unique across animation, obj and rigid body animation entries.
     scale : tuple of 3 float
-        Initial scale in x, y, z (each > 0).
+        Initial scale in x, y, z (each in [1e-6, 1e6]).
     rba_folder : FilePath
         Folder of ``NNNN.rba`` files (thesis app. C.3), one per frame.
     scene_path : FilePath

@@ -17,6 +17,12 @@ _TRUE = {"true", "1", "yes", "on"}
 _FALSE = {"false", "0", "no", "off"}
 
 
+#: the initial scale of an animation, obj or rigid body animation entry (each of x, y, z), as a
+#: placement's petal factor and dimorph's size factors
+MIN_ENTRY_SCALE = 1e-6
+MAX_ENTRY_SCALE = 1e6
+
+
 class _Reader:
     """One pass over the lines of a .fcc file, collecting fields for CanopyParams."""
 
@@ -200,6 +206,15 @@ class _Reader:
         d = tuple(self.integer(key, t, n, 1) for t in toks)
         return d * 3 if len(d) == 1 else d
 
+    def entry_scale(self, key, toks, line) -> tuple[float, ...]:
+        """The 3 scales of an animation, obj or rigid body animation line, each in
+        [MIN_ENTRY_SCALE, MAX_ENTRY_SCALE]."""
+        scale = self.floats(key, " ".join(toks), line, 3, positive=True)
+        for t, v in zip(toks, scale):
+            if not MIN_ENTRY_SCALE <= v <= MAX_ENTRY_SCALE:
+                raise self.err(line, f"scales in [{MIN_ENTRY_SCALE:g}, {MAX_ENTRY_SCALE:g}] for '{key}'", shorten(t))
+        return scale
+
     def read_entry(self, key, spec, value, n):
         parts = [t for t in _SEP.split(value.strip(), maxsplit=4)]
         if len(parts) < 5 or not parts[4].strip():
@@ -209,7 +224,7 @@ class _Reader:
                 shorten(value) if value.strip() else "nothing",
             )
         id_ = self.ident(key, parts[0], n)
-        scale = self.floats(key, " ".join(parts[1:4]), n, 3, positive=True)
+        scale = self.entry_scale(key, parts[1:4], n)
         path = self.filepath(key, parts[4], n)
         self.claim_id(key, id_, parts[0], n)
         self.animations.append(AnimationEntry(id_, scale, path, key, n))
@@ -223,7 +238,7 @@ class _Reader:
                 f"{len(toks)} value(s): {shorten(value) if value.strip() else 'nothing'}",
             )
         id_ = self.ident(key, toks[0], n)
-        scale = self.floats(key, " ".join(toks[1:4]), n, 3, positive=True)
+        scale = self.entry_scale(key, toks[1:4], n)
         folder = self.filepath(key, toks[4], n)
         scene = self.filepath(key, toks[5], n)
         self.claim_id(key, id_, toks[0], n)

@@ -256,19 +256,39 @@ def own_stale(folder, tool: str, stale_patterns=()) -> list[Path]:
     return out
 
 
+def _in_the_way(folder: Path, rels) -> Path | None:
+    """The first path under ``folder`` that keeps a file ``rel`` of ``rels`` from being moved there:
+    a parent that is not a folder, or the file's own name taken by a folder."""
+    for rel in rels:
+        rel = Path(rel)
+        for parent in reversed(rel.parents[:-1]):
+            d = folder / parent
+            if os.path.lexists(d) and not d.is_dir():
+                return d
+        if (folder / rel).is_dir():
+            return folder / rel
+    return None
+
+
 @contextlib.contextmanager
-def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: str = "-o"):
+def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: str = "-o", subfolders=()):
     """Write a run's output folder through a staging folder: yields a fresh hidden folder inside
     ``folder`` to write into; when the body completes, the earlier run's own files (its manifest,
     or ``stale_patterns`` for a folder from before manifests) are removed, the new files moved into
     ``folder`` and a manifest written. A failed or killed run leaves the earlier output as it was
     (no mix of two runs); its staging folder is removed by the next run. Refuses (one line) an
     output folder that is an input or holds one this run would replace or remove (named like its
-    output, or listed by its manifest), a folder that is a file, and a second concurrent run."""
+    output, or listed by its manifest), a folder that is a file, and a second concurrent run; an
+    output file or one of ``subfolders`` (the folders the run will write into) whose place inside
+    ``folder`` is taken by a file or a folder of the wrong kind is refused before any work, or,
+    found only when the run is done, before anything is moved (the staging folder removed)."""
     import shutil
 
     folder = Path(folder)
     check_output_path(folder, folder=True)
+    blocked = _in_the_way(folder, [Path(d) / "x" for d in subfolders])
+    if blocked is not None:
+        raise InputError(f"{blocked}: expected a path that can be a folder, found a file in the way")
     pats = [re.compile(p + "$") for p in stale_patterns]
     listed = set(read_manifest(folder, tool) or ())
     refuse_output_over_inputs(folder, inputs, folder=True, option=option,
@@ -285,6 +305,11 @@ def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: st
             raise
         new = sorted(p.relative_to(staging) for p in staging.rglob("*") if p.is_file())
         new_names = {p.as_posix() for p in new}
+        blocked = _in_the_way(folder, new)
+        if blocked is not None:
+            shutil.rmtree(staging, ignore_errors=True)
+            what = "a folder, found a file" if not blocked.is_dir() else "a file, found a folder"
+            raise InputError(f"{blocked}: expected a path that can be {what} in the way")
         for old in own_stale(folder, tool, stale_patterns):
             rel = old.relative_to(folder).as_posix()
             if rel not in new_names:

@@ -45,6 +45,12 @@ __all__ = [
 
 FORMAT_VERSION = 1
 MAX_DEGREE = 5
+#: the largest tilt of a petal (degrees): a turn either way; 1e308 would be a finite garbage angle
+MAX_TILT = 360
+#: the most petals of one organ (symmetry n): polygonize replicates the petal n times
+MAX_SYMMETRY = 10_000
+#: the largest material id: the 256 material definitions of the material map (SCN ``mtl:``)
+MAX_MATERIAL = 255
 MAX_COORDINATE = 1e12
 """Largest control-point coordinate accepted: interpolating and meshing squares coordinates, so
 1e300 overflowed (exit 1) instead of being refused."""
@@ -206,6 +212,8 @@ class Organ:
             return ("symmetry", "an integer n", repr(self.symmetry_n))
         if self.symmetry_n < 1:
             return ("symmetry", "n >= 1", str(self.symmetry_n))
+        if self.symmetry_n > MAX_SYMMETRY:
+            return ("symmetry", f"n <= {MAX_SYMMETRY} (petals of one whorl)", str(self.symmetry_n))
         if not math.isfinite(self.symmetry_phase_deg):
             return ("symmetry", "a finite phase angle", repr(self.symmetry_phase_deg))
         if not isinstance(self.bilateral, (bool, np.bool_)):
@@ -221,12 +229,14 @@ class Organ:
                 "symmetry, thesis 2.2)",
                 str(self.fused),
             )
-        if not math.isfinite(self.tilt_deg):
-            return ("tilt", "a finite angle", repr(self.tilt_deg))
+        if not (math.isfinite(self.tilt_deg) and abs(self.tilt_deg) <= MAX_TILT):
+            return ("tilt", f"a finite angle within +-{MAX_TILT} degrees", repr(self.tilt_deg))
         if isinstance(self.material, bool) or not isinstance(self.material, (int, np.integer)):
             return ("material", "an integer id", repr(self.material))
         if self.material < 0:
             return ("material", "an id >= 0", str(self.material))
+        if self.material > MAX_MATERIAL:
+            return ("material", f"an id <= {MAX_MATERIAL} (the material map's ids, as SCN 'mtl:')", str(self.material))
         for key, value in (("lambda", self.lambda_), ("eta", self.eta)):
             p = _sampling_problem(key, value)
             if p is not None:

@@ -475,7 +475,7 @@ def organs(draw, name):
         symmetry_phase_deg=draw(d6),
         bilateral=bilateral,
         fused=draw(st.integers(0, nv)) if bilateral and n >= 2 else 0,
-        tilt_deg=draw(d6),
+        tilt_deg=draw(st.integers(-360 * 10**6, 360 * 10**6).map(lambda i: i / 1e6)),  # within +-360
         material=draw(st.integers(0, 255)),
         lambda_=draw(lam),
         eta=draw(eta),

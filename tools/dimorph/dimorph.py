@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from inflo.formats.errors import InputError
-from inflo.formats.scn import Scene
+from inflo.formats.scn import MAX_FRAME, Scene
 from inflo.tools.common import linalg as la
 
 from .cones import FATE_DISK, FATE_RAY, FATE_SMALL_RAY, d_min, fates
@@ -142,6 +142,9 @@ def shift_window(p, development_frames: int | None, lead: float) -> bool:
         start, end = _round_frame(start - lead), _round_frame(end - lead)
         start = max(start, 0)
         end = max(end, start + 1)
+    if end > MAX_FRAME:
+        raise InputError(f"expected developmental windows that end by frame {MAX_FRAME} (as a scene's frames), "
+                         f"found frameEnd {end} for placement id {p.id} (frames {p.frame_start} {p.frame_end})")
     p.frame_start, p.frame_end = start, end
     return True
 
@@ -171,11 +174,15 @@ def check_window_options(opts: DimorphOptions) -> None:
     """InputError (one line) for a non-finite lead or a development window that is not > 0."""
     if not math.isfinite(opts.ray_lead):
         raise InputError(f"--ray-lead must be a finite number of frames, found {opts.ray_lead}")
+    if not abs(opts.ray_lead) <= MAX_FRAME:
+        raise InputError(f"--ray-lead must be a number of frames within +-{MAX_FRAME}, found {opts.ray_lead:g}")
     for name, v in (("--ray-development-frames", opts.ray_development_frames),
                     ("--disk-development-frames", opts.disk_development_frames),
                     ("--bract-development-frames", opts.bract_development_frames)):
         if v is not None and (isinstance(v, bool) or int(v) != v or v <= 0):
             raise InputError(f"{name} must be an integer > 0, found {v}")
+        if v is not None and v > MAX_FRAME:
+            raise InputError(f"{name} must be an integer <= {MAX_FRAME} (a scene's frames), found {v}")
 
 
 def dimorph_scene(scene: Scene, opts: DimorphOptions) -> tuple[Scene, dict]:

@@ -18,9 +18,26 @@ from inflo.tools.phyllotaxis.surface import builtin_curve
 
 from .cones import d_min
 
-__all__ = ["FIBONACCI", "simple_head", "ray_count", "sweep_n", "sweep_alpha", "write_sweep"]
+__all__ = ["FIBONACCI", "MAX_SWEEP_WORK", "simple_head", "ray_count", "sweep_n", "sweep_alpha", "sweep_work",
+           "write_sweep"]
 
 FIBONACCI = (1, 2, 3, 5, 8, 13, 21, 34, 55, 89, 144, 233, 377)
+
+#: the most cone tests a sweep runs (about half a minute): see :func:`sweep_work`
+MAX_SWEEP_WORK = 2e7
+
+
+def _alpha_steps(alpha_range, alpha_step: float) -> int:
+    return int(round((alpha_range[1] - alpha_range[0]) / alpha_step))
+
+
+def sweep_work(n_range, n_fixed: int, alpha_range, alpha_step: float) -> float:
+    """The work of a sweep in cone tests: each head of n florets costs max(n, 100)^1.5 (its rim
+    florets, about sqrt(n), each examine every floret; 100: a small head's fixed cost); the n
+    sweep has one head per n in ``n_range``, the alpha sweep one head of ``n_fixed`` per alpha."""
+    ns = np.maximum(np.arange(int(n_range[0]), int(n_range[1]) + 1, dtype=np.float64), 100.0)
+    steps = _alpha_steps(alpha_range, alpha_step) + 1
+    return float(np.sum(ns ** 1.5)) + steps * max(float(n_fixed), 100.0) ** 1.5
 
 
 def simple_head(n: int, divergence: float = 137.5) -> np.ndarray:
@@ -96,7 +113,7 @@ def write_sweep(out_dir, *, alpha: float = 75.0, n_range=(10, 300), n_fixed: int
     out.mkdir(parents=True, exist_ok=True)
     ns = np.arange(int(n_range[0]), int(n_range[1]) + 1)
     cn = sweep_n(ns, alpha, divergence=divergence, half_angle=half_angle)
-    k = int(round((alpha_range[1] - alpha_range[0]) / alpha_step))
+    k = _alpha_steps(alpha_range, alpha_step)
     alphas = alpha_range[0] + alpha_step * np.arange(k + 1)
     ca = sweep_alpha(n_fixed, alphas, divergence=divergence, half_angle=half_angle)
     angle = "half-angle" if half_angle else "opening angle"

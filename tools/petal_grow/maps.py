@@ -23,7 +23,7 @@ from inflo.formats.errors import FormatError, shorten
 from inflo.tools.common import linalg as la
 
 __all__ = ["ScalarMap", "DirectionMap", "parse_scalar_map", "parse_direction_map", "triangle_values",
-           "triangle_directions", "EXPRESSION_NAMES"]
+           "triangle_directions", "checked_values", "EXPRESSION_NAMES"]
 
 _FUNCS = {
     "sin": np.sin, "cos": np.cos, "tan": np.tan, "exp": np.exp, "log": np.log, "sqrt": np.sqrt,
@@ -42,12 +42,37 @@ _NODES = (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Call, ast.Name, ast.Load, 
           ast.Compare, ast.Lt, ast.LtE, ast.Gt, ast.GtE, ast.IfExp)
 
 
+#: the longest growth expression (characters) and its deepest nesting (operations and calls
+#: within one another): Python's parser and compiler recurse once a level
+MAX_EXPRESSION_CHARS = 1000
+MAX_EXPRESSION_DEPTH = 100
+
+
+def _depth(tree) -> int:
+    """The nesting depth of an expression tree, found without recursion."""
+    deepest, todo = 0, [(tree, 1)]
+    while todo:
+        node, d = todo.pop()
+        deepest = max(deepest, d)
+        todo.extend((c, d + 1) for c in ast.iter_child_nodes(node))
+    return deepest
+
+
 def _compile(text: str, path, line, what: str):
     """Check and compile one arithmetic expression in u, v (no attribute access, no other names)."""
+    if len(text) > MAX_EXPRESSION_CHARS:
+        raise FormatError(path, line, f"{what}: an expression of at most {MAX_EXPRESSION_CHARS} characters",
+                          f"{len(text)} characters: {shorten(text)}")
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError:
         raise FormatError(path, line, f"{what}: an expression in u and v or a .png file", shorten(text)) from None
+    except (RecursionError, MemoryError):
+        raise FormatError(path, line, f"{what}: an expression nested at most {MAX_EXPRESSION_DEPTH} deep",
+                          shorten(text)) from None
+    if _depth(tree) > MAX_EXPRESSION_DEPTH:
+        raise FormatError(path, line, f"{what}: an expression nested at most {MAX_EXPRESSION_DEPTH} deep",
+                          f"{_depth(tree)} levels: {shorten(text)}")
     for node in ast.walk(tree):
         if not isinstance(node, _NODES):
             raise FormatError(path, line, f"{what}: only arithmetic, comparisons and the functions "
@@ -65,6 +90,12 @@ def _compile(text: str, path, line, what: str):
             e = _float_value(node.right, path, line, what, text)
             if not abs(e) <= MAX_EXPONENT:
                 raise FormatError(path, line, f"{what}: constant exponents within +-{MAX_EXPONENT}", shorten(text))
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow) and _constant(node):
+            # a constant power is evaluated exactly on integers: finite in floating point, it has at
+            # most 309 digits ((9**1024)**1024 would not end)
+            if not math.isfinite(_float_value(node, path, line, what, text)):
+                raise FormatError(path, line, f"{what}: constant powers within floating point range (1.8e308)",
+                                  shorten(text))
     code = compile(tree, "<growth map>", "eval")
     try:
         _eval(code, np.array([[0.0, 0.0], [0.5, 0.5], [1.0, 1.0]]))
@@ -152,6 +183,7 @@ class ScalarMap:
     source: str
     code: object = None
     image: np.ndarray | None = None
+    where: tuple = (None, None, "")  # (file, line, key) the map was read from, for errors
 
     def __call__(self, uv: np.ndarray) -> np.ndarray:
         uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
@@ -167,6 +199,7 @@ class DirectionMap:
     source: str
     codes: tuple = ()
     image: np.ndarray | None = None
+    where: tuple = (None, None, "")  # (file, line, key) the map was read from, for errors
 
     def __call__(self, uv: np.ndarray) -> np.ndarray:
         uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
@@ -187,14 +220,14 @@ def parse_scalar_map(value, base: Path, path, line, what: str) -> ScalarMap:
     if isinstance(value, (int, float)):
         value = repr(float(value))
     if _is_png(value):
-        return ScalarMap(value, image=_read_png(base / value.strip(), path, line, what))
-    return ScalarMap(value, code=_compile(value, path, line, what))
+        return ScalarMap(value, image=_read_png(base / value.strip(), path, line, what), where=(path, line, what))
+    return ScalarMap(value, code=_compile(value, path, line, what), where=(path, line, what))
 
 
 def parse_direction_map(value, base: Path, path, line, what: str) -> DirectionMap:
     """``"du, dv"`` expressions, a 2-list of numbers/expressions, or a ``.png`` (red u, green v)."""
     if isinstance(value, str) and _is_png(value):
-        return DirectionMap(value, image=_read_png(base / value.strip(), path, line, what))
+        return DirectionMap(value, image=_read_png(base / value.strip(), path, line, what), where=(path, line, what))
     if isinstance(value, str):
         parts = _split_top(value)
     elif isinstance(value, list):
@@ -203,7 +236,8 @@ def parse_direction_map(value, base: Path, path, line, what: str) -> DirectionMa
         parts = []
     if len(parts) != 2 or not all(isinstance(p, str) for p in parts):
         raise FormatError(path, line, f"{what}: 'du, dv' (two expressions) or a .png file", shorten(repr(value)))
-    return DirectionMap(str(value), codes=tuple(_compile(p, path, line, what) for p in parts))
+    return DirectionMap(str(value), codes=tuple(_compile(p, path, line, what) for p in parts),
+                        where=(path, line, what))
 
 
 def _split_top(text: str) -> list[str]:
@@ -234,14 +268,28 @@ def triangle_values(m: ScalarMap, tri_uv: np.ndarray) -> np.ndarray:
 
     ``tri_uv`` is (m, 3, 2): the uv of each triangle's corners."""
     n = len(tri_uv)
-    s = m(_corner_and_centroid(tri_uv)).reshape(4, n)
-    big = float(np.abs(s).max()) if s.size else 0.0
-    if not big <= MAX_MAP_VALUE:
-        from inflo.formats.errors import InputError
-
-        raise InputError(f"growth map {shorten(str(m.source))}: expected values within +-{MAX_MAP_VALUE:g} over "
-                         f"the organ, found {big:g}")
+    uv = _corner_and_centroid(tri_uv)
+    s = checked_values(m, uv, m(uv)).reshape(4, n)
     return (s[0] + s[1] + s[2] + 3.0 * s[3]) / 6.0
+
+
+def checked_values(m, uv: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``values`` (k,) or (k, 2), the map ``m`` sampled at ``uv`` (k, 2); a FormatError naming the
+    map's key and line and the first sample where a value is not finite or beyond +-MAX_MAP_VALUE."""
+    flat = values.reshape(len(uv), -1) if len(uv) else values.reshape(0, 1)
+    bad = ~(np.abs(flat) <= MAX_MAP_VALUE).all(axis=1)
+    if bad.any():
+        k = int(np.argmax(bad))
+        found = ", ".join(f"{float(x):g}" for x in flat[k])
+        path, line, what = m.where
+        expected = f"values within +-{MAX_MAP_VALUE:g} over the organ for {what or 'growth map'} {shorten(str(m.source))}"
+        found = f"{found} at (u, v) = ({float(uv[k, 0]):g}, {float(uv[k, 1]):g})"
+        if path is None:
+            from inflo.formats.errors import InputError
+
+            raise InputError(f"growth map: expected {expected}, found {found}")
+        raise FormatError(path, line, expected, found)
+    return values
 
 
 #: the largest magnitude a scalar growth map may take on an organ (rates, factors and angles)
@@ -252,7 +300,8 @@ def triangle_directions(m: DirectionMap, tri_uv: np.ndarray) -> np.ndarray:
     """(m, 2) unit uv directions per triangle, eq. 1 applied to each component, then normalized
     ((0, 1), along v, where the map averages to zero)."""
     n = len(tri_uv)
-    s = m(_corner_and_centroid(tri_uv)).reshape(4, n, 2)
+    uv = _corner_and_centroid(tri_uv)
+    s = checked_values(m, uv, m(uv)).reshape(4, n, 2)
     d = (s[0] + s[1] + s[2] + 3.0 * s[3]) / 6.0
     norm = la.norm(d, axis=1)
     ok = norm > 1e-12

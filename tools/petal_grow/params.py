@@ -93,6 +93,7 @@ class Params:
     flower: Flower
     growth: dict
     organs: list = field(default_factory=list)
+    lines: dict = field(default_factory=dict)  # (table, key) -> line, for bounds checked on the bud
 
 
 #: the work a parameter file may ask for (formats/petal_grow.md, "Bounds"): keyframes, solver
@@ -101,6 +102,8 @@ MAX_KEYFRAMES = 10_000
 MAX_ITERATIONS = 10_000
 MAX_STEPS = 5_000_000
 MAX_COLLISION_ITERATIONS = 1_000
+#: placed coordinates (translate, joint_pivot, joint_axis components), scene units; a layer index
+MAX_COORDINATE = 1e6
 
 
 #: how petal-grow finds a key's line: in the ``index``-th ``[table]``/``[[table]]`` of that exact
@@ -133,7 +136,7 @@ def _num(value, path, line, what, lo=None, hi=None, integer=False):
 def _vec3(value, path, line, what):
     if not (isinstance(value, list) and len(value) == 3):
         raise FormatError(path, line, f"{what}: three numbers [x, y, z]", shorten(repr(value)))
-    return tuple(_num(v, path, line, what) for v in value)
+    return tuple(_num(v, path, line, what, lo=-MAX_COORDINATE, hi=MAX_COORDINATE) for v in value)
 
 
 def _schedule(value, path, line, what, kind):
@@ -258,9 +261,10 @@ def parse_params(text: str, path="<params>") -> Params:
             raise FormatError(path, ol("beneath"), "beneath: an organ name", shorten(repr(beneath)))
         organs.append(Organ(
             name=name, mesh=base / tbl["mesh"], material=material,
-            rotate=_num(tbl.get("rotate", 0.0), path, ol("rotate"), "rotate (degrees)"),
+            rotate=_num(tbl.get("rotate", 0.0), path, ol("rotate"), "rotate (degrees)", lo=-360, hi=360),
             translate=_vec3(tbl.get("translate", [0.0, 0.0, 0.0]), path, ol("translate"), "translate"),
-            layer=_num(tbl.get("layer", 0), path, ol("layer"), "layer", integer=True),
+            layer=_num(tbl.get("layer", 0), path, ol("layer"), "layer", lo=-MAX_COORDINATE, hi=MAX_COORDINATE,
+                       integer=True),
             beneath=beneath, growth=growth, joint=joint,
             base_v=flower.base_v if tbl.get("base_v") is None else
             _num(tbl["base_v"], path, ol("base_v"), "base_v", lo=0.0, hi=1.0),
@@ -272,7 +276,9 @@ def parse_params(text: str, path="<params>") -> Params:
         if o.beneath and o.beneath not in names:
             raise FormatError(path, _line(text, "organ", "beneath", organs.index(o)),
                               f"beneath: an organ name{did_you_mean(o.beneath, names)}", repr(o.beneath))
-    return Params(source=path, flower=flower, growth=sets, organs=organs)
+    lines = {("flower", "collision_distance"): L("collision_distance")}
+    lines.update({(f"growth.{name}", "thickness"): _line(text, f"growth.{name}", "thickness") for name in sets})
+    return Params(source=path, flower=flower, growth=sets, organs=organs, lines=lines)
 
 
 def _bad(path, line, expected, value):

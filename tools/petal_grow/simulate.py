@@ -47,7 +47,7 @@ from inflo.tools.pbd.solver import bending_residual, distance_residual, edge_len
 
 from .bud import read_bud_obj
 from .growth import HINGE_SIGN, grow_rest_state
-from .maps import triangle_directions, triangle_values
+from .maps import checked_values, triangle_directions, triangle_values
 from .params import Params
 
 __all__ = ["Model", "build_model", "Simulation", "run", "GrowResult", "WRITE_FORMATS", "rotation_matrix",
@@ -171,6 +171,7 @@ def build_model(params: Params) -> Model:
         nv += len(x)
         nt += len(bud.faces)
     x = np.ascontiguousarray(np.concatenate(xs))
+    _check_lengths(params, x)
     uv = np.concatenate(uvs)
     tri = np.ascontiguousarray(np.concatenate(tris), dtype=np.int32)
     edges = mesh_edges(tri)
@@ -212,6 +213,22 @@ def build_model(params: Params) -> Model:
     return model
 
 
+def _check_lengths(params: Params, x: np.ndarray) -> None:
+    """FormatError for a ``collision_distance`` or a growth set's ``thickness`` longer than the placed
+    bud's extent (its bounding box diagonal): a gap or a thickness wider than the flower (formats/
+    petal_grow.md, "Bounds")."""
+    from inflo.formats.errors import FormatError
+
+    extent = la.norm(x.max(axis=0) - x.min(axis=0))
+    checks = [("flower", "collision_distance", params.flower.collision_distance)]
+    checks += [(f"growth.{name}", "thickness", g.thickness) for name, g in params.growth.items()]
+    for table, key, value in checks:
+        if not value <= extent:
+            raise FormatError(params.source, params.lines.get((table, key)),
+                              f"{key}: at most the bud's extent = {extent:.6g} (its bounding box diagonal)",
+                              f"{value:g}")
+
+
 def _check_orientation(tri, edge_tris, edges, interior, source) -> None:
     """Both triangles of an interior edge must pass it in opposite directions (consistent winding:
     the inner side is the same side everywhere)."""
@@ -234,8 +251,8 @@ def _organ_values(model: Model, o: OrganData, g) -> dict:
     e_lo = np.nonzero(model.edge_indices[:, 0] >= o.v0)[0]
     e_sel = e_lo[model.edge_indices[e_lo, 0] < o.v1]
     h_sel = np.nonzero((model.hinge_indices[:, 0] >= o.v0) & (model.hinge_indices[:, 0] < o.v1))[0]
-    st = g.stretch(vuv)
-    bd = g.bend(vuv)
+    st = checked_values(g.stretch, vuv, g.stretch(vuv))
+    bd = checked_values(g.bend, vuv, g.bend(vuv))
     ed = model.edge_indices
     hg = model.hinge_indices
     return {

@@ -44,6 +44,8 @@ def topology_runs(meshes) -> list[tuple[int, int]]:
 
 #: the most faces a subdivided frame may have (memory and time of every later stage)
 MAX_FACES = 20_000_000
+#: --collision-iterations and --max-collision-retries (as petal-grow's collision_iterations/retries)
+MAX_COLLISION_PASSES = 1_000
 
 
 @inflo_command("subdivide", help="Loop subdivision that stays collision-free (thesis 4.4).")
@@ -54,8 +56,10 @@ MAX_FACES = 20_000_000
 @click.option("--no-collisions", is_flag=True, help="Plain Loop subdivision, no collision handling.")
 @click.option("--spacing", type=click.FloatRange(min=0.0, min_open=True), default=None,
               help="Collision thickness h (the .fcc 'spacing'); default 1/2000 of the bounding-box diagonal.")
-@click.option("--collision-iterations", type=click.IntRange(1), default=10, show_default=True)
-@click.option("--max-collision-retries", type=click.IntRange(0), default=20, show_default=True)
+@click.option("--collision-iterations", type=int, default=10, show_default=True,
+              help="Sweeps over the collision constraints per round, in 1..1000.")
+@click.option("--max-collision-retries", type=int, default=20, show_default=True,
+              help="Detect/solve rounds after the first, in 0..1000.")
 @click.option("--check", is_flag=True, help="Count intersecting triangle pairs of each output frame (exact test).")
 def main(source, levels, output, no_collisions, spacing, collision_iterations, max_collision_retries, check,
          quiet, debug):
@@ -63,6 +67,10 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
 
     if spacing is not None and not math.isfinite(spacing):
         raise InputError(f"--spacing must be a finite number > 0, found {spacing}")
+    for name, v, low in (("--collision-iterations", collision_iterations, 1),
+                         ("--max-collision-retries", max_collision_retries, 0)):
+        if not low <= v <= MAX_COLLISION_PASSES:
+            raise InputError(f"{name} must be in [{low}, {MAX_COLLISION_PASSES}], found {v}")
     paths = list_obj_sequence(source)
     single = os.path.isfile(source)
     # checked before reading: the output never overwrites the input (IN.obj -o IN.obj) and a
@@ -91,6 +99,11 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
     if not no_collisions:
         from .collisions import collision_resolver, default_spacing
 
+        if spacing is not None:
+            extent = 2000.0 * default_spacing(meshes[0].vertices)
+            if not spacing <= extent:
+                raise InputError(f"--spacing: expected a collision thickness at most the mesh's extent = {extent:.6g} "
+                                 f"(its bounding box diagonal, {paths[0].name}), found {spacing:g}")
         h = spacing if spacing is not None else default_spacing(meshes[0].vertices)
         resolve = collision_resolver(spacing=h, iterations=collision_iterations, max_retries=max_collision_retries)
     notes: list = []

@@ -30,8 +30,8 @@ from .params import check_frames, load_inputs, read_params
 def main(params, output, seed, frame_step, frame_textures, quiet, debug):
     p = read_params(params)
     inputs = load_inputs(p)
-    check_frames(p, inputs, p.output.frame_step if frame_step is None else frame_step,
-                 p.output.frame_textures if frame_textures is None else frame_textures,
+    step = p.output.frame_step if frame_step is None else frame_step
+    check_frames(p, inputs, step, p.output.frame_textures if frame_textures is None else frame_textures,
                  option=frame_step is not None)
     limit = max(p.run.max_iterations, 1)
     scale = p.growth.scale
@@ -40,7 +40,8 @@ def main(params, output, seed, frame_step, frame_textures, quiet, debug):
     # the earlier run's files are replaced only when this one completes (no new veins on an old texture)
     stale = (r"veins\.obj", r"veins\.widths", r"blade\.obj", r"blade\.mtl", r"texture\.png",
              r"frames/(veins|blade|texture)_\d+\.(obj|widths|png|mtl)")
-    with staged_output(output, "venation", stale_patterns=stale, inputs=[(f, "input") for f in files + referenced_files(params)]) as stage, \
+    with staged_output(output, "venation", stale_patterns=stale, inputs=[(f, "input") for f in files + referenced_files(params)],
+                        subfolders=("frames",) if step else ()) as stage, \
             stall_notice("venation") as tick, \
             progress(length=min(limit, max(inputs.growth.steps, 1) + 50), label="venation", quiet=quiet) as bar:
         done = [0]

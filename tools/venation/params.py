@@ -44,6 +44,10 @@ NEIGHBOURHOODS = ("relative", "urquhart")
 REGIONS = ("auto", "blade", "margin")
 WIDTH_MODELS = ("pipe", "elongation")
 MAX_SAMPLES = 100_000
+#: blade coordinates (polygon, base, roots), blade.size and the growth scales: blade units
+MAX_COORDINATE = 1e6
+#: initial vein nodes (veins.roots)
+MAX_ROOTS = 1_000_000
 MAX_TEXTURE = 16_384
 
 _NUM = (int, float)
@@ -319,6 +323,14 @@ def _check_ranges(p: dict, where: ParamText) -> None:
         fail("blade", "samples", f"in [16, {MAX_SAMPLES}] (margin points sampled along the contour)")
     if b["size"] <= 0:
         fail("blade", "size", "> 0")
+    if b["size"] > MAX_COORDINATE:
+        fail("blade", "size", f"<= {MAX_COORDINATE:g}")
+    for section, key in (("blade", "polygon"), ("blade", "base"), ("veins", "roots")):
+        pts = np.asarray(p[section][key] or [], dtype=np.float64)
+        if pts.size and not np.abs(pts).max() <= MAX_COORDINATE:
+            fail(section, key, f"with coordinates within +-{MAX_COORDINATE:g}")
+    if len(p["veins"]["roots"]) > MAX_ROOTS:
+        fail("veins", "roots", f"at most {MAX_ROOTS} points (initial vein nodes)")
     g = p["growth"]
     aniso = g["type"] == "anisotropic"
     for key in ("initial", "final", "rate"):
@@ -330,6 +342,8 @@ def _check_ranges(p: dict, where: ParamText) -> None:
             fail("growth", key, "> 0 (the increase of the scale per step)")
         if key != "rate" and any(x <= 0 for x in vals):
             fail("growth", key, "> 0 (a scale of the blade)")
+        if any(x > MAX_COORDINATE for x in vals):
+            fail("growth", key, f"<= {MAX_COORDINATE:g}")
     ini = np.broadcast_to(np.asarray(g["initial"], float), (2,))
     fin = np.broadcast_to(np.asarray(g["final"], float), (2,))
     if np.any(fin < ini):
@@ -531,6 +545,11 @@ def _check_work(p: Params, blade: Blade, growth: Growth) -> None:
     if not darts <= MAX_DARTS:
         fail("sources", "darts", f"sources.darts <= {MAX_DARTS} / the final blade area {area:.6g} = "
              f"{MAX_DARTS / max(area, 1e-300):.6g} (at most {MAX_DARTS} darts a step)", f"{p.sources.darts:g}")
+    for section, key, value in (("veins", "kill_distance", p.veins.kill_distance),
+                                ("sources", "birth_source", p.sources.birth_source),
+                                ("sources", "birth_vein", p.sources.birth_vein)):
+        if not value <= ext:
+            fail(section, key, f"{section}.{key} <= the final blade's extent = {ext:.6g}", f"{value:g}")
     ms = p.output.mesh_spacing
     if ms and not ext / ms <= MAX_SPAN:
         fail("output", "mesh_spacing", f"output.mesh_spacing >= the final blade's extent / {MAX_SPAN} = "

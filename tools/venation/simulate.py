@@ -608,7 +608,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
     pad = 2.0 * sp.step + 1e-9 * float(np.max(hi - lo))
     lo, hi = lo - pad, hi + pad
 
-    cap = 4096
+    cap = 4096 if len(roots) <= 4096 else len(roots) + 1024  # room for every initial node
     nodes = _new_nodes(cap)
     n_nodes = len(roots)
     nodes.pos[:n_nodes] = roots
