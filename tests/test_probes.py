@@ -75,7 +75,7 @@ PROBES = [
      "expected TOML (UTF-8 text)", "{d}/f2"),
     ("branch-gen", ["{d}/head.scn", "--base", "nan", "nan", "nan", "-o", "{d}/b1"], "--base must be three finite numbers",
      "{d}/b1"),
-    ("branch-gen", ["{d}/head.scn", "{d}/step.toml", "-o", "{d}/b2"], "rodkaew.step: expected a step >= ", "{d}/b2"),
+    ("branch-gen", ["{d}/head.scn", "{d}/step.toml", "-o", "{d}/b2"], "expected a step >= ", "{d}/b2"),
     ("branch-gen", ["{d}/far.scn", "-o", "{d}/b3"], "positions within +-1e+12, found 1e+300", "{d}/b3"),
     ("phyllotaxis", ["{d}/samples.toml", "-o", "{d}/h1"], "surface.samples in [16, 10000000]", "{d}/h1"),
     ("phyllotaxis", ["{d}/frames.toml", "-o", "{d}/h2"], "dynamics.frames in [1, 100000]", "{d}/h2"),

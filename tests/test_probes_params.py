@@ -57,7 +57,7 @@ PROBES = [
      "for 'sca.add_points'"),
     ("branch-gen", TREE, {"sca.add_points": "1000", "sca.add_iterations": "100000"},
      "n_points + add_points * add_iterations <= 1000000"),
-    ("branch-gen", TREE, {"sca.step": "1e308"}, "a length in (0, 1e+12] for 'sca.step'"),
+    ("branch-gen", TREE, {"sca.step": "1e308"}, "a step D > 0 and <= 1e+12 for 'sca.step'"),
     ("branch-gen", TREE, {"sca.step": "1e-300"}, "a step D >= "),
     ("branch-gen", TREE, {"sca.step": "100.0"}, "a step D <= "),
     ("branch-gen", TREE, {"sca.kill_distance": "100.0"}, "every point dies at once"),
@@ -70,7 +70,7 @@ PROBES = [
     ("branch-gen", TREE, {"pipe.tip_diameter": "1e308"}, "for 'pipe.tip_diameter'"),
     ("branch-gen", TREE, {"post.decimate": "1e308"}, "for 'post.decimate'"),
     # branch-gen, extended Rodkaew: steps and the growth of space over the run
-    ("branch-gen", CORYMB, {"rodkaew.step": "1e308"}, "a length in (0, 1e+12] for 'rodkaew.step'"),
+    ("branch-gen", CORYMB, {"rodkaew.step": "1e308"}, "a step length > 0 and <= 1e+12 for 'rodkaew.step'"),
     ("branch-gen", CORYMB, {"rodkaew.steps_per_frame": "1000000000000"}, "for 'rodkaew.steps_per_frame'"),
     ("branch-gen", CORYMB, {"rodkaew.steps_per_frame": "1000000"}, "every floret born before max_steps"),
     ("branch-gen", CORYMB, {"rodkaew.max_steps": "1000000000000"}, "for 'rodkaew.max_steps'"),
@@ -81,7 +81,7 @@ PROBES = [
      "changes at most 1e+12-fold"),
     ("branch-gen", CORYMB, {"growth.mode": '"allometric"', "growth.rates": "[-0.9, 0, 0]"}, "for 'growth.rates'"),
     # thyrse
-    ("thyrse", THYRSE, {"thyrse.length": "1e-320"}, "a length in [1e-06, 1e+06] for 'thyrse.length'"),
+    ("thyrse", THYRSE, {"thyrse.length": "1e-320"}, "a length in (0, 1e+06] and >= 1e-06 for 'thyrse.length'"),
     ("thyrse", THYRSE, {"thyrse.pedicel_length": "1e-320"}, "for 'thyrse.pedicel_length'"),
     ("thyrse", THYRSE, {"thyrse.floret_id": "100000000000000000000"}, "an id in [0, 2147483647]"),
     ("thyrse", THYRSE, {"obstacle.id": "99999999999999999999999"}, "for 'obstacle.id'"),
@@ -89,9 +89,9 @@ PROBES = [
     ("thyrse", THYRSE, {"pipe.tip_diameter": "1e308", "pipe.exponent": "1e-300"}, "for 'pipe."),
     # phyllotaxis
     ("phyllotaxis", STATIC, {"primordia.placement": '"ca"', "primordia.development_frames": "99999999999999999999"},
-     "primordia.development_frames in [1, 10000000]"),
+     "primordia.development_frames > 0 frames and <= 10000000"),
     ("phyllotaxis", STATIC, {"primordia.placement": '"ca"', "primordia.development_order": '"centripetal"',
-                             "primordia.development_offset": "1e308"}, "primordia.development_offset in [0, "),
+                             "primordia.development_offset": "1e308"}, "primordia.development_offset >= 0 and <= 10000000"),
     ("phyllotaxis", STATIC, {"primordia.placement": '"ca"', "primordia.development_order": '"centripetal"',
                              "primordia.development_offset": "1000000"}, "development windows that end by frame"),
     ("phyllotaxis", STATIC, {"primordia.divergence": "1e-320"}, "primordia.divergence in [0.1, 359.9]"),

@@ -280,22 +280,26 @@ def _validate(p: Params, w: ParamText) -> None:
         if not ok:
             raise w.error(sec, key, expected, repr(found))
 
-    def length(sec, key, value, *, zero=False, inf=False):
-        lo = "[0" if zero else "(0"
+    def length(sec, key, value, what, *, zero=False, inf=False):
         ok = (value >= 0 if zero else value > 0) and (value <= MAX_LENGTH or (inf and value == INF))
-        need(ok, sec, key, f"a length in {lo}, {MAX_LENGTH:g}]" + (" or inf" if inf else ""), value)
+        need(ok, sec, key, f"{what} {'>= 0' if zero else '> 0'} and <= {MAX_LENGTH:g}" + (" (or inf)" if inf else ""),
+             value)
 
     def coords(sec, key, value):
         need(all(abs(c) <= MAX_LENGTH for c in value), sec, key, f"coordinates within +-{MAX_LENGTH:g}", value)
 
     coords(None, "base", p.base)
-    length("rodkaew", "step", r.step)
-    length("rodkaew", "merge_distance", r.merge_distance)
+    length("rodkaew", "step", r.step, "a step length")
+    length("rodkaew", "merge_distance", r.merge_distance, "a merge distance")
     for k in ("w_a", "w_b", "w_h"):
-        need(0 <= getattr(r, k) <= 1e6, "rodkaew", k, "a weight in [0, 1e6]", getattr(r, k))
+        need(0 <= getattr(r, k) <= 1e6, "rodkaew", k, "a weight >= 0 and <= 1e+06", getattr(r, k))
     need(r.w_a + r.w_b + r.w_h > 0, "rodkaew", "w_a", "weights w_a + w_b + w_h > 0", r.w_a + r.w_b + r.w_h)
-    length("rodkaew", "w_b_range", r.w_b_range)
-    length("rodkaew", "perception_radius", r.perception_radius, inf=True)
+    # without attraction to the base a particle that meets no other tree never arrives: it wanders
+    # until max_steps, every step a node
+    need(r.w_a > 0 and r.w_a >= (r.w_b + r.w_h) / 1000, "rodkaew", "w_a",
+         "a weight w_a > 0 and >= (w_b + w_h) / 1000 (particles must reach the base)", r.w_a)
+    length("rodkaew", "w_b_range", r.w_b_range, "a distance")
+    length("rodkaew", "perception_radius", r.perception_radius, "a radius", inf=True)
     need(r.initial_direction in ("floret", "base"), "rodkaew", "initial_direction", "'floret' or 'base'",
          r.initial_direction)
     need(1 <= r.steps_per_frame <= MAX_STEPS, "rodkaew", "steps_per_frame", f"an integer in [1, {MAX_STEPS}]",
@@ -322,10 +326,10 @@ def _validate(p: Params, w: ParamText) -> None:
         total = s.n_points + s.add_points * s.add_iterations
         need(total <= MAX_POINTS, "sca", "add_points",
              f"n_points + add_points * add_iterations <= {MAX_POINTS} attraction points", total)
-    length("sca", "min_distance", s.min_distance, zero=True)
-    length("sca", "influence_radius", s.influence_radius, inf=True)
-    length("sca", "kill_distance", s.kill_distance)
-    length("sca", "step", s.step)
+    length("sca", "min_distance", s.min_distance, "a distance", zero=True)
+    length("sca", "influence_radius", s.influence_radius, "a radius", inf=True)
+    length("sca", "kill_distance", s.kill_distance, "a distance")
+    length("sca", "step", s.step, "a step D")
     need(math.hypot(*s.tropism) <= MAX_TROPISM, "sca", "tropism", f"a vector of length <= {MAX_TROPISM:g}", s.tropism)
     need(len(s.roots) >= 1, "sca", "roots", "at least one root [x, y, z]", s.roots)
     need(len(s.roots) <= MAX_POINTS, "sca", "roots", f"at most {MAX_POINTS} roots", len(s.roots))
@@ -341,20 +345,20 @@ def _validate(p: Params, w: ParamText) -> None:
     need(e.shape in ("sphere", "ellipsoid", "cone", "cylinder", "contours"), "envelope", "shape",
          "'sphere', 'ellipsoid', 'cone', 'cylinder' or 'contours'", e.shape)
     coords("envelope", "centre", e.centre)
-    length("envelope", "radius", e.radius)
-    need(all(0 < x <= MAX_LENGTH for x in e.radii), "envelope", "radii", f"semi-axes in (0, {MAX_LENGTH:g}]",
+    length("envelope", "radius", e.radius, "a radius")
+    need(all(0 < x <= MAX_LENGTH for x in e.radii), "envelope", "radii", f"semi-axes > 0 and <= {MAX_LENGTH:g}",
          e.radii)
-    length("envelope", "height", e.height)
+    length("envelope", "height", e.height, "a height")
     if e.shape == "contours":
         need(len(e.contours) >= 1, "envelope", "contours", "at least one {file, angle} contour", e.contours)
         need(len(e.contours) <= 360, "envelope", "contours", "at most 360 contours", len(e.contours))
         for c in e.contours:
             need(abs(c.angle) <= 360, "envelope", "contours", "angles in [-360, 360] degrees", c.angle)
     q = p.post
-    need(0 <= q.decimate <= MAX_LENGTH, "post", "decimate", f"tau_d in [0, {MAX_LENGTH:g}]", q.decimate)
+    need(0 <= q.decimate <= MAX_LENGTH, "post", "decimate", f"tau_d >= 0 and <= {MAX_LENGTH:g}", q.decimate)
     need(0 <= q.subdivide <= 4, "post", "subdivide", "0..4 levels", q.subdivide)
     pp = p.pipe
-    need(0 < pp.tip_diameter <= 1e6, "pipe", "tip_diameter", "a diameter in (0, 1e+06]", pp.tip_diameter)
+    need(1e-6 <= pp.tip_diameter <= 1e6, "pipe", "tip_diameter", "a diameter in [1e-06, 1e+06]", pp.tip_diameter)
     lo, hi = PIPE_EXPONENT
     need(lo <= pp.exponent <= hi, "pipe", "exponent", f"an exponent in [{lo:g}, {hi:g}]", pp.exponent)
     need(3 <= p.cylinder.sides <= 64, "cylinder", "sides", "3..64 sides", p.cylinder.sides)

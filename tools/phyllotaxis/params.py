@@ -324,11 +324,11 @@ def _check_ranges(p: dict, w: ParamText) -> None:
     if not 0 <= pr["frame_start"] <= pr["frame_end"]:
         fail("primordia", "frame_end", ">= frame_start >= 0")
     if not 0 <= pr["development_offset"] <= MAX_FRAME:
-        fail("primordia", "development_offset", f"in [0, {MAX_FRAME}] frames per rank")
+        fail("primordia", "development_offset", f">= 0 and <= {MAX_FRAME} frames per rank")
     for section in ("primordia", "dynamics", "hierarchy"):
         n = p.get(section, {}).get("development_frames")
         if n is not None and not 0 < n <= MAX_FRAME:
-            fail(section, "development_frames", f"in [1, {MAX_FRAME}] frames")
+            fail(section, "development_frames", f"> 0 frames and <= {MAX_FRAME}")
     if "dynamics" in p:
         d = p["dynamics"]
         if not 1 <= d["frames"] <= MAX_FRAMES:

@@ -175,12 +175,12 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
 
     need(all(math.isfinite(c) and abs(c) <= 1e12 for c in p.base), None, "base",
          "coordinates within +-1e+12", p.base)
-    need(MIN_LENGTH <= t.length <= MAX_LENGTH, "thyrse", "length", f"a length in [{MIN_LENGTH:g}, {MAX_LENGTH:g}]",
-         t.length)
+    need(MIN_LENGTH <= t.length <= MAX_LENGTH, "thyrse", "length",
+         f"a length in (0, {MAX_LENGTH:g}] and >= {MIN_LENGTH:g}", t.length)
     need(0 <= t.nodes <= MAX_AXIS_NODES, "thyrse", "nodes", f"an integer in [0, {MAX_AXIS_NODES}]", t.nodes)
     need(0 <= t.first_node < 1, "thyrse", "first_node", "a relative height in [0, 1)", t.first_node)
     need(MIN_LENGTH <= t.pedicel_length <= MAX_LENGTH, "thyrse", "pedicel_length",
-         f"a length in [{MIN_LENGTH:g}, {MAX_LENGTH:g}]", t.pedicel_length)
+         f"a length in (0, {MAX_LENGTH:g}] and >= {MIN_LENGTH:g}", t.pedicel_length)
     need(0 < t.pedicel_angle < 180, "thyrse", "pedicel_angle", "an angle in (0, 180) degrees", t.pedicel_angle)
     need(0 <= t.tropism <= 1e6, "thyrse", "tropism", "a weight in [0, 1e6]", t.tropism)
     need(-360 <= t.divergence <= 360, "thyrse", "divergence", "an angle in [-360, 360] degrees", t.divergence)
@@ -193,7 +193,7 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
     o = p.obstacle
     need(-1 <= o.id <= MAX_ID, "obstacle", "id", f"an id in [0, {MAX_ID}] (or -1: none)", o.id)
     need(o.id != t.floret_id, "obstacle", "id", f"an id other than the florets' ({t.floret_id})", o.id)
-    need(MIN_LENGTH <= o.gap <= 1e6, "obstacle", "gap", f"a length in [{MIN_LENGTH:g}, 1e6]", o.gap)
+    need(MIN_LENGTH <= o.gap <= 1e6, "obstacle", "gap", f"a length in (0, 1e6] and >= {MIN_LENGTH:g}", o.gap)
     need(0 <= o.margin <= 1e6, "obstacle", "margin", "a length in [0, 1e6]", o.margin)
     need(1 <= d.frames <= MAX_FRAMES, "development", "frames", f"an integer in [1, {MAX_FRAMES}]", d.frames)
     need(0 <= d.window <= d.frames - 1, "development", "window", "0 <= window <= frames - 1", d.window)
