@@ -202,10 +202,10 @@ def simulate(*, mode: str, frames: int, interval: float, primordium_area: float,
     from .params import MAX_GROWTH, MAX_LOG_GROWTH
 
     for key, table in (("inner_growth", rin), ("outer_growth", rout), ("primordium_growth", grow)):
-        total = float(np.max(np.cumsum(table))) / substeps if len(table) else 0.0
+        total = float(np.max(np.abs(np.cumsum(table)))) / substeps if len(table) else 0.0
         if not total <= MAX_LOG_GROWTH:
-            raise InputError(f"expected dynamics.{key} whose integral over the run is at most {MAX_LOG_GROWTH:.4g} "
-                             f"(an area grows at most {MAX_GROWTH:g}-fold), found {total:.4g}")
+            raise InputError(f"expected dynamics.{key} whose integral over the run is within +-{MAX_LOG_GROWTH:.4g} "
+                             f"(an area grows or shrinks at most {MAX_GROWTH:g}-fold), found {total:.4g}")
     emergence, side, inner, outer, overflow = simulate_regions(
         MODE_CODES[mode], int(frames), int(substeps), float(interval), float(primordium_area),
         float(inner_area), float(outer_area), rin, rout, float(threshold), int(max_count),

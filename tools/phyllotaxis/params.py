@@ -184,6 +184,7 @@ MAX_ID = 2**31 - 1  # a floret type id (the .fcc id, an int32 in the scene's arr
 DIVERGENCE = (0.1, 359.9)  # degrees: beyond, every primordium lies on one line (and 1e-320 is no angle)
 MAX_GROWTH = 1e12  # an area's growth over a run (exp of a rate x frames): no overflow, no 0/0
 MAX_LOG_GROWTH = math.log(MAX_GROWTH)
+MIN_AREA = 1e-12  # a primordium's area: its size (2 sqrt(A / pi)) not below the written precision of a position
 #: placements over all RBA frames (frames x primordia present): the rows a dynamic run writes
 MAX_RBA_ROWS = 20_000_000
 # sections present in the result only when the file has them (besides the exclusive ones)
@@ -305,8 +306,8 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         fail("surface", "height", "within +-1e6 (coordinates stay far from overflow)")
     if not DIVERGENCE[0] <= pr["divergence"] <= DIVERGENCE[1]:
         fail("primordia", "divergence", f"in [{DIVERGENCE[0]:g}, {DIVERGENCE[1]:g}] degrees")
-    if isinstance(pr["area"], float) and pr["area"] <= 0:
-        fail("primordia", "area", "> 0 (A(s) is a primordium area)")
+    if isinstance(pr["area"], float) and not MIN_AREA <= pr["area"] <= 1e12:
+        fail("primordia", "area", f"> 0 (A(s) is a primordium area), in [{MIN_AREA:g}, 1e12]")
     if pr["count"] < 0:
         fail("primordia", "count", ">= 0 (0: fill the surface)")
     for section, key, high in (("primordia", "count", MAX_COUNT), ("primordia", "max_count", MAX_COUNT),
@@ -319,8 +320,8 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         fail("primordia", "start", "in [0, 1) (fraction of the curve length)")
     if not 0 <= pr["floret_id"] <= MAX_ID:
         fail("primordia", "floret_id", f"in [0, {MAX_ID}] (an id of the .fcc file)")
-    if not 0 < pr["size_factor"] <= 1e6:
-        fail("primordia", "size_factor", "in (0, 1e6]")
+    if not 1e-6 <= pr["size_factor"] <= 1e6:
+        fail("primordia", "size_factor", "in (0, 1e6], at least 1e-6")
     if not 0 <= pr["frame_start"] <= pr["frame_end"]:
         fail("primordia", "frame_end", ">= frame_start >= 0")
     if not 0 <= pr["development_offset"] <= MAX_FRAME:
@@ -336,8 +337,8 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         if not d["interval"] >= MIN_INTERVAL:
             fail("dynamics", "interval", f">= {MIN_INTERVAL:g} frames (at most {1 / MIN_INTERVAL:g} primordia per "
                                          "frame and front)")
-        if d["primordium_area"] <= 0:
-            fail("dynamics", "primordium_area", "> 0")
+        if not MIN_AREA <= d["primordium_area"] <= 1e12:
+            fail("dynamics", "primordium_area", f"> 0, in [{MIN_AREA:g}, 1e12]")
         if d["inner_area"] < 0:
             fail("dynamics", "inner_area", ">= 0")
         if d["outer_area"] < 0:
@@ -351,8 +352,8 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         if d["substeps"] < 0:
             fail("dynamics", "substeps", ">= 0 (0: automatic)")
         for key in ("primordium_growth", "inner_growth", "outer_growth"):
-            if isinstance(d[key], float) and not d[key] * d["frames"] <= MAX_LOG_GROWTH:
-                fail("dynamics", key, f"x frames <= {MAX_LOG_GROWTH:.4g} (an area grows at most "
+            if isinstance(d[key], float) and not abs(d[key] * d["frames"]) <= MAX_LOG_GROWTH:
+                fail("dynamics", key, f"x frames within +-{MAX_LOG_GROWTH:.4g} (an area grows or shrinks at most "
                                       f"{MAX_GROWTH:g}-fold over the run)")
         if d["close_apex"] and d["mode"] == "segregation":
             fail("dynamics", "close_apex", "false in segregation (its inner region keeps growing: no apex to close)")

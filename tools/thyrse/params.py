@@ -181,7 +181,8 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
     need(0 <= t.first_node < 1, "thyrse", "first_node", "a relative height in [0, 1)", t.first_node)
     need(MIN_LENGTH <= t.pedicel_length <= MAX_LENGTH, "thyrse", "pedicel_length",
          f"a length in (0, {MAX_LENGTH:g}] and >= {MIN_LENGTH:g}", t.pedicel_length)
-    need(0 < t.pedicel_angle < 180, "thyrse", "pedicel_angle", "an angle in (0, 180) degrees", t.pedicel_angle)
+    need(1 <= t.pedicel_angle <= 179, "thyrse", "pedicel_angle", "an angle in (0, 180) degrees, from 1 to 179",
+         t.pedicel_angle)
     need(0 <= t.tropism <= 1e6, "thyrse", "tropism", "a weight in [0, 1e6]", t.tropism)
     need(-360 <= t.divergence <= 360, "thyrse", "divergence", "an angle in [-360, 360] degrees", t.divergence)
     need(0 <= t.floret_id <= MAX_ID, "thyrse", "floret_id", f"an id in [0, {MAX_ID}]", t.floret_id)
@@ -201,7 +202,7 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
     need(0 <= d.start_variation <= d.frames - 1, "development", "start_variation", "0 <= start_variation <= frames - 1",
          d.start_variation)
     ranges = {"lateral_length": (0.0, 10.0), "order": (0.0, 6.0), "density": (0.0, 1e6), "branch_density": (0.0, 1e6),
-              "angle": (0.0, 180.0), "sub_angle": (0.0, 180.0), "floret_size": (1e-9, 1e6), "start": (0.0, 1.0)}
+              "angle": (1.0, 179.0), "sub_angle": (1.0, 179.0), "floret_size": (1e-9, 1e6), "start": (0.0, 1.0)}
     for k, (lo, hi) in ranges.items():
         if k not in p.functions:
             continue
