@@ -105,6 +105,8 @@ PROBES = [
     ("phyllotaxis", STATIC, {"primordia.area": "1e-320"}, "primordia.area > 0 (A(s) is a primordium area), in [1e-12"),
     ("phyllotaxis", STATIC, {"primordia.size_factor": "1e-320"}, "primordia.size_factor in (0, 1e6], at least"),
     ("phyllotaxis", DYNAMIC, {"dynamics.primordium_area": "1e-320"}, "dynamics.primordium_area > 0, in [1e-12"),
+    ("phyllotaxis", EX / "phyllotaxis" / "compound_cones.toml", {"compound.floret_fraction": "1e-320"},
+     "compound.floret_fraction in (0, 1), at least 1e-6"),
     ("phyllotaxis", DYNAMIC, {"dynamics.primordium_growth": "-1e308"}, "dynamics.primordium_growth x frames within"),
     ("phyllotaxis", DYNAMIC, {"dynamics.inner_growth": "-1e308"}, "dynamics.inner_growth x frames within"),
     ("phyllotaxis", DYNAMIC, {"dynamics.frames": "100000"}, "dynamics.primordium_growth x frames within"),

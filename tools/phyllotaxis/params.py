@@ -381,8 +381,8 @@ def _check_ranges(p: dict, w: ParamText) -> None:
             fail("compound", "head_fill", "in (0, 1000]")
         if not abs(c["head_height"]) <= 1e3:
             fail("compound", "head_height", "within +-1000 (head radii)")
-        if not 0 < c["floret_fraction"] < 1:
-            fail("compound", "floret_fraction", "in (0, 1)")
+        if not 1e-6 <= c["floret_fraction"] < 1:
+            fail("compound", "floret_fraction", "in (0, 1), at least 1e-6")
         if not 0 <= c["head_start"] < 1:
             fail("compound", "head_start", "in [0, 1) (head radii)")
     if "hierarchy" in p:
