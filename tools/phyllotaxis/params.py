@@ -339,10 +339,10 @@ def _check_ranges(p: dict, w: ParamText) -> None:
                                          "frame and front)")
         if not MIN_AREA <= d["primordium_area"] <= 1e12:
             fail("dynamics", "primordium_area", f"> 0, in [{MIN_AREA:g}, 1e12]")
-        if d["inner_area"] < 0:
-            fail("dynamics", "inner_area", ">= 0")
-        if d["outer_area"] < 0:
-            fail("dynamics", "outer_area", ">= 0")
+        if not 0 <= d["inner_area"] <= 1e12:
+            fail("dynamics", "inner_area", ">= 0 and <= 1e12")
+        if not 0 <= d["outer_area"] <= 1e12:
+            fail("dynamics", "outer_area", ">= 0 and <= 1e12")
         if d["mode"] == "segregation" and d["threshold"] <= d["primordium_area"]:
             fail("dynamics", "threshold", "> primordium_area (segregation needs room for a primordium)")
         if len(d["curves"]) != len(d["curve_times"]):
@@ -369,8 +369,8 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         if rc["segments"] * (rc["rings"] + rc["underside_rings"]) > MAX_RECEPTACLE_VERTICES:
             fail("receptacle", "segments", f"x (rings + underside_rings) <= {MAX_RECEPTACLE_VERTICES} "
                  "(the receptacle's vertices a frame)")
-        if rc["depth"] <= 0:
-            fail("receptacle", "depth", "> 0 (a fraction of the rim radius)")
+        if not 0 < rc["depth"] <= 1000:
+            fail("receptacle", "depth", "> 0 (a fraction of the rim radius), at most 1000")
         if not 0 <= rc["stem"] < 1:
             fail("receptacle", "stem", "in [0, 1) (a fraction of the rim radius)")
         if rc["inset"] < 0:
