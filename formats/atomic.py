@@ -270,6 +270,18 @@ def _in_the_way(folder: Path, rels) -> Path | None:
     return None
 
 
+def _unstage_message(exc: InputError, staging: Path, folder: Path) -> None:
+    """Name the output file the user asked for, not its staging twin, in a refusal raised while
+    writing (``out/.staging-tool/branches.obj`` -> ``out/branches.obj``): the staging folder is
+    never seen."""
+    def real(text: str) -> str:
+        return text.replace(f"{staging}{os.sep}", f"{folder}{os.sep}").replace(str(staging), str(folder))
+
+    if hasattr(exc, "path") and isinstance(exc.path, str):
+        exc.path = real(exc.path)
+    exc.args = tuple(real(a) if isinstance(a, str) else a for a in exc.args)
+
+
 @contextlib.contextmanager
 def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: str = "-o", subfolders=()):
     """Write a run's output folder through a staging folder: yields a fresh hidden folder inside
@@ -300,8 +312,10 @@ def staged_output(folder, tool: str, *, stale_patterns=(), inputs=(), option: st
         staging.mkdir()
         try:
             yield staging
-        except BaseException:
+        except BaseException as exc:
             shutil.rmtree(staging, ignore_errors=True)
+            if isinstance(exc, InputError):
+                _unstage_message(exc, staging, folder)
             raise
         new = sorted(p.relative_to(staging) for p in staging.rglob("*") if p.is_file())
         new_names = {p.as_posix() for p in new}

@@ -12,6 +12,7 @@ formats):
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -23,9 +24,9 @@ from inflo.tools.common import linalg as la
 
 from .cylinders import generalized_cylinders
 from .envelope import envelope_from_params
-from .params import Params, check_file
+from .params import Params, check_file, key_error
 from .pipe import chains, decimate, pipe_radii, relocate, subdivide
-from .rodkaew import RodkaewInput, grow_rodkaew
+from .rodkaew import RodkaewInput, _end_frame, grow_rodkaew
 from .sca import grow_sca
 from .skeleton import Skeleton, growth_scale
 
@@ -190,7 +191,7 @@ def _frame_meshes(sk: Skeleton, params: Params, rba_frames, end_frame: float, fr
 COORD_LIMIT = 1e12
 
 
-def check_rodkaew_work(inp: RodkaewInput, params: Params) -> None:
+def check_rodkaew_work(inp: RodkaewInput, params: Params, n_frames: int | None = None) -> None:
     """Refuse, before any work, a run that could not finish (``step = 1e-9`` or a floret
     at 1e300 hung): floret or group coordinates beyond :data:`COORD_LIMIT`, and a ``step`` so short
     that the farthest floret is more than ``max_steps`` steps from the base (each particle moves one
@@ -213,9 +214,81 @@ def check_rodkaew_work(inp: RodkaewInput, params: Params) -> None:
     rp = params.rodkaew
     reach = float(la.norm(pts - np.asarray(params.base, float), axis=1).max())
     if reach / rp.step > rp.max_steps:
-        raise InputError(f"{params.source or 'branch-gen parameters'}: rodkaew.step: expected a step >= {reach / rp.max_steps:.3g} (the "
-                         f"farthest floret is {reach:.4g} from the base, at most max_steps = {rp.max_steps} "
-                         f"steps of it), found {rp.step:g}")
+        raise key_error(params, "rodkaew", "step", f"a step >= {reach / rp.max_steps:.3g} (the farthest floret is "
+                        f"{reach:.4g} from the base, at most max_steps = {rp.max_steps} steps of it)", f"{rp.step:g}")
+    last = float(np.nan_to_num(np.asarray(inp.emergence, float), nan=0.0).max())
+    if not last * rp.steps_per_frame < rp.max_steps:
+        raise key_error(params, "rodkaew", "steps_per_frame", f"every floret born before max_steps = {rp.max_steps} "
+                        f"(the last emerges at frame {last:g}, step {last * rp.steps_per_frame:g})",
+                        f"{rp.steps_per_frame}")
+    check_growth(params, _end_frame(inp, params, n_frames), reach)
+
+
+def check_growth(params: Params, end_frame: float, reach: float) -> None:
+    """Refuse, before any work, a growth of space whose scale over the run leaves floating point
+    range or the coordinate limit: ``S(end) / S(0)`` and its inverse at most :data:`MAX_GROWTH` per
+    axis (``(1 + rate)^frames``: a rate of 1e308, or 0.5 over 1e12 frames, scaled every branch to
+    0/0), the last frame of growth at most :data:`MAX_FRAMES`, and the florets' reach times that
+    scale within :data:`COORD_LIMIT`."""
+    from .params import MAX_FRAMES, MAX_GROWTH
+
+    gp = params.growth
+    if gp.mode == "none":
+        return
+    if not end_frame <= MAX_FRAMES:
+        raise key_error(params, "growth", "frames", f"growth that ends by frame {MAX_FRAMES} (the last emergence "
+                        f"or RBA frame when -1)", f"{end_frame:g}")
+    if gp.mode == "functions":
+        ys = np.concatenate([np.asarray(fn.sampled()[1], float) for fn in gp._functions])
+        factor = float(ys.max() / ys.min())
+        key = "funcs"
+    else:
+        rates = [gp.rate] if gp.mode == "uniform" else list(gp.rates)
+        logs = max(abs(math.log1p(r)) for r in rates) * max(end_frame, 0.0)
+        factor = math.exp(min(logs, 700.0))
+        key = "rate" if gp.mode == "uniform" else "rates"
+    if not factor <= MAX_GROWTH or not reach * factor < COORD_LIMIT:
+        raise key_error(params, "growth", key, f"a growth of space whose scale changes at most {MAX_GROWTH:g}-fold "
+                        f"over the run (to frame {end_frame:g}) and keeps the florets within +-{COORD_LIMIT:g}",
+                        f"{factor:.3g}-fold")
+
+
+def check_sca_work(env, params: Params) -> None:
+    """Refuse, before any work, a space colonization that could not finish or would be degenerate:
+    an envelope beyond :data:`COORD_LIMIT`; a step D so short that the farthest corner of the
+    envelope's box is more than ``max_iterations`` steps from the roots (each iteration grows a
+    node by D, so that is a lower bound of the iterations the tree needs to reach it), or longer than
+    that extent; a kill distance d_k at most D / 2 (a node that grows at a point lands within D / 2
+    of it at best, so a point with a smaller d_k is never killed and the tree grows around it until
+    memory runs out) or at least the extent (every point dies at once: no tree).
+
+    Raises
+    ------
+    InputError
+        Naming the parameter, the bound and the value found.
+    """
+    sp = params.sca
+    lo, hi = (np.asarray(b, float) for b in env.bounds())
+    box = np.concatenate([lo, hi])
+    if not (np.isfinite(box).all() and np.abs(box).max() <= COORD_LIMIT):
+        raise key_error(params, "envelope", "shape", f"an envelope within +-{COORD_LIMIT:g}",
+                        f"the box {' '.join(f'{c:g}' for c in lo)} .. {' '.join(f'{c:g}' for c in hi)}")
+    corners = np.array([[(lo, hi)[(k >> i) & 1][i] for i in range(3)] for k in range(8)])
+    roots = np.asarray(sp.roots, float).reshape(-1, 3)
+    extent = max(float(la.norm(roots - c, axis=1).max()) for c in corners)
+    if extent / sp.step > sp.max_iterations:
+        raise key_error(params, "sca", "step", f"a step D >= {extent / sp.max_iterations:.3g} (the envelope reaches "
+                        f"{extent:.4g} from the roots, at most max_iterations = {sp.max_iterations} steps of D)",
+                        f"{sp.step:g}")
+    if sp.step > extent:
+        raise key_error(params, "sca", "step", f"a step D <= {extent:.4g} (the envelope's extent from the roots)",
+                        f"{sp.step:g}")
+    if not sp.kill_distance > 0.5 * sp.step:
+        raise key_error(params, "sca", "kill_distance", f"a kill distance d_k > step / 2 = {0.5 * sp.step:g} (else "
+                        f"a point may never be reached)", f"{sp.kill_distance:g}")
+    if sp.kill_distance >= extent:
+        raise key_error(params, "sca", "kill_distance", f"a kill distance d_k < {extent:.4g} (the envelope's extent "
+                        f"from the roots: else every point dies at once)", f"{sp.kill_distance:g}")
 
 
 def branch_gen(scene, params: Params, *, rba_frames=None, algorithm: str | None = None, frame_step: int = 1,
@@ -238,6 +311,7 @@ def branch_gen(scene, params: Params, *, rba_frames=None, algorithm: str | None 
     algorithm = algorithm or params.algorithm
     if algorithm == "sca":
         env = envelope_from_params(params)
+        check_sca_work(env, params)
         sk, res = grow_sca(params, env, progress=progress)
         head = (f"branch-gen space colonization: N {len(res.points)} D {params.sca.step:g} "
                 f"d_k {params.sca.kill_distance:g} d_I {params.sca.influence_radius:g} seed {params.seed}; "
@@ -245,8 +319,7 @@ def branch_gen(scene, params: Params, *, rba_frames=None, algorithm: str | None 
     else:
         _load_growth_functions(params)
         inp = rodkaew_input(scene, rba_frames)
-        check_rodkaew_work(inp, params)
-        from .rodkaew import _end_frame
+        check_rodkaew_work(inp, params, len(rba_frames) if rba_frames else None)
 
         sk = grow_rodkaew(inp, params, wb_table=_wb_table(params),
                           n_frames=len(rba_frames) if rba_frames else None, progress=progress)

@@ -40,6 +40,7 @@ __all__ = [
     "params_from_dict",
     "param_text",
     "ALGORITHMS",
+    "key_error",
 ]
 
 ALGORITHMS = ("rodkaew", "sca")
@@ -151,6 +152,7 @@ class Params:
     cylinder: CylinderParams = field(default_factory=CylinderParams)
     source: str | None = None  # the file read, for error messages
     folder: Path = field(default_factory=Path)  # relative paths are relative to this
+    lines: list = field(default_factory=list, repr=False)  # the file's lines, for errors naming a key's line
 
 
 _SECTIONS = {
@@ -176,6 +178,12 @@ def param_text(path, lines) -> ParamText:
     return ParamText(path, "\n".join(lines), style=LINES, template="{expected} for '{name}'", show=show_repr)
 
 
+def key_error(p: Params, sec: str | None, key: str, expected: str, found: str):
+    """The :class:`~inflo.formats.errors.FormatError` about ``sec.key`` of ``p``'s file, at the key's
+    line (a bound that depends on more than the file: the scene, the envelope)."""
+    return param_text(p.source or "<params>", p.lines).error(sec, key, expected, found)
+
+
 def params_from_dict(data: dict, *, path="<params>", lines=None, folder=None) -> Params:
     """Build :class:`Params` from a parsed TOML mapping, validating every key.
 
@@ -185,7 +193,7 @@ def params_from_dict(data: dict, *, path="<params>", lines=None, folder=None) ->
         Unknown key/section (naming the closest known one), wrong type, out-of-range value.
     """
     w = param_text(path, lines or [])
-    p = Params(source=os.fspath(path), folder=Path(folder) if folder is not None else Path("."))
+    p = Params(source=os.fspath(path), folder=Path(folder) if folder is not None else Path("."), lines=list(lines or []))
     known_top = list(_TOP) + list(_SECTIONS)
     for key, v in data.items():
         if key not in known_top:
@@ -249,6 +257,22 @@ def _convert(w, sec, key, val, default):
     raise AssertionError(key)  # pragma: no cover
 
 
+#: lengths and coordinates (scene units) stay within this: the OBJ writer's limit, far from overflow
+MAX_LENGTH = 1e12
+#: simulation steps and iterations: a run of more could not finish in reasonable time
+MAX_STEPS = 10_000_000
+#: attraction points in all (``n_points + add_points * add_iterations``)
+MAX_POINTS = 1_000_000
+#: growth of space: the scale of space at its end over its scale at frame 0, per axis (and its inverse)
+MAX_GROWTH = 1e12
+#: the last frame of growth
+MAX_FRAMES = 10_000_000
+#: the tropism's length (the unit growth direction is added to it: beyond this only the tropism counts)
+MAX_TROPISM = 1e6
+#: the pipe model's exponent p (da Vinci 2, thesis p > 2, Murray 3)
+PIPE_EXPONENT = (1.0, 20.0)
+
+
 def _validate(p: Params, w: ParamText) -> None:
     r = p.rodkaew
 
@@ -256,17 +280,31 @@ def _validate(p: Params, w: ParamText) -> None:
         if not ok:
             raise w.error(sec, key, expected, repr(found))
 
-    need(r.step > 0, "rodkaew", "step", "a step length > 0", r.step)
-    need(r.merge_distance > 0, "rodkaew", "merge_distance", "a merge distance > 0", r.merge_distance)
+    def length(sec, key, value, what, *, zero=False, inf=False):
+        ok = (value >= 0 if zero else value > 0) and (value <= MAX_LENGTH or (inf and value == INF))
+        need(ok, sec, key, f"{what} {'>= 0' if zero else '> 0'} and <= {MAX_LENGTH:g}" + (" (or inf)" if inf else ""),
+             value)
+
+    def coords(sec, key, value):
+        need(all(abs(c) <= MAX_LENGTH for c in value), sec, key, f"coordinates within +-{MAX_LENGTH:g}", value)
+
+    coords(None, "base", p.base)
+    length("rodkaew", "step", r.step, "a step length")
+    length("rodkaew", "merge_distance", r.merge_distance, "a merge distance")
     for k in ("w_a", "w_b", "w_h"):
-        need(getattr(r, k) >= 0, "rodkaew", k, "a weight >= 0", getattr(r, k))
+        need(0 <= getattr(r, k) <= 1e6, "rodkaew", k, "a weight >= 0 and <= 1e+06", getattr(r, k))
     need(r.w_a + r.w_b + r.w_h > 0, "rodkaew", "w_a", "weights w_a + w_b + w_h > 0", r.w_a + r.w_b + r.w_h)
-    need(r.w_b_range > 0, "rodkaew", "w_b_range", "a distance > 0", r.w_b_range)
-    need(r.perception_radius > 0, "rodkaew", "perception_radius", "a radius > 0", r.perception_radius)
+    # without attraction to the base a particle that meets no other tree never arrives: it wanders
+    # until max_steps, every step a node
+    need(r.w_a > 0 and r.w_a >= (r.w_b + r.w_h) / 1000, "rodkaew", "w_a",
+         "a weight w_a > 0 and >= (w_b + w_h) / 1000 (particles must reach the base)", r.w_a)
+    length("rodkaew", "w_b_range", r.w_b_range, "a distance")
+    length("rodkaew", "perception_radius", r.perception_radius, "a radius", inf=True)
     need(r.initial_direction in ("floret", "base"), "rodkaew", "initial_direction", "'floret' or 'base'",
          r.initial_direction)
-    need(r.steps_per_frame >= 1, "rodkaew", "steps_per_frame", "an integer >= 1", r.steps_per_frame)
-    need(r.max_steps >= 1, "rodkaew", "max_steps", "an integer >= 1", r.max_steps)
+    need(1 <= r.steps_per_frame <= MAX_STEPS, "rodkaew", "steps_per_frame", f"an integer in [1, {MAX_STEPS}]",
+         r.steps_per_frame)
+    need(1 <= r.max_steps <= MAX_STEPS, "rodkaew", "max_steps", f"an integer in [1, {MAX_STEPS}]", r.max_steps)
     if r.step > r.merge_distance:
         warnings.warn(f"{p.source}: rodkaew.step {r.step} is larger than merge_distance {r.merge_distance}: "
                       "particles may jump across branches without grafting", UserWarning, stacklevel=3)
@@ -277,29 +315,52 @@ def _validate(p: Params, w: ParamText) -> None:
         need(len(g.funcs) == 3, "growth", "funcs", "three .func files for mode 'functions'", g.funcs)
     need(g.rate > -1, "growth", "rate", "a rate > -1", g.rate)
     need(all(x > -1 for x in g.rates), "growth", "rates", "rates > -1", g.rates)
+    need(g.frames == -1 or 0 <= g.frames <= MAX_FRAMES, "growth", "frames", f"-1 or a frame in [0, {MAX_FRAMES}]",
+         g.frames)
     s = p.sca
-    need(s.n_points >= 0, "sca", "n_points", "an integer >= 0", s.n_points)
-    need(s.min_distance >= 0, "sca", "min_distance", "a distance >= 0", s.min_distance)
-    need(s.influence_radius > 0, "sca", "influence_radius", "a radius > 0", s.influence_radius)
-    need(s.kill_distance > 0, "sca", "kill_distance", "a distance > 0", s.kill_distance)
-    need(s.step > 0, "sca", "step", "a step D > 0", s.step)
+    need(0 <= s.n_points <= MAX_POINTS, "sca", "n_points", f"an integer in [0, {MAX_POINTS}]", s.n_points)
+    need(0 <= s.add_points <= MAX_POINTS, "sca", "add_points", f"an integer in [0, {MAX_POINTS}]", s.add_points)
+    need(0 <= s.add_iterations <= MAX_STEPS, "sca", "add_iterations", f"an integer in [0, {MAX_STEPS}]",
+         s.add_iterations)
+    if s.add_points and s.add_iterations:
+        total = s.n_points + s.add_points * s.add_iterations
+        need(total <= MAX_POINTS, "sca", "add_points",
+             f"n_points + add_points * add_iterations <= {MAX_POINTS} attraction points", total)
+    length("sca", "min_distance", s.min_distance, "a distance", zero=True)
+    length("sca", "influence_radius", s.influence_radius, "a radius", inf=True)
+    length("sca", "kill_distance", s.kill_distance, "a distance")
+    length("sca", "step", s.step, "a step D")
+    need(math.hypot(*s.tropism) <= MAX_TROPISM, "sca", "tropism", f"a vector of length <= {MAX_TROPISM:g}", s.tropism)
     need(len(s.roots) >= 1, "sca", "roots", "at least one root [x, y, z]", s.roots)
-    need(s.add_points >= 0 and s.add_iterations >= 0, "sca", "add_points", "counts >= 0", s.add_points)
-    need(s.max_iterations >= 1, "sca", "max_iterations", "an integer >= 1", s.max_iterations)
+    need(len(s.roots) <= MAX_POINTS, "sca", "roots", f"at most {MAX_POINTS} roots", len(s.roots))
+    for root in s.roots:
+        coords("sca", "roots", root)
+    need(len(s.obstacles) <= 1000, "sca", "obstacles", "at most 1000 planes", len(s.obstacles))
+    for plane in s.obstacles:
+        need(all(abs(c) <= MAX_LENGTH for c in plane), "sca", "obstacles",
+             f"plane coefficients within +-{MAX_LENGTH:g}", plane)
+    need(1 <= s.max_iterations <= MAX_STEPS, "sca", "max_iterations", f"an integer in [1, {MAX_STEPS}]",
+         s.max_iterations)
     e = p.envelope
     need(e.shape in ("sphere", "ellipsoid", "cone", "cylinder", "contours"), "envelope", "shape",
          "'sphere', 'ellipsoid', 'cone', 'cylinder' or 'contours'", e.shape)
-    need(e.radius > 0, "envelope", "radius", "a radius > 0", e.radius)
-    need(all(x > 0 for x in e.radii), "envelope", "radii", "semi-axes > 0", e.radii)
-    need(e.height > 0, "envelope", "height", "a height > 0", e.height)
+    coords("envelope", "centre", e.centre)
+    length("envelope", "radius", e.radius, "a radius")
+    need(all(0 < x <= MAX_LENGTH for x in e.radii), "envelope", "radii", f"semi-axes > 0 and <= {MAX_LENGTH:g}",
+         e.radii)
+    length("envelope", "height", e.height, "a height")
     if e.shape == "contours":
         need(len(e.contours) >= 1, "envelope", "contours", "at least one {file, angle} contour", e.contours)
+        need(len(e.contours) <= 360, "envelope", "contours", "at most 360 contours", len(e.contours))
+        for c in e.contours:
+            need(abs(c.angle) <= 360, "envelope", "contours", "angles in [-360, 360] degrees", c.angle)
     q = p.post
-    need(q.decimate >= 0, "post", "decimate", "tau_d >= 0", q.decimate)
+    need(0 <= q.decimate <= MAX_LENGTH, "post", "decimate", f"tau_d >= 0 and <= {MAX_LENGTH:g}", q.decimate)
     need(0 <= q.subdivide <= 4, "post", "subdivide", "0..4 levels", q.subdivide)
     pp = p.pipe
-    need(pp.tip_diameter > 0, "pipe", "tip_diameter", "a diameter > 0", pp.tip_diameter)
-    need(pp.exponent > 0, "pipe", "exponent", "an exponent > 0", pp.exponent)
+    need(1e-6 <= pp.tip_diameter <= 1e6, "pipe", "tip_diameter", "a diameter in [1e-06, 1e+06]", pp.tip_diameter)
+    lo, hi = PIPE_EXPONENT
+    need(lo <= pp.exponent <= hi, "pipe", "exponent", f"an exponent in [{lo:g}, {hi:g}]", pp.exponent)
     need(3 <= p.cylinder.sides <= 64, "cylinder", "sides", "3..64 sides", p.cylinder.sides)
 
 

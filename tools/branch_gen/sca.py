@@ -221,6 +221,10 @@ def _update_nearest(points, alive, near, near_d2, node_pos, n_from, n_to):
 
 
 POINT_LEAF = 32  # live points per bucket of the point kd-tree
+#: tree nodes a run may make (about 100 bytes each, and a copy while the arrays grow)
+MAX_NODES = 10_000_000
+#: iterations without a point reached after which a growing tree is taken to grow away from them (at least)
+STALL_ITERATIONS = 1000
 NODE_LEAF = 16  # new nodes per bucket of that iteration's node kd-tree
 NODE_CLUSTER = 32  # new nodes per cluster (subtree of the node kd-tree) walking the point kd-tree
 
@@ -562,6 +566,14 @@ def _iterate(max_iter, it0, n_nodes, n_new_from, n_live, points, nodes, tree, co
     return it, n_nodes, n_new_from, n_live, 1
 
 
+class Stalled(InputError):
+    """A space colonization that would not end: its tree grows without reaching its points."""
+
+    def __init__(self, expected: str, found: str):
+        self.expected, self.found = expected, found
+        super().__init__(f"expected {expected}, found {found}")
+
+
 def _new_nodes(cap: int) -> Nodes:
     """Room for ``cap`` tree nodes (no parent, initial iteration, nothing accumulated)."""
     return Nodes(pos=np.zeros((cap, 3)), parent=np.full(cap, -1, np.int64), iteration=np.full(cap, -1, np.int64),
@@ -639,15 +651,33 @@ def colonize(points, roots, *, step: float, kill_distance: float, influence_radi
     killed_before = 0
     work = np.zeros(2, np.int64)
     tree = _point_tree(points, POINT_LEAF)
+    # a tree that grows for many times the iterations it needs to cross the points' box without
+    # reaching a point never will (it grows away from them): refused rather than run to max_iterations
+    box = np.vstack([pts, roots])
+    span = float(la.norm(box.max(axis=0) - box.min(axis=0))) if len(box) else 0.0
+    patience = max(STALL_ITERATIONS, 10 * int(math.ceil(min(span / step, 1e9))))
+    last_kill, dead_before = 0, 0
     while True:
         limit = min(max_iterations, it + 1) if (add_points is not None and it < add_iterations) else max_iterations
+        limit = min(limit, it + patience)
         it, n_nodes, new_from, n_live, status = _iterate(limit, it, n_nodes, new_from, n_live, points, nodes, tree,
                                                          const, work)
+        killed = int((~points.alive).sum())
         if progress is not None:
-            killed = int((~points.alive).sum())
             progress(killed - killed_before)
             killed_before = killed
+        if killed > dead_before:
+            last_kill, dead_before = it, killed
+        elif status != 0 and n_live and it - last_kill >= patience:
+            raise Stalled("a space colonization that reaches its attraction points (a tropism that does not lead "
+                          "away from them)", f"none reached in {it - last_kill} iterations while the tree grew to "
+                          f"{n_nodes} nodes, {n_live} points alive")
+        if status == 1 and it < max_iterations and not (add_points is not None and it <= add_iterations):
+            continue
         if status == 2:
+            if cap >= MAX_NODES:
+                raise Stalled(f"a space colonization tree of at most {MAX_NODES} nodes (a tropism that does not "
+                              f"lead away from the points)", f"more after {it} iterations, {n_live} points alive")
             nodes = Nodes(*(np.concatenate([a, b]) for a, b in zip(nodes, _new_nodes(cap))))
             cap *= 2
             continue
@@ -690,9 +720,17 @@ def grow_sca(params, envelope, *, progress=None) -> tuple[Skeleton, ScaResult]:
                                  obstacles=sp.obstacles, existing=existing if sp.min_distance > 0 else None)
 
     add = more_points if sp.add_points > 0 and sp.add_iterations > 0 else None
-    res = colonize(pts, sp.roots, step=sp.step, kill_distance=sp.kill_distance,
-                   influence_radius=sp.influence_radius, tropism=sp.tropism, max_iterations=sp.max_iterations,
-                   add_points=add, add_iterations=sp.add_iterations, progress=progress)
+    from .params import key_error
+
+    try:
+        res = colonize(pts, sp.roots, step=sp.step, kill_distance=sp.kill_distance,
+                       influence_radius=sp.influence_radius, tropism=sp.tropism, max_iterations=sp.max_iterations,
+                       add_points=add, add_iterations=sp.add_iterations, progress=progress)
+    except Stalled as exc:
+        raise key_error(params, "sca", "tropism", exc.expected, exc.found) from None
+    if len(res.node_pos) == len(sp.roots):
+        raise key_error(params, "sca", "influence_radius", "a space colonization tree that grows (an attraction "
+                        "point within the radius of influence of a root)", f"{sp.influence_radius:g} and no node grown")
     n = len(res.node_pos)
     link = res.node_iter.astype(np.float64)
     link[res.node_parent < 0] = np.inf

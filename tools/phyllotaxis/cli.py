@@ -1,6 +1,8 @@
 """Command-line front end of ``phyllotaxis`` (thesis ch. 5; parameters: formats/phyllotaxis.md)."""
 from __future__ import annotations
 
+import warnings
+
 import click
 
 from inflo.formats.atomic import staged_output
@@ -16,6 +18,18 @@ from .params import read_params
 @click.option("-o", "--output", "output", required=True, type=click.Path(), help="Output folder.")
 @click.option("--png", type=click.Path(), default=None, help="Also save a top view of the final pattern (florets as discs coloured by age).")
 def main(params, output, png, quiet, debug):
+    # a numerical warning no bound prevented is one line (no source line under it), once per kind
+    with warnings.catch_warnings():
+        warnings.simplefilter("once")
+        warnings.showwarning = _one_line_warning
+        _run(params, output, png, quiet)
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    click.echo(f"phyllotaxis: warning: {message}", err=True)
+
+
+def _run(params, output, png, quiet):
     p = read_params(params)
 
     def bar(length, label):

@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from inflo.formats.errors import InputError
 from inflo.formats.scn import Scene
 from inflo.tools.common import linalg as la
 
@@ -89,6 +90,13 @@ def apply_development_order(scene: Scene, *, order: str, offset: float, frame_st
     if loose.any():
         centres[loose] = arr["pos"][loose].mean(axis=0)
     ranks = development_ranks(arr["pos"], centres, group, order)
+    from .params import MAX_FRAME
+
+    last = frame_start + int(ranks.max()) * offset + frames
+    if not last <= MAX_FRAME:
+        raise InputError(f"expected development windows that end by frame {MAX_FRAME}, found frame {last:.4g} "
+                         f"(frame_start {frame_start} + development_offset {offset:g} x rank {int(ranks.max())} + "
+                         f"{frames} frames); lower primordia.development_offset or development_frames")
     for p, r in zip(scene.placements, ranks):
         start = round_frame(frame_start + int(r) * offset)
         p.kind = "ca"

@@ -195,6 +195,17 @@ def simulate(*, mode: str, frames: int, interval: float, primordium_area: float,
     t = np.arange(steps, dtype=np.float64) / substeps
     rin = _rate_table(inner_growth, t, frames)
     rout = _rate_table(outer_growth, t, frames)
+    age_grid = np.arange(frames * substeps + 1, dtype=np.float64) / substeps
+    grow = _rate_table(primordium_growth, age_grid, frames)
+    # an area grows at most MAX_GROWTH-fold over the run (exp of the rate's integral): a larger
+    # growth overflows to inf and 0/0 (checked before any work, .func rates included)
+    from .params import MAX_GROWTH, MAX_LOG_GROWTH
+
+    for key, table in (("inner_growth", rin), ("outer_growth", rout), ("primordium_growth", grow)):
+        total = float(np.max(np.abs(np.cumsum(table)))) / substeps if len(table) else 0.0
+        if not total <= MAX_LOG_GROWTH:
+            raise InputError(f"expected dynamics.{key} whose integral over the run is within +-{MAX_LOG_GROWTH:.4g} "
+                             f"(an area grows or shrinks at most {MAX_GROWTH:g}-fold), found {total:.4g}")
     emergence, side, inner, outer, overflow = simulate_regions(
         MODE_CODES[mode], int(frames), int(substeps), float(interval), float(primordium_area),
         float(inner_area), float(outer_area), rin, rout, float(threshold), int(max_count),
@@ -214,8 +225,6 @@ def simulate(*, mode: str, frames: int, interval: float, primordium_area: float,
     theta = np.where(side == -1, -inner_rank * phi, (outer_rank + 1) * phi)
     key = np.where(side == -1, -(inner_rank + 1), outer_rank).astype(np.int64)
     order = np.argsort(key, kind="stable")
-    age_grid = np.arange(frames * substeps + 1, dtype=np.float64) / substeps
-    grow = _rate_table(primordium_growth, age_grid, frames)
     logs = np.concatenate([[0.0], np.cumsum(0.5 * (grow[1:] + grow[:-1]) * np.diff(age_grid))])
     age_area = primordium_area * np.exp(logs)
     return DynamicPattern(emergence, side, theta, order, inner, outer, age_grid, age_area,

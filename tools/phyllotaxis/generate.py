@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from inflo.formats.atomic import frame_name
+from inflo.formats.errors import InputError
 from inflo.formats.func import read_func
 from inflo.formats.rba import RbaFrame, write_rba
 from inflo.formats.scn import write_scn
@@ -87,6 +88,7 @@ def generate(params: Params, out_dir, *, progress=None, header: str | None = Non
                        primordium_growth=_func_or_number(d.primordium_growth), threshold=d.threshold,
                        divergence=pr.divergence, profiles=profiles, curve_times=d.curve_times,
                        substeps=d.substeps, max_count=d.max_count, close_apex=d.close_apex)
+        _check_frames_work("dynamics", d.frames, pat.emergence, params.receptacle)
         ctx = progress(d.frames, "phyllotaxis frames") if progress else _NoBar()
         rec = (params.receptacle, out / "receptacle") if params.receptacle is not None else None
         with ctx as bar:
@@ -179,6 +181,7 @@ def _hierarchy(params: Params, out: Path, progress, header, notes) -> Summary:
     frames = 0
     if h_p.dynamic:
         frames = int(math.floor(h_p.frames)) + 1
+        _check_frames_work("hierarchy", frames, h.element_birth[h.florets[final["ids"]]], None)
         rba = out / "rba"
         rba.mkdir(parents=True, exist_ok=True)
         ctx = progress(frames, "phyllotaxis frames") if progress else _NoBar()
@@ -203,6 +206,25 @@ def _hierarchy(params: Params, out: Path, progress, header, notes) -> Summary:
     preview = {"pos": final["pos"], "diameter": final["scale"][:, 0], "age": h_p.frames - birth}
     return Summary(f"hierarchy ({h_p.levels} levels)", len(final["ids"]), frames, out / "scene.scn",
                    notes + list(h.messages), preview)
+
+
+def _check_frames_work(section: str, frames: int, birth, receptacle) -> None:
+    """Refuse, before the first RBA frame is written, a run whose frames x primordia (the rows of
+    every RBA file: a primordium is in every frame from its emergence on) exceed
+    :data:`~.params.MAX_RBA_ROWS`, or whose receptacle meshes (vertices a frame x frames) do."""
+    from .params import MAX_RBA_ROWS
+
+    birth = np.asarray(birth, dtype=np.float64)
+    rows = float(np.sum(np.maximum(frames - np.ceil(birth - 1e-9), 0.0)))
+    if rows > MAX_RBA_ROWS:
+        raise InputError(f"expected at most {MAX_RBA_ROWS} placements over all RBA frames ({section}.frames x the "
+                         f"primordia present), found {rows:.4g} ({len(birth)} primordia over {frames} frames); "
+                         f"lower {section}.frames or max_count")
+    if receptacle is not None:
+        verts = receptacle.segments * (receptacle.rings + receptacle.underside_rings) * frames
+        if verts > MAX_RBA_ROWS:
+            raise InputError(f"expected at most {MAX_RBA_ROWS} receptacle vertices over all frames (segments x "
+                             f"(rings + underside_rings) x {section}.frames), found {verts}")
 
 
 def _room(final: dict, h_p, birth: np.ndarray) -> tuple:

@@ -180,6 +180,13 @@ MAX_SUBSTEPS = 10_000
 MAX_LEVELS = 10  # levels of a recursive hierarchy
 MAX_FRAMES = 100_000
 MIN_INTERVAL = 1e-3
+MAX_ID = 2**31 - 1  # a floret type id (the .fcc id, an int32 in the scene's arrays)
+DIVERGENCE = (0.1, 359.9)  # degrees: beyond, every primordium lies on one line (and 1e-320 is no angle)
+MAX_GROWTH = 1e12  # an area's growth over a run (exp of a rate x frames): no overflow, no 0/0
+MAX_LOG_GROWTH = math.log(MAX_GROWTH)
+MIN_AREA = 1e-12  # a primordium's area: its size (2 sqrt(A / pi)) not below the written precision of a position
+#: placements over all RBA frames (frames x primordia present): the rows a dynamic run writes
+MAX_RBA_ROWS = 20_000_000
 # sections present in the result only when the file has them (besides the exclusive ones)
 _WHEN_GIVEN = ("receptacle",)
 
@@ -295,10 +302,12 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         fail("surface", "angle", "in (0, 180] degrees")
     if not 16 <= s["samples"] <= MAX_SAMPLES:
         fail("surface", "samples", f"in [16, {MAX_SAMPLES}] (arc-length samples of C)")
-    if not 0 < pr["divergence"] < 360:
-        fail("primordia", "divergence", "in (0, 360) degrees")
-    if isinstance(pr["area"], float) and pr["area"] <= 0:
-        fail("primordia", "area", "> 0 (A(s) is a primordium area)")
+    if not abs(s["height"]) <= 1e6:
+        fail("surface", "height", "within +-1e6 (coordinates stay far from overflow)")
+    if not DIVERGENCE[0] <= pr["divergence"] <= DIVERGENCE[1]:
+        fail("primordia", "divergence", f"in [{DIVERGENCE[0]:g}, {DIVERGENCE[1]:g}] degrees")
+    if isinstance(pr["area"], float) and not MIN_AREA <= pr["area"] <= 1e12:
+        fail("primordia", "area", f"> 0 (A(s) is a primordium area), in [{MIN_AREA:g}, 1e12]")
     if pr["count"] < 0:
         fail("primordia", "count", ">= 0 (0: fill the surface)")
     for section, key, high in (("primordia", "count", MAX_COUNT), ("primordia", "max_count", MAX_COUNT),
@@ -309,16 +318,18 @@ def _check_ranges(p: dict, w: ParamText) -> None:
             fail(section, key, f"<= {high}")
     if not 0 <= pr["start"] < 1:
         fail("primordia", "start", "in [0, 1) (fraction of the curve length)")
-    if pr["floret_id"] < 0:
-        fail("primordia", "floret_id", ">= 0")
-    if not 0 < pr["size_factor"] <= 1e6:
-        fail("primordia", "size_factor", "in (0, 1e6]")
+    if not 0 <= pr["floret_id"] <= MAX_ID:
+        fail("primordia", "floret_id", f"in [0, {MAX_ID}] (an id of the .fcc file)")
+    if not 1e-6 <= pr["size_factor"] <= 1e6:
+        fail("primordia", "size_factor", "in (0, 1e6], at least 1e-6")
     if not 0 <= pr["frame_start"] <= pr["frame_end"]:
         fail("primordia", "frame_end", ">= frame_start >= 0")
-    if pr["development_offset"] < 0:
-        fail("primordia", "development_offset", ">= 0 frames per rank")
-    if pr["development_frames"] is not None and pr["development_frames"] <= 0:
-        fail("primordia", "development_frames", "> 0 frames")
+    if not 0 <= pr["development_offset"] <= MAX_FRAME:
+        fail("primordia", "development_offset", f">= 0 and <= {MAX_FRAME} frames per rank")
+    for section in ("primordia", "dynamics", "hierarchy"):
+        n = p.get(section, {}).get("development_frames")
+        if n is not None and not 0 < n <= MAX_FRAME:
+            fail(section, "development_frames", f"> 0 frames and <= {MAX_FRAME}")
     if "dynamics" in p:
         d = p["dynamics"]
         if not 1 <= d["frames"] <= MAX_FRAMES:
@@ -326,12 +337,12 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         if not d["interval"] >= MIN_INTERVAL:
             fail("dynamics", "interval", f">= {MIN_INTERVAL:g} frames (at most {1 / MIN_INTERVAL:g} primordia per "
                                          "frame and front)")
-        if d["primordium_area"] <= 0:
-            fail("dynamics", "primordium_area", "> 0")
-        if d["inner_area"] < 0:
-            fail("dynamics", "inner_area", ">= 0")
-        if d["outer_area"] < 0:
-            fail("dynamics", "outer_area", ">= 0")
+        if not MIN_AREA <= d["primordium_area"] <= 1e12:
+            fail("dynamics", "primordium_area", f"> 0, in [{MIN_AREA:g}, 1e12]")
+        if not 0 <= d["inner_area"] <= 1e12:
+            fail("dynamics", "inner_area", ">= 0 and <= 1e12")
+        if not 0 <= d["outer_area"] <= 1e12:
+            fail("dynamics", "outer_area", ">= 0 and <= 1e12")
         if d["mode"] == "segregation" and d["threshold"] <= d["primordium_area"]:
             fail("dynamics", "threshold", "> primordium_area (segregation needs room for a primordium)")
         if len(d["curves"]) != len(d["curve_times"]):
@@ -340,8 +351,10 @@ def _check_ranges(p: dict, w: ParamText) -> None:
             fail("dynamics", "curve_times", "increasing")
         if d["substeps"] < 0:
             fail("dynamics", "substeps", ">= 0 (0: automatic)")
-        if d["development_frames"] is not None and d["development_frames"] <= 0:
-            fail("dynamics", "development_frames", "> 0 frames")
+        for key in ("primordium_growth", "inner_growth", "outer_growth"):
+            if isinstance(d[key], float) and not abs(d[key] * d["frames"]) <= MAX_LOG_GROWTH:
+                fail("dynamics", key, f"x frames within +-{MAX_LOG_GROWTH:.4g} (an area grows or shrinks at most "
+                                      f"{MAX_GROWTH:g}-fold over the run)")
         if d["close_apex"] and d["mode"] == "segregation":
             fail("dynamics", "close_apex", "false in segregation (its inner region keeps growing: no apex to close)")
     if "receptacle" in p:
@@ -356,8 +369,8 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         if rc["segments"] * (rc["rings"] + rc["underside_rings"]) > MAX_RECEPTACLE_VERTICES:
             fail("receptacle", "segments", f"x (rings + underside_rings) <= {MAX_RECEPTACLE_VERTICES} "
                  "(the receptacle's vertices a frame)")
-        if rc["depth"] <= 0:
-            fail("receptacle", "depth", "> 0 (a fraction of the rim radius)")
+        if not 0 < rc["depth"] <= 1000:
+            fail("receptacle", "depth", "> 0 (a fraction of the rim radius), at most 1000")
         if not 0 <= rc["stem"] < 1:
             fail("receptacle", "stem", "in [0, 1) (a fraction of the rim radius)")
         if rc["inset"] < 0:
@@ -368,8 +381,8 @@ def _check_ranges(p: dict, w: ParamText) -> None:
             fail("compound", "head_fill", "in (0, 1000]")
         if not abs(c["head_height"]) <= 1e3:
             fail("compound", "head_height", "within +-1000 (head radii)")
-        if not 0 < c["floret_fraction"] < 1:
-            fail("compound", "floret_fraction", "in (0, 1)")
+        if not 1e-6 <= c["floret_fraction"] < 1:
+            fail("compound", "floret_fraction", "in (0, 1), at least 1e-6")
         if not 0 <= c["head_start"] < 1:
             fail("compound", "head_start", "in [0, 1) (head radii)")
     if "hierarchy" in p:
@@ -386,11 +399,9 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         for a, t in zip(_per_level(h["element_area"], h["levels"]), _per_level(h["production_threshold"], h["levels"])):
             if t <= a:
                 fail("hierarchy", "production_threshold", "> element_area at every level")
-        if not 0 < h["divergence"] < 360:
-            fail("hierarchy", "divergence", "in (0, 360) degrees")
+        if not DIVERGENCE[0] <= h["divergence"] <= DIVERGENCE[1]:
+            fail("hierarchy", "divergence", f"in [{DIVERGENCE[0]:g}, {DIVERGENCE[1]:g}] degrees")
         if h["development_frames"] is not None:
-            if h["development_frames"] <= 0:
-                fail("hierarchy", "development_frames", "> 0 frames")
             if not h["dynamic"]:
                 fail("hierarchy", "development_frames",
                      "only with dynamic = true (static files: [primordia] development_order/_frames)")

@@ -83,9 +83,11 @@ def ridley_positions(profile: Profile, area: AreaFunction, *, start: float = 0.0
         ``count`` exceeds the primordia that fit, or more than ``max_count`` would be placed.
     """
     a = area(profile.s)
-    if np.any(~np.isfinite(a)) or np.any(a <= 0):
-        k = int(np.argmax(~(a > 0)))
-        raise FormatError(area.path or "primordia.area", None, "A(s) > 0 along the whole curve",
+    from .params import MIN_AREA
+
+    if np.any(~np.isfinite(a)) or np.any(a < MIN_AREA):
+        k = int(np.argmax(~(a >= MIN_AREA)))
+        raise FormatError(area.path or "primordia.area", None, f"A(s) > 0 along the whole curve (at least {MIN_AREA:g})",
                           f"A = {a[k]:.6g} at s = {profile.s[k]:.6g} (fraction {profile.s[k] / profile.length:.3f})")
     integrand = 2.0 * np.pi * profile.r / a
     G = np.concatenate([[0.0], np.cumsum(0.5 * (integrand[1:] + integrand[:-1]) * np.diff(profile.s))])

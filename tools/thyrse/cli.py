@@ -11,6 +11,7 @@ Parameters: ``formats/thyrse.md``.
 from __future__ import annotations
 
 import math
+import warnings
 
 import click
 
@@ -33,6 +34,18 @@ from .params import read_params
               help="A floret model OBJ (floret units, local frame; repeatable: e.g. its bud and open pose): a "
                    "floret whose model would meet the branches is not formed.")
 def main(params, output, base, rooms, quiet, debug):
+    # a numerical warning no bound prevented is one line (no source line under it), once per kind
+    with warnings.catch_warnings():
+        warnings.simplefilter("once")
+        warnings.showwarning = _one_line_warning
+        _run(params, output, base, rooms, quiet)
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    click.echo(f"thyrse: warning: {message}", err=True)
+
+
+def _run(params, output, base, rooms, quiet):
     p = read_params(params)
     if base is not None:
         if not all(math.isfinite(b) and abs(b) < 1e12 for b in base):

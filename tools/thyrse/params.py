@@ -97,6 +97,8 @@ class Params:
 #: the longest development a thyrse lays out (frames)
 MAX_FRAMES = 100000
 MAX_LENGTH = 1e6  # lengths (thyrse.length, pedicel_length): coordinates stay far from overflow
+MIN_LENGTH = 1e-6  # ... and not below the written precision of a position (a subnormal 1e-320 is no length)
+MAX_ID = 2**31 - 1  # an .fcc animation id (an int32 in the scene's arrays)
 MAX_AXIS_NODES = 10_000  # node pairs on the main axis
 
 _OWN = {"thyrse": ThyrseParams, "development": DevelopmentParams, "obstacle": ObstacleParams}
@@ -173,24 +175,26 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
 
     need(all(math.isfinite(c) and abs(c) <= 1e12 for c in p.base), None, "base",
          "coordinates within +-1e+12", p.base)
-    need(0 < t.length <= MAX_LENGTH, "thyrse", "length", f"a length in (0, {MAX_LENGTH:g}]", t.length)
+    need(MIN_LENGTH <= t.length <= MAX_LENGTH, "thyrse", "length",
+         f"a length in (0, {MAX_LENGTH:g}] and >= {MIN_LENGTH:g}", t.length)
     need(0 <= t.nodes <= MAX_AXIS_NODES, "thyrse", "nodes", f"an integer in [0, {MAX_AXIS_NODES}]", t.nodes)
     need(0 <= t.first_node < 1, "thyrse", "first_node", "a relative height in [0, 1)", t.first_node)
-    need(0 < t.pedicel_length <= MAX_LENGTH, "thyrse", "pedicel_length", f"a length in (0, {MAX_LENGTH:g}]",
-         t.pedicel_length)
-    need(0 < t.pedicel_angle < 180, "thyrse", "pedicel_angle", "an angle in (0, 180) degrees", t.pedicel_angle)
+    need(MIN_LENGTH <= t.pedicel_length <= MAX_LENGTH, "thyrse", "pedicel_length",
+         f"a length in (0, {MAX_LENGTH:g}] and >= {MIN_LENGTH:g}", t.pedicel_length)
+    need(1 <= t.pedicel_angle <= 179, "thyrse", "pedicel_angle", "an angle in (0, 180) degrees, from 1 to 179",
+         t.pedicel_angle)
     need(0 <= t.tropism <= 1e6, "thyrse", "tropism", "a weight in [0, 1e6]", t.tropism)
     need(-360 <= t.divergence <= 360, "thyrse", "divergence", "an angle in [-360, 360] degrees", t.divergence)
-    need(t.floret_id >= 0, "thyrse", "floret_id", "an id >= 0", t.floret_id)
+    need(0 <= t.floret_id <= MAX_ID, "thyrse", "floret_id", f"an id in [0, {MAX_ID}]", t.floret_id)
     need(0 <= t.min_distance <= 1e6, "thyrse", "min_distance", "a distance in [0, 1e6]", t.min_distance)
     need(0 <= t.reach <= 1e6, "thyrse", "reach", "a reach in [0, 1e6]", t.reach)
     need(0 <= t.surface_weight <= 1e6, "thyrse", "surface_weight", "a weight in [0, 1e6]", t.surface_weight)
     need(0 <= t.size_variation <= 0.5, "thyrse", "size_variation", "a fraction in [0, 0.5]", t.size_variation)
     need(0 <= t.seed < 2**63, "thyrse", "seed", "an integer in [0, 2**63)", t.seed)
     o = p.obstacle
-    need(o.id >= -1, "obstacle", "id", "an id >= 0 (or -1: none)", o.id)
+    need(-1 <= o.id <= MAX_ID, "obstacle", "id", f"an id in [0, {MAX_ID}] (or -1: none)", o.id)
     need(o.id != t.floret_id, "obstacle", "id", f"an id other than the florets' ({t.floret_id})", o.id)
-    need(0 < o.gap <= 1e6, "obstacle", "gap", "a length in (0, 1e6]", o.gap)
+    need(MIN_LENGTH <= o.gap <= 1e6, "obstacle", "gap", f"a length in (0, 1e6] and >= {MIN_LENGTH:g}", o.gap)
     need(0 <= o.margin <= 1e6, "obstacle", "margin", "a length in [0, 1e6]", o.margin)
     need(1 <= d.frames <= MAX_FRAMES, "development", "frames", f"an integer in [1, {MAX_FRAMES}]", d.frames)
     need(0 <= d.window <= d.frames - 1, "development", "window", "0 <= window <= frames - 1", d.window)
@@ -198,7 +202,7 @@ def params_from_toml(data: dict, *, path="<params>", lines=None, folder=None) ->
     need(0 <= d.start_variation <= d.frames - 1, "development", "start_variation", "0 <= start_variation <= frames - 1",
          d.start_variation)
     ranges = {"lateral_length": (0.0, 10.0), "order": (0.0, 6.0), "density": (0.0, 1e6), "branch_density": (0.0, 1e6),
-              "angle": (0.0, 180.0), "sub_angle": (0.0, 180.0), "floret_size": (1e-9, 1e6), "start": (0.0, 1.0)}
+              "angle": (1.0, 179.0), "sub_angle": (1.0, 179.0), "floret_size": (1e-9, 1e6), "start": (0.0, 1.0)}
     for k, (lo, hi) in ranges.items():
         if k not in p.functions:
             continue
