@@ -28,7 +28,8 @@ class KeySpec:
         ``strict``; None: any finite number.
     high : float or None
         ``"int"``: at most ``high`` (iteration and frame counts: a count beyond it is a typo, not a
-        run this machine could finish); None: no upper bound.
+        run this machine could finish); ``"float"``: every number at most ``high`` in magnitude
+        (sizes and coordinates beyond it overflow the simulation's arithmetic); None: no upper bound.
     strict : bool
     check : str
         A condition on the values together, as the spec words it (:data:`_CHECKS`).
@@ -56,6 +57,8 @@ class KeySpec:
             text = "float" if self.n == 1 else f"{self.n} floats"
             if self.low is not None:
                 text += f" {'>' if self.strict else '≥'} {self.low:g}"
+            if self.high is not None:
+                text += f", ≤ {self.high:g}" if self.low is not None else f" in ±{self.high:g}"
             if self.check:
                 text += (" " if self.check.startswith("in ") else ", ") + self.check
         elif self.kind == "stiffness":
@@ -92,8 +95,8 @@ KEYS: Mapping[str, KeySpec] = MappingProxyType({
     "kStretch": KeySpec("stiffness", field="k_stretch"),
     "kBend": KeySpec("stiffness", field="k_bend"),
     "kCollision": KeySpec("stiffness", field="k_collision"),
-    "spacing": KeySpec("float", low=0, field="spacing"),
-    "scene scale factor": KeySpec("float", 3, low=0, strict=True, field="scene_scale"),
+    "spacing": KeySpec("float", low=0, high=1e12, field="spacing"),
+    "scene scale factor": KeySpec("float", 3, low=0, high=1e6, strict=True, field="scene_scale"),
     "updates per frame": replace(_COUNT1, high=1000, field="updates_per_frame"),
     "run for number of frames": replace(_COUNT0, high=_FRAMES, field="run_frames"),
     "sanity check per frames": replace(_COUNT0, high=_FRAMES, field="sanity_check_every"),
@@ -103,15 +106,15 @@ KEYS: Mapping[str, KeySpec] = MappingProxyType({
     "relax iterations": replace(_COUNT0, high=_ITERS, field="relax_iterations"),
     "collisions": KeySpec("bool", field="collisions"),
     "emergence scales": KeySpec("scales", field="emergence_scales"),
-    "emergence growth frames": KeySpec("float", low=0, strict=True, field="emergence_growth_frames"),
+    "emergence growth frames": KeySpec("float", low=0, high=1e7, strict=True, field="emergence_growth_frames"),
     "crowded scales": KeySpec("scales", field="crowded_scales"),
     "output animation frames number": replace(_COUNT1, high=_FRAMES, field="output_frames_number"),
     "output animation obj per frames": replace(_COUNT0, high=_FRAMES, field="output_obj_skip"),
-    "lattice size multiply": KeySpec("float", 3, low=0, strict=True, field="lattice.size_multiply"),
+    "lattice size multiply": KeySpec("float", 3, low=0, high=1e6, strict=True, field="lattice.size_multiply"),
     "lattice make cube": KeySpec("bool", field="lattice.make_cube"),
-    "origin": KeySpec("float", 3, field="lattice.origin"),
+    "origin": KeySpec("float", 3, high=1e12, field="lattice.origin"),
     "divisions": KeySpec("divisions", field="lattice.divisions"),
-    "dimensions": KeySpec("float", 3, low=0, strict=True, field="lattice.dimensions"),
+    "dimensions": KeySpec("float", 3, low=0, high=1e12, strict=True, field="lattice.dimensions"),
     "lattice auto bounds": KeySpec("bool", field="lattice.auto_bounds"),
     "color map file location": KeySpec("path", field="color_map"),
     "material map file location": KeySpec("path", field="material_map"),

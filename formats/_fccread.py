@@ -170,6 +170,10 @@ class _Reader:
     def read_float(self, key, spec, value, n):
         positive = spec.low == 0 and spec.strict
         vals = self.floats(key, value, n, spec.n, positive=positive, nonneg=spec.low == 0 and not positive)
+        if spec.high is not None:
+            for t, v in zip(self.tokens(value), vals if isinstance(vals, (list, tuple)) else [vals]):
+                if abs(v) > spec.high:
+                    raise self.err(n, f"numbers of magnitude at most {spec.high:g} for '{key}'", shorten(t))
         if spec.check:
             _CHECKS[spec.check](self, key, vals, value, n)
         return vals[0] if spec.n == 1 else vals

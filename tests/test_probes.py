@@ -44,8 +44,11 @@ def inputs(tmp_path):
     (tmp_path / "frames.toml").write_text("[dynamics]\nframes = 100000000\n")
     (tmp_path / "interval.toml").write_text("[dynamics]\ninterval = 1e-9\n")
     fcc = (tmp_path / "fcc" / "dense.fcc").read_text()
-    (tmp_path / "fcc" / "wide.fcc").write_text(fcc.replace("spacing: 0.01", "spacing: 1e300"))
+    (tmp_path / "fcc" / "wide.fcc").write_text(fcc.replace("spacing: 0.01", "spacing: 1e6"))
     (tmp_path / "fcc" / "iters.fcc").write_text(fcc.replace("solver iterations: 50", "solver iterations: 1" + "0" * 23))
+    for name, line in [("sscale", "scene scale factor: 1e308 1 1"), ("lattice", "lattice size multiply: 1e308 1 1"),
+                       ("origin", "origin: 1e308 0 0"), ("dims", "dimensions: 1 1e308 1")]:
+        (tmp_path / "fcc" / f"{name}.fcc").write_text(fcc + line + "\n")
     dup = tmp_path / "fcc" / "dup"  # a template with a duplicated (unwelded) vertex in every frame
     dup.mkdir()
     for f in sorted((tmp_path / "fcc" / "anim").glob("frame_*.obj")):
@@ -65,6 +68,10 @@ PROBES = [
     ("fccompose", ["{d}/fcc/dense.fcc", "-o", "{d}/fcc/anim"], "holding the 'animation' input anim", "{d}/fcc/anim/log.csv"),
     ("fccompose", ["{d}/fcc/wide.fcc", "-o", "{d}/fcc/o1"], "at most 4 x the largest floret's extent", "{d}/fcc/o1"),
     ("fccompose", ["{d}/fcc/iters.fcc", "-o", "{d}/fcc/o2"], "an integer in [0, 10000]", "{d}/fcc/o2"),
+    ("fccompose", ["{d}/fcc/sscale.fcc", "-o", "{d}/fcc/o4"], "magnitude at most 1e+06", "{d}/fcc/o4"),
+    ("fccompose", ["{d}/fcc/lattice.fcc", "-o", "{d}/fcc/o5"], "magnitude at most 1e+06", "{d}/fcc/o5"),
+    ("fccompose", ["{d}/fcc/origin.fcc", "-o", "{d}/fcc/o6"], "magnitude at most 1e+12", "{d}/fcc/o6"),
+    ("fccompose", ["{d}/fcc/dims.fcc", "-o", "{d}/fcc/o7"], "magnitude at most 1e+12", "{d}/fcc/o7"),
     ("fccompose", ["{d}/fcc/dup.fcc", "-o", "{d}/fcc/o3"], "vertices 178 and 179 at the same point", "{d}/fcc/o3"),
     ("canopy-render", ["{d}/huge.obj", "-o", "{d}/r1.png"], "coordinates within +-1e+15", "{d}/r1.png"),
     ("floret-animate", ["{d}/big.floret", REPO / "pipelines" / "sunflower" / "draft" / "ray_open.floret", "-o", "{d}/f1"],

@@ -173,7 +173,8 @@ def test_staged_output_names_the_real_path_in_a_refusal(tmp_path):
     *[("branch-gen", p) for p in sorted((EX / "branch_gen").glob("*.toml"))],
     *[("thyrse", p) for p in sorted((REPO / "pipelines").rglob("thyrse.toml"))],
     *[("phyllotaxis", p) for p in sorted((REPO / "pipelines").rglob("*.toml"))
-      if "[primordia]" in p.read_text() or "[surface]" in p.read_text()],
+      if ("[primordia]" in p.read_text() or "[surface]" in p.read_text()) and "stem_veins" not in p.parts],
+    *[("stem-veins", p) for p in sorted((EX / "stem_veins").glob("*.toml"))],
 ], ids=lambda x: str(x).replace(str(REPO) + "/", "") if not isinstance(x, str) else x)
 def test_every_shipped_parameter_file_is_within_bounds(tool, path):
     """The bounds refuse no shipped parameter file (each tool's reader over every one)."""
@@ -181,6 +182,8 @@ def test_every_shipped_parameter_file_is_within_bounds(tool, path):
         from inflo.tools.branch_gen.params import read_params
     elif tool == "thyrse":
         from inflo.tools.thyrse.params import read_params
+    elif tool == "stem-veins":
+        from inflo.tools.stem_veins.params import read_params
     else:
         from inflo.tools.phyllotaxis.params import read_params
     read_params(path)

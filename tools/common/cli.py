@@ -46,6 +46,23 @@ def _path_error(exc: OSError) -> str:
     return f"{where}: {what}"
 
 
+def _remove_if_only_bookkeeping(folder: str) -> None:
+    """Remove a folder a failed run made when it holds nothing but the run's bookkeeping (its
+    manifest ``.inflo-*``, a ``.staging-*`` folder): no output is left that looks like a run's."""
+    import shutil
+
+    with contextlib.suppress(OSError):
+        names = os.listdir(folder)
+        if all(n.startswith((".inflo-", ".staging-")) for n in names):
+            for n in names:
+                path = os.path.join(folder, n)
+                if os.path.isdir(path) and not os.path.islink(path):
+                    shutil.rmtree(path)
+                else:
+                    os.unlink(path)
+            os.rmdir(folder)
+
+
 def inflo_command(name: str, **command_kwargs):
     """Decorator: a click command with ``--quiet`` and ``--debug`` and inflo's error conventions."""
 
@@ -61,8 +78,7 @@ def inflo_command(name: str, **command_kwargs):
                 except (Exception, KeyboardInterrupt):
                     # a run that fails leaves no empty output folder it made (no partial output)
                     if fresh and os.path.isdir(out):
-                        with contextlib.suppress(OSError):
-                            os.rmdir(out)
+                        _remove_if_only_bookkeeping(out)
                     raise
             except KeyboardInterrupt:
                 if debug:
