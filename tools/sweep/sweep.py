@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from pathlib import Path
 
+from inflo.formats.atomic import output_lock
 from inflo.formats.errors import InputError
-from inflo.tools.common.cli import progress
+from inflo.tools.common.cli import one_line, progress
 
 from .overrides import check_placeholders
 from .results import write_contact_sheet, write_heatmap, write_results_csv
@@ -80,12 +81,18 @@ def _dashboard(client) -> str | None:
 def run_sweep(sweep: Sweep, out_dir, *, scheduler: str | None = None, workers: int | None = None,
               quiet: bool = False, force: bool = False, dry_run: bool = False, dashboard: str = ":8787",
               echo=print) -> SweepSummary:
-    """Run every variant not done before; return the results of all of them."""
+    """Run every variant not done before; return the results of all of them. A second sweep into
+    the same OUT_DIR while this one runs is refused (one line)."""
     out_dir = Path(out_dir)
     allv = variants(sweep)
+    with output_lock(out_dir, "inflo-sweep"):
+        return _run_locked(sweep, out_dir, allv, scheduler=scheduler, workers=workers, quiet=quiet, force=force,
+                           dry_run=dry_run, dashboard=dashboard, echo=echo)
+
+
+def _run_locked(sweep, out_dir, allv, *, scheduler, workers, quiet, force, dry_run, dashboard, echo) -> SweepSummary:
     summary = SweepSummary()
     pending = []
-    out_dir.mkdir(parents=True, exist_ok=True)
     for v in allv:
         try:
             fp = prepare(sweep, out_dir, v)
@@ -100,7 +107,7 @@ def run_sweep(sweep: Sweep, out_dir, *, scheduler: str | None = None, workers: i
             pending.append((v, fp))
     if dry_run:
         for v, _ in pending:
-            echo(f"inflo-sweep: would run {v.id} ({v.label() or 'base'}) in {variant_dir(out_dir, v)}")
+            echo(f"inflo-sweep: would run {v.id} ({one_line(v.label()) or 'base'}) in {variant_dir(out_dir, v)}")
         echo(f"inflo-sweep: {len(allv)} variants, {summary.cached} done before, {len(pending)} to run")
         summary.results += [dict(failed_result(v, "not run (--dry-run)", 0), status="pending") for v, _ in pending]
         return summary
@@ -119,18 +126,28 @@ def run_sweep(sweep: Sweep, out_dir, *, scheduler: str | None = None, workers: i
 
 
 def _run_pending(sweep, out_dir, pending, summary, *, scheduler, workers, quiet, dashboard, echo):
+    import warnings
+
     import dask
     from distributed import Client, LocalCluster, as_completed
 
     cluster = None
     with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
         if scheduler:
-            client = Client(scheduler, timeout="30s")
+            try:
+                client = Client(scheduler, timeout="30s")
+            except OSError as exc:
+                raise InputError(f"--scheduler: expected a Dask scheduler at {scheduler}, found "
+                                 f"{one_line(exc)}") from None
             if workers:
                 client.wait_for_workers(workers, timeout=120)
         else:
             n = workers or max(1, min(len(pending), os.cpu_count() or 1))
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=dashboard)
+            with warnings.catch_warnings():
+                # the dashboard's port taken (another sweep): it takes another, and the link below says which
+                warnings.filterwarnings("ignore", message=r"Port \d+ is already in use", category=UserWarning)
+                cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                       dashboard_address=dashboard)
             client = Client(cluster)
     try:
         nworkers = sum(client.nthreads().values()) or 1
