@@ -80,6 +80,28 @@ def _color(ctx, param, value):
         raise click.BadParameter(str(exc)) from None
 
 
+def _label(ctx, param, value):
+    """A sheet label template: fields ``{n}``, ``{index}``, ``{name}`` only (no attribute or item
+    access), and a format spec of at most three-digit widths (a label, not megabytes of padding)."""
+    import string
+
+    if not value:
+        return value
+    try:
+        fields = [(f, spec) for _, f, spec, _ in string.Formatter().parse(value) if f is not None]
+    except ValueError as exc:
+        raise click.BadParameter(f"expected a label with {{n}}, {{index}} or {{name}}, found {value!r} ({exc})") from None
+    for f, spec in fields:
+        if f not in ("n", "index", "name") or "{" in (spec or "") or re.search(r"\d{4,}", spec or ""):
+            raise click.BadParameter(f"expected a label with {{n}}, {{index}} or {{name}} (a format spec of widths "
+                                     f"below 1000), found {value!r}")
+    try:
+        value.format(n=1, index=0, name="frame_0000")
+    except (ValueError, TypeError) as exc:
+        raise click.BadParameter(f"expected a label with {{n}}, {{index}} or {{name}}, found {value!r} ({exc})") from None
+    return value
+
+
 def _frames(ctx, param, value):
     if value is None:
         return None
@@ -107,7 +129,7 @@ def _frames(ctx, param, value):
 @click.option("--sheet-every", type=click.IntRange(min=1), metavar="N",
               help="Contact sheet of frames 1, N, 2N, ... and the last (output .png).")
 @click.option("--columns", type=click.IntRange(min=1), help="Columns of a contact sheet [at most 6 a row].")
-@click.option("--label", "label_format", default="frame {n}", show_default=True,
+@click.option("--label", "label_format", default="frame {n}", show_default=True, callback=_label,
               help="Sheet label per frame: {n} frame number, {index} 0-based, {name} file stem; '' for none.")
 @click.option("--title", help="A title line above a contact sheet.")
 @click.option("--fps", type=click.FloatRange(min=0.1, max=100), default=25.0, show_default=True,
