@@ -147,8 +147,10 @@ def _free_port() -> int:
     (["--scheduler", "not an address"], "expected a Dask scheduler address"),
     (["--scheduler", "tcp://127.0.0.1:{port}"], "expected a Dask scheduler listening at"),
     (["--scheduler", "no-such-host.invalid:8786"], "found no host"),
+    (["--dashboard", "nonsense"], "--dashboard: expected an address [HOST]:PORT"),
+    (["--dashboard", ":99999"], "--dashboard: expected an address [HOST]:PORT"),
 ], ids=["workers-1e6", "workers-0", "workers-word", "sched-256", "sched-port", "sched-words", "sched-refused",
-        "sched-nohost"])
+        "sched-nohost", "dashboard-word", "dashboard-port"])
 def test_sweep_workers_and_scheduler_are_checked_first(work, args, fragment):
     (work / "s.toml").write_text(_stage('["{inputs}/vogel.toml", "-o", "{out}/h"]'))
     args = [a.format(port=_free_port()) for a in args]
@@ -156,6 +158,17 @@ def test_sweep_workers_and_scheduler_are_checked_first(work, args, fragment):
     r = run_cli("inflo-sweep", work / "s.toml", "-o", work / "out", *args)
     _one_line_exit_2(r, fragment)
     assert time.monotonic() - t0 < 25  # a bad address was 30 s and exit 1
+    assert not (work / "out").exists()
+
+
+def test_sweep_copies_bounded_by_variants_times_input_size(work):
+    """100,000 variants each copying a 1 MB input: 100 GB of copies, refused before any is written."""
+    (work / "pad.txt").write_text("#" * 1_000_000)
+    (work / "s.toml").write_text(_stage('["{inputs}/vogel.toml", "-o", "{out}/h"]',
+                                        axes='[axes]\n"vogel.toml:primordia.count" = { range = [1, 100000, 1] }\n')
+                                 .replace('"scene.scn"]', '"scene.scn", "pad.txt"]'))
+    r = run_cli("inflo-sweep", work / "s.toml", "-o", work / "out")
+    _one_line_exit_2(r, "expected variants x the bytes each copies within 5e+10 bytes, found 100000 variants")
     assert not (work / "out").exists()
 
 

@@ -19,7 +19,7 @@ from inflo.formats.errors import InputError
 from inflo.tools.common.cli import inflo_command, one_line
 
 from .spec import read_sweep
-from .sweep import check_runnable, run_sweep
+from .sweep import check_copies, check_runnable, run_sweep
 
 
 @inflo_command("inflo-sweep", help="Run the variants of SWEEP.toml (a pipeline or CLI stages over a grid or random "
@@ -39,6 +39,9 @@ def main(sweep_file, output, scheduler, workers, force, dry_run, dashboard, quie
     sweep = read_sweep(sweep_file)
     check_runnable(sweep)
     _refuse_output_inside_inputs(sweep, sweep_file, output)
+    check_copies(sweep)
+    if not _DASHBOARD.fullmatch(dashboard.strip()) or int(dashboard.rsplit(":", 1)[-1]) > 65535:
+        raise InputError(f"--dashboard: expected an address [HOST]:PORT (port 0..65535), found {dashboard!r}")
     if scheduler is not None:
         _check_scheduler(scheduler, connect=not dry_run)
     elif workers is not None and workers > local_worker_limit():
@@ -72,6 +75,9 @@ def local_worker_limit() -> int:
 
 _ADDRESS = re.compile(r"(?:(?P<scheme>tcp|tls|ws|wss|ucx)://)?(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+)"
                       r":(?P<port>[0-9]{1,5})/?")
+
+
+_DASHBOARD = re.compile(r"(?:(?:[A-Za-z0-9_.-]+|\[[0-9A-Fa-f:.]+\])?:)?[0-9]{1,5}")
 
 
 def _check_scheduler(address: str, *, connect: bool = True, timeout: float = 10.0) -> None:

@@ -21,14 +21,18 @@ from pathlib import Path
 
 from inflo.formats.atomic import output_lock
 from inflo.formats.errors import InputError
-from inflo.tools.common.cli import one_line, progress
+from inflo.tools.common.cli import one_line, progress, stall_notice
 
 from .overrides import check_placeholders
 from .results import write_contact_sheet, write_heatmap, write_results_csv
 from .spec import Sweep, variants
 from .variant import cached_result, failed_result, prepare, run_batch, variant_dir
 
-__all__ = ["SweepSummary", "check_runnable", "run_sweep", "auto_batch"]
+__all__ = ["SweepSummary", "check_runnable", "check_copies", "run_sweep", "auto_batch", "MAX_COPY_BYTES"]
+
+#: the most bytes of input copies one sweep writes: its variants x the bytes each copies (the
+#: pipeline folder or the inputs); 50 GB holds some 50,000 copies of a species pipeline
+MAX_COPY_BYTES = 50_000_000_000
 
 
 @dataclass
@@ -58,6 +62,30 @@ def check_runnable(sweep: Sweep) -> None:
     if sweep.pipeline is not None and shutil.which(sweep.pipeline.make) is None:
         raise InputError(f"{sweep.path}: [pipeline] make: expected a command on PATH, found no "
                          f"{sweep.pipeline.make!r}")
+
+
+def _copied_bytes(sweep: Sweep) -> int:
+    """The bytes one variant copies: the pipeline folder's files or the inputs (as prepare copies them)."""
+    srcs = [(sweep.pipeline.path, sweep.pipeline.path)] if sweep.pipeline is not None else \
+        [(sweep.folder / rel, sweep.folder) for rel in sweep.inputs]
+    total = 0
+    for src, rel_to in srcs:
+        for p in [src] if src.is_file() else sorted(src.rglob("*")):
+            parts = p.relative_to(rel_to).parts
+            if any(x in ("__pycache__", ".git") or x.startswith(".") for x in parts) or not p.is_file():
+                continue
+            total += p.stat().st_size
+    return total
+
+
+def check_copies(sweep: Sweep) -> None:
+    """Bad input (one line, before anything is written) when the variants' copies of the inputs
+    would exceed :data:`MAX_COPY_BYTES`."""
+    n = sweep.samples if sweep.sampling == "random" else math.prod(len(a.values) for a in sweep.axes)
+    size = _copied_bytes(sweep)
+    if n * size > MAX_COPY_BYTES:
+        raise InputError(f"{sweep.path}: expected variants x the bytes each copies within {MAX_COPY_BYTES:.3g} "
+                         f"bytes, found {n} variants x {size} bytes = {n * size:.3g}")
 
 
 def auto_batch(sweep: Sweep, pending: int, workers: int) -> int:
@@ -93,18 +121,20 @@ def run_sweep(sweep: Sweep, out_dir, *, scheduler: str | None = None, workers: i
 def _run_locked(sweep, out_dir, allv, *, scheduler, workers, quiet, force, dry_run, dashboard, echo) -> SweepSummary:
     summary = SweepSummary()
     pending = []
-    for v in allv:
-        try:
-            fp = prepare(sweep, out_dir, v)
-        except (InputError, OSError) as exc:
-            summary.results.append(failed_result(v, f"inputs: {exc}", 2))
-            continue
-        res = None if force else cached_result(sweep, out_dir, v, fp)
-        if res is not None:
-            summary.results.append(res)
-            summary.cached += 1
-        else:
-            pending.append((v, fp))
+    with stall_notice("inflo-sweep") as tick:  # a million variants take minutes to prepare: never silent
+        for k, v in enumerate(allv):
+            tick(k, len(allv), "variants prepared")
+            try:
+                fp = prepare(sweep, out_dir, v)
+            except (InputError, OSError) as exc:
+                summary.results.append(failed_result(v, f"inputs: {exc}", 2))
+                continue
+            res = None if force else cached_result(sweep, out_dir, v, fp)
+            if res is not None:
+                summary.results.append(res)
+                summary.cached += 1
+            else:
+                pending.append((v, fp))
     if dry_run:
         for v, _ in pending:
             echo(f"inflo-sweep: would run {v.id} ({one_line(v.label()) or 'base'}) in {variant_dir(out_dir, v)}")
