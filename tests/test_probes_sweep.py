@@ -234,6 +234,29 @@ def test_canopy_render_options_are_one_line_errors(work, args, fragment):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("args,fragment", [
+    (["--sheet-every", "1", "--size", "16384x16384"], "expected a sheet of at most 536,870,912 pixels in all"),
+    (["--size", "16384x16384", "-o", "{d}/anim.gif"], "expected a gif of at most 536,870,912 pixels in all"),
+], ids=["sheet-pixels", "gif-pixels"])
+def test_canopy_render_held_frames_bounded(work, args, fragment):
+    out = work / "pic.png"
+    shutil.copy(work / "seq" / "frame_0001.obj", work / "seq" / "frame_0002.obj")  # 3 x 16384^2 > 2^29
+    args = [a.replace("{d}", str(work)) for a in args]
+    r = run_cli("canopy-render", work / "seq", *([] if "-o" in args else ["-o", out]), *args)
+    _one_line_exit_2(r, fragment)
+    assert not out.exists() and not (work / "anim.gif").exists()
+
+
+def test_canopy_render_image_the_gl_cannot_allocate(work):
+    """llvmpipe refuses a 16384x16384 framebuffer at 4 samples (was exit 1); a GL that allocates it draws."""
+    out = work / "big.png"
+    r = run_cli("canopy-render", work / "tri.obj", "-o", out, "--size", "16384x16384", "--samples", "4")
+    if r.returncode == 0:
+        pytest.skip("this GL allocates a 16384x16384 image at 4 samples")
+    _one_line_exit_2(r, "expected an image the GL can allocate")
+    assert not out.exists()
+
+
 def test_canopy_render_label_and_fcc_in_range_still_draw(work):
     (work / "cam.fcc").write_text("camera position: 0 0 5\ncamera lookat: 0 0 0\ncamera fov: 40\nnear plane: 0.01\n")
     r = run_cli("canopy-render", "-q", work / "seq", "--sheet-every", "1", "--label", "{n:03d} {name}", "-o",

@@ -41,6 +41,12 @@ Examples::
     canopy-render build/yarrow/canopy/ build/yarrow/branches.obj --view top -o yarrow_top.png
     canopy-render build/lily/canopy/ -o lily.mp4 --fps 30 --size 1280x720
 
+Bounds (bad input, one line, exit 2, before drawing): ``--size`` up to 16384x16384 and what the
+GL can allocate at ``--samples`` (llvmpipe: about 8192x8192 at 4 samples); a sheet's or GIF's
+frames x width x height at most 2**29 pixels (held in memory; an MP4 streams); float options
+finite; ``--label`` fields ``{n}``, ``{index}``, ``{name}``; the ``.fcc`` camera keys within
+formats/fcc.md's canopy-render ranges.
+
 Needs Mesa's EGL (``apt-get install -y libegl1 libegl-mesa0 libgl1-mesa-dri libgl1``); without it
 the run stops with exit code 1 and says so. Bad input exits with code 2.
 """

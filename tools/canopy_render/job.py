@@ -109,6 +109,10 @@ class RenderJob:
     mtl_textures: bool = False
 
 
+#: the most pixels of the frames a contact sheet or a GIF holds in memory at once (frames x
+#: width x height; 1.6 GB as RGB): some 3,000 GIF frames at 480x360 or sheet tiles at 400x400
+MAX_HELD_PIXELS = 2**29
+
 #: the ``.fcc`` camera keys canopy-render draws with: field of view in degrees, clip distances
 FCC_FOV_RANGE = (0.01, 179.0)
 FCC_CLIP_RANGE = (1e-9, 1e15)
@@ -180,6 +184,10 @@ def run_job(job: RenderJob) -> str:
     else:
         shown = list(range(n))
     framed = list(range(n)) if (job.fit_all or kind in ("gif", "mp4")) else sorted(set(shown))
+    w, h = options.size
+    if kind in ("sheet", "gif") and len(shown) * w * h > MAX_HELD_PIXELS:  # their frames are held in memory
+        raise InputError(f"{job.output}: expected a {kind} of at most {MAX_HELD_PIXELS:,} pixels in all (frames x "
+                         f"--size), found {len(shown)} frames of {w}x{h} = {len(shown) * w * h:,}")
 
     fcc_camera = read_fcc_camera(job.fcc) if job.fcc is not None else None
     renderer = Renderer()  # before the reading: a missing GL fails fast
