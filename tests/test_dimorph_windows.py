@@ -93,7 +93,7 @@ def test_dimorph_cli_on_a_dynamic_head_sets_rba_scale_to_the_factor_and_ray_wind
 @pytest.mark.parametrize("args,needle", [
     (["--ray-development-frames", 0], "--ray-development-frames must be an integer > 0"),
     (["--disk-development-frames", -3], "--disk-development-frames must be an integer > 0"),
-    (["--ray-lead", "nan"], "--ray-lead must be a finite number"),
+    (["--ray-lead", "nan"], "'--ray-lead': expected a finite number"),
     (["--bract-development-frames", 0], "--bract-development-frames must be an integer > 0"),
 ])
 def test_dimorph_bad_window_flags_exit_2(tmp_path, args, needle):

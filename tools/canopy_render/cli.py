@@ -41,6 +41,12 @@ Examples::
     canopy-render build/yarrow/canopy/ build/yarrow/branches.obj --view top -o yarrow_top.png
     canopy-render build/lily/canopy/ -o lily.mp4 --fps 30 --size 1280x720
 
+Bounds (bad input, one line, exit 2, before drawing): ``--size`` up to 16384x16384 and what the
+GL can allocate at ``--samples`` (llvmpipe: about 8192x8192 at 4 samples); a sheet's or GIF's
+frames x width x height at most 2**29 pixels (held in memory; an MP4 streams); float options
+finite; ``--label`` fields ``{n}``, ``{index}``, ``{name}``; the ``.fcc`` camera keys within
+formats/fcc.md's canopy-render ranges.
+
 Needs Mesa's EGL (``apt-get install -y libegl1 libegl-mesa0 libgl1-mesa-dri libgl1``); without it
 the run stops with exit code 1 and says so. Bad input exits with code 2.
 """
@@ -80,6 +86,28 @@ def _color(ctx, param, value):
         raise click.BadParameter(str(exc)) from None
 
 
+def _label(ctx, param, value):
+    """A sheet label template: fields ``{n}``, ``{index}``, ``{name}`` only (no attribute or item
+    access), and a format spec of at most three-digit widths (a label, not megabytes of padding)."""
+    import string
+
+    if not value:
+        return value
+    try:
+        fields = [(f, spec) for _, f, spec, _ in string.Formatter().parse(value) if f is not None]
+    except ValueError as exc:
+        raise click.BadParameter(f"expected a label with {{n}}, {{index}} or {{name}}, found {value!r} ({exc})") from None
+    for f, spec in fields:
+        if f not in ("n", "index", "name") or "{" in (spec or "") or re.search(r"\d{4,}", spec or ""):
+            raise click.BadParameter(f"expected a label with {{n}}, {{index}} or {{name}} (a format spec of widths "
+                                     f"below 1000), found {value!r}")
+    try:
+        value.format(n=1, index=0, name="frame_0000")
+    except (ValueError, TypeError) as exc:
+        raise click.BadParameter(f"expected a label with {{n}}, {{index}} or {{name}}, found {value!r} ({exc})") from None
+    return value
+
+
 def _frames(ctx, param, value):
     if value is None:
         return None
@@ -107,7 +135,7 @@ def _frames(ctx, param, value):
 @click.option("--sheet-every", type=click.IntRange(min=1), metavar="N",
               help="Contact sheet of frames 1, N, 2N, ... and the last (output .png).")
 @click.option("--columns", type=click.IntRange(min=1), help="Columns of a contact sheet [at most 6 a row].")
-@click.option("--label", "label_format", default="frame {n}", show_default=True,
+@click.option("--label", "label_format", default="frame {n}", show_default=True, callback=_label,
               help="Sheet label per frame: {n} frame number, {index} 0-based, {name} file stem; '' for none.")
 @click.option("--title", help="A title line above a contact sheet.")
 @click.option("--fps", type=click.FloatRange(min=0.1, max=100), default=25.0, show_default=True,

@@ -109,11 +109,39 @@ class RenderJob:
     mtl_textures: bool = False
 
 
+#: the most pixels of the frames a contact sheet or a GIF holds in memory at once (frames x
+#: width x height; 1.6 GB as RGB): some 3,000 GIF frames at 480x360 or sheet tiles at 400x400
+MAX_HELD_PIXELS = 2**29
+
+#: the ``.fcc`` camera keys canopy-render draws with: field of view in degrees, clip distances
+FCC_FOV_RANGE = (0.01, 179.0)
+FCC_CLIP_RANGE = (1e-9, 1e15)
+
+
 def read_fcc_camera(path):
-    """The viewer keys (``CameraParams``) of a ``.fcc`` file; :class:`FormatError` when it is malformed."""
+    """The viewer keys (``CameraParams``) of a ``.fcc`` file; :class:`FormatError` when it is malformed
+    or a key is beyond what a picture can be drawn with: a position, look-at point, up vector or light
+    beyond +-1e15 (the coordinates of a renderable scene), ``camera fov`` outside [0.01, 179]
+    degrees, ``near plane``/``far plane`` outside [1e-9, 1e15] (the projection's numbers overflow
+    or underflow beyond them)."""
+    from inflo.formats.errors import FormatError
     from inflo.formats.fcc import read_fcc
 
-    return read_fcc(path).camera
+    from .inputs import MAX_COORDINATE
+
+    cam = read_fcc(path).camera
+    for key, v in (("camera position", cam.position), ("camera lookat", cam.lookat), ("camera up", cam.up),
+                   ("light position", cam.light_position)):
+        if v is not None and not all(abs(float(x)) <= MAX_COORDINATE for x in v):
+            raise FormatError(path, None, f"{key} within +-{MAX_COORDINATE:g}", " ".join(f"{float(x):g}" for x in v))
+    lo, hi = FCC_FOV_RANGE
+    if not lo <= float(cam.fov_deg) <= hi:
+        raise FormatError(path, None, f"camera fov in [{lo:g}, {hi:g}] degrees", f"{float(cam.fov_deg):g}")
+    lo, hi = FCC_CLIP_RANGE
+    for key, v in (("near plane", cam.near), ("far plane", cam.far)):
+        if v is not None and not lo <= float(v) <= hi:
+            raise FormatError(path, None, f"{key} in [{lo:g}, {hi:g}]", f"{float(v):g}")
+    return cam
 
 
 def run_job(job: RenderJob) -> str:
@@ -156,6 +184,10 @@ def run_job(job: RenderJob) -> str:
     else:
         shown = list(range(n))
     framed = list(range(n)) if (job.fit_all or kind in ("gif", "mp4")) else sorted(set(shown))
+    w, h = options.size
+    if kind in ("sheet", "gif") and len(shown) * w * h > MAX_HELD_PIXELS:  # their frames are held in memory
+        raise InputError(f"{job.output}: expected a {kind} of at most {MAX_HELD_PIXELS:,} pixels in all (frames x "
+                         f"--size), found {len(shown)} frames of {w}x{h} = {len(shown) * w * h:,}")
 
     fcc_camera = read_fcc_camera(job.fcc) if job.fcc is not None else None
     renderer = Renderer()  # before the reading: a missing GL fails fast

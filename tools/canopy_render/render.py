@@ -544,12 +544,21 @@ class Renderer:
         if key != self._fbo_key:
             for f in self._fbos:
                 f.release()
+            self._fbos, self._fbo_key = (), None
             ctx = self.ctx
-            draw = ctx.framebuffer(
-                color_attachments=[ctx.renderbuffer(size, 4, samples=samples)],
-                depth_attachment=ctx.depth_renderbuffer(size, samples=samples),
-            )
-            resolve = ctx.framebuffer(color_attachments=[ctx.renderbuffer(size, 4)]) if samples else draw
+            import moderngl
+
+            try:
+                draw = ctx.framebuffer(
+                    color_attachments=[ctx.renderbuffer(size, 4, samples=samples)],
+                    depth_attachment=ctx.depth_renderbuffer(size, samples=samples),
+                )
+                resolve = ctx.framebuffer(color_attachments=[ctx.renderbuffer(size, 4)]) if samples else draw
+            except moderngl.Error as exc:  # the GL's limit on an image (llvmpipe: about 8192x8192 at 4 samples)
+                from inflo.formats.errors import InputError
+
+                raise InputError(f"--size {size[0]}x{size[1]} --samples {max(samples, 1)}: expected an image the GL "
+                                 f"can allocate (a smaller --size, or fewer --samples), found {exc}") from None
             self._fbos = (draw, resolve) if samples else (draw,)
             self._fbo_key = key
         return self._fbos[0], self._fbos[-1]

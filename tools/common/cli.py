@@ -5,6 +5,11 @@
 - A failed run (any other exception) prints one line and exits with code 1.
 - An output path the system refuses (a file where a folder must be made, a missing or read-only
   parent) and a numeric overflow are bad input too: one line, exit 2.
+- A usage error (an unknown option, a missing argument, a value click refuses) prints one line
+  ``<cli>: error: <message> (see <cli> --help)`` and exits with code 2.
+- Every float option takes finite numbers only (nan, inf: a usage error).
+- Messages are one line: line breaks and other control characters in them (a file name holding a
+  newline) are written as escapes (``\\n``).
 - ``--debug`` re-raises so the traceback is shown.
 - Ctrl-C exits with code 130; files already renamed into place are complete (atomic writes).
 - Progress bars go to stderr, only on a terminal and without ``--quiet``.
@@ -19,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import math
 import os
 import sys
 import time
@@ -27,10 +33,99 @@ import click
 
 from inflo.formats.errors import InputError
 
-__all__ = ["inflo_command", "progress", "SEED", "stall_notice"]
+__all__ = ["inflo_command", "progress", "SEED", "FINITE", "FiniteRange", "InfloCommand", "InfloGroup", "one_line",
+           "stall_notice"]
 
 #: the type of every ``--seed``: numpy's generators take seeds in [0, 2**32 - 1]
 SEED = click.IntRange(0, 2**32 - 1)
+
+
+def one_line(text) -> str:
+    """``text`` on one line: line breaks, tabs and other characters that are not printable written
+    as Python escapes (a file name holding a newline becomes ``no\\nsuch.con``)."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+class _Finite(click.types.FloatParamType):
+    """A float option's type: a finite number (nan and inf are refused like a word)."""
+
+    def convert(self, value, param, ctx):
+        x = super().convert(value, param, ctx)
+        if not math.isfinite(x):
+            self.fail(f"expected a finite number, found {value!r}", param, ctx)
+        return x
+
+
+#: the type of a float option (``type=float`` becomes this in every :func:`inflo_command`)
+FINITE = _Finite()
+
+
+class FiniteRange(click.FloatRange):
+    """``click.FloatRange`` that also refuses nan (which passes every comparison) and inf."""
+
+    def convert(self, value, param, ctx):
+        x = click.types.FloatParamType.convert(self, value, param, ctx)
+        if not math.isfinite(x):
+            self.fail(f"expected a finite number, found {value!r}", param, ctx)
+        return super().convert(x, param, ctx)
+
+
+def _finite_types(cmd: click.Command) -> None:
+    """Every float option and argument of ``cmd`` takes finite numbers only (same help text)."""
+    for p in cmd.params:
+        t = p.type
+        if isinstance(t, FiniteRange) or isinstance(t, _Finite):
+            continue
+        if isinstance(t, click.FloatRange):
+            p.type = FiniteRange(min=t.min, max=t.max, min_open=t.min_open, max_open=t.max_open, clamp=t.clamp)
+        elif isinstance(t, click.types.FloatParamType):
+            p.type = FINITE
+        elif isinstance(t, click.Tuple) and any(isinstance(x, click.types.FloatParamType) for x in t.types):
+            t.types = [FINITE if type(x) is click.types.FloatParamType else x for x in t.types]
+
+
+def _usage_line(exc: click.ClickException, name: str) -> str:
+    """One line for click's error: ``<cli>: error: <message> (see <cli> --help)``."""
+    ctx = getattr(exc, "ctx", None)
+    path = ctx.command_path if ctx is not None else name
+    msg = one_line(exc.format_message())
+    if isinstance(exc, click.UsageError):
+        return f"{path}: error: {msg} (see {path} --help)"
+    return f"{path}: error: {msg}"
+
+
+class _OneLineUsage:
+    """click's usage errors as one line (instead of the usage, a hint, a blank line and the error)."""
+
+    def _one_line(self, exc: click.ClickException, name: str | None) -> None:
+        line = _usage_line(exc, name or self.name)
+        exc.show = lambda file=None: click.echo(line, err=True)
+
+    def make_context(self, info_name, args, parent=None, **extra):
+        try:
+            return super().make_context(info_name, args, parent=parent, **extra)
+        except click.ClickException as exc:
+            self._one_line(exc, info_name)
+            raise
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except click.ClickException as exc:
+            if "show" not in vars(exc):
+                self._one_line(exc, ctx.command_path)
+            raise
+
+
+class InfloCommand(_OneLineUsage, click.Command):
+    """The click command of an inflo CLI: one-line usage errors."""
+
+
+class InfloGroup(_OneLineUsage, click.Group):
+    """A click group of inflo commands: one-line usage errors."""
 
 
 def _path_error(exc: OSError) -> str:
@@ -88,7 +183,7 @@ def inflo_command(name: str, **command_kwargs):
             except InputError as exc:
                 if debug:
                     raise
-                click.echo(f"{name}: error: {exc}", err=True)
+                click.echo(f"{name}: error: {one_line(exc)}", err=True)
                 sys.exit(2)
             except click.exceptions.ClickException:
                 raise
@@ -96,7 +191,7 @@ def inflo_command(name: str, **command_kwargs):
                     PermissionError) as exc:
                 if debug:
                     raise
-                click.echo(f"{name}: error: {_path_error(exc)}", err=True)
+                click.echo(f"{name}: error: {one_line(_path_error(exc))}", err=True)
                 sys.exit(2)
             except MemoryError:  # a count beyond what the machine holds that no bound caught
                 if debug:
@@ -108,13 +203,13 @@ def inflo_command(name: str, **command_kwargs):
                 if debug:
                     raise
                 click.echo(f"{name}: error: expected input whose numbers stay within floating point range, found "
-                           f"an overflow ({exc})", err=True)
+                           f"an overflow ({one_line(exc)})", err=True)
                 sys.exit(2)
             except Exception as exc:  # a failed run: one line unless --debug
                 if debug:
                     raise
                 click.echo(
-                    f"{name}: failed: {type(exc).__name__}: {exc} (rerun with --debug for a traceback)",
+                    f"{name}: failed: {type(exc).__name__}: {one_line(exc)} (rerun with --debug for a traceback)",
                     err=True,
                 )
                 sys.exit(1)
@@ -123,7 +218,10 @@ def inflo_command(name: str, **command_kwargs):
         cmd = click.option("--debug", is_flag=True, help="Show a Python traceback on errors.")(cmd)
         cmd = click.option("--quiet", "-q", is_flag=True, help="No progress bar or messages.")(cmd)
         command_kwargs.setdefault("context_settings", {"help_option_names": ["-h", "--help"]})
-        return click.command(name, **command_kwargs)(cmd)
+        command_kwargs.setdefault("cls", InfloCommand)
+        cmd = click.command(name, **command_kwargs)(cmd)
+        _finite_types(cmd)
+        return cmd
 
     return decorate
 

@@ -12,7 +12,7 @@ import click
 
 from inflo.formats.atomic import check_output_path, refuse_output_over_inputs, staged_output
 from inflo.formats.scn import MAX_WRITTEN, read_scn, write_scn
-from inflo.tools.common.cli import inflo_command
+from inflo.tools.common.cli import InfloGroup, inflo_command
 
 from .dimorph import DimorphOptions, check_window_options, dimorph_scene
 from .sweep import MAX_SWEEP_WORK, sweep_work, write_sweep
@@ -165,7 +165,7 @@ def sweep(output, alpha, n_min, n_max, n_fixed, alpha_min, alpha_max, alpha_step
             click.echo(f"dimorph sweep: wrote {Path(output) / Path(p).name}", err=True)
 
 
-class _SceneOrSubcommand(click.Group):
+class _SceneOrSubcommand(InfloGroup):
     """A group whose first argument, when it is not a subcommand, is the scene of ``run``.
 
     Flags given before the subcommand (``dimorph --debug sweep ...``) are passed on to it.

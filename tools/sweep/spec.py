@@ -28,6 +28,12 @@ __all__ = ["Target", "Axis", "Stage", "Pipeline", "Metric", "Sweep", "Variant", 
 
 MAX_VARIANTS = 1_000_000
 
+#: the longest ``[sweep] timeout``: about 116 days (a finite number a timer can wait)
+MAX_TIMEOUT = 10_000_000
+
+#: the options by which an inflo CLI names what it writes
+OUTPUT_FLAGS = ("-o", "--output")
+
 
 @dataclass(frozen=True)
 class Target:
@@ -270,6 +276,9 @@ def _parse_axis(name, raw, stages, pipeline, text, path) -> Axis:
                               shorten(repr(v)))
         if any(isinstance(x, float) and not math.isfinite(x) for x in v):
             raise FormatError(path, line, "finite values", shorten(repr(v)))
+        if any(isinstance(x, str) and not x.isprintable() for x in v):
+            raise FormatError(path, line, "values on one line (no line breaks or other control characters)",
+                              shorten(repr(v)))
         return Axis(name, tgt, tuple(v))
     if kind == "range":
         return Axis(name, tgt, _range_values(v, path, line))
@@ -389,6 +398,9 @@ def parse_sweep(text: str, path="<sweep>") -> Sweep:
         line = _line_of(text, "base", k)
         if not _scalar(v):
             raise FormatError(path, line, "a number, string or boolean", shorten(repr(v)))
+        if isinstance(v, str) and not v.isprintable():
+            raise FormatError(path, line, "a value on one line (no line breaks or other control characters)",
+                              shorten(repr(v)))
         base.append((parse_target(k, stage_names, is_pipe, path, line), v))
     axes = tuple(_parse_axis(k, v, stage_names, is_pipe, text, path) for k, v in raw.get("axes", {}).items())
     seen_targets: dict[Target, str] = {}
@@ -445,8 +457,9 @@ def parse_sweep(text: str, path="<sweep>") -> Sweep:
         if total > MAX_VARIANTS:
             raise FormatError(path, L(None, "axes"), f"at most {MAX_VARIANTS} variants", f"{total}")
     timeout = sw.get("timeout", 0)
-    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or not timeout >= 0:
-        raise FormatError(path, L("timeout"), "timeout in seconds >= 0 (0: none)", shorten(repr(timeout)))
+    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or not 0 <= timeout <= MAX_TIMEOUT:
+        raise FormatError(path, L("timeout"), f"timeout in seconds in [0, {MAX_TIMEOUT}] (0: none)",
+                          shorten(repr(timeout)))
     numeric_metric = [m.name for m in metrics]
     heatmap = _str(sw, "heatmap", path, L("heatmap"))
     if heatmap is not None and heatmap not in numeric_metric:
@@ -459,6 +472,24 @@ def parse_sweep(text: str, path="<sweep>") -> Sweep:
         if os.path.isabs(rel) or ".." in Path(rel).parts or not (folder / rel).exists():
             raise FormatError(path, L("inputs"), "input files or folders under the sweep file's folder",
                               repr(rel))
+    still = _str(sw, "still", path, L("still"))
+    if still is not None and not _relative_inside(still):
+        raise FormatError(path, L("still"), "still as a path inside the variant's out/ or build/ folder", repr(still))
+    for m in metrics:
+        if m.file is not None and not _relative_inside(m.file):
+            raise FormatError(path, _line_of(text, "metrics", m.name),
+                              "a metric's file inside the variant's out/ or build/ folder", repr(m.file))
+    if is_pipe:
+        bv = pipeline.build_var
+        if bv in dict(pipeline.vars):
+            raise FormatError(path, L("vars", "pipeline"), f"make variables other than {bv} (each variant's "
+                              f"build folder)", bv)
+        for t, _ in base + [(a.target, None) for a in axes]:
+            if t.kind == "make" and t.key == bv:
+                raise FormatError(path, None, f"make targets other than make:{bv} (each variant's build folder)",
+                                  repr(str(t)))
+    for nth, st in enumerate(stages):
+        _check_stage_paths(st, base, axes, inputs, folder, path, L("args", "stage", nth) or L(None, "stage", nth))
     for t, _ in base + [(a.target, None) for a in axes]:
         if t.kind in ("toml", "fcc"):
             where = pipeline.path if is_pipe else folder
@@ -473,10 +504,104 @@ def parse_sweep(text: str, path="<sweep>") -> Sweep:
     return Sweep(
         path=path, name=_str(sw, "name", path, L("name"), path.stem), sampling=sampling, samples=samples,
         seed=_int(sw, "seed", path, L("seed"), 0, 0), batch=_int(sw, "batch", path, L("batch"), 0, 0),
-        still=_str(sw, "still", path, L("still")), heatmap=heatmap,
+        still=still, heatmap=heatmap,
         contact_sheet=_int(sw, "contact_sheet", path, L("contact_sheet"), 64, 0), inputs=inputs,
         base=tuple(base), axes=axes, stages=tuple(stages), pipeline=pipeline, metrics=tuple(metrics),
         timeout=float(timeout))
+
+
+def _relative_inside(rel: str) -> bool:
+    """A relative path that stays inside its folder (no absolute path, no ``..`` above it)."""
+    norm = os.path.normpath(rel)
+    return bool(rel) and not os.path.isabs(rel) and not rel.startswith("~") and norm != ".." \
+        and not norm.startswith("../")
+
+
+#: the variant's folder while a stage's paths are checked (no real path holds a NUL)
+_VARIANT = "/\0variant"
+
+#: the most argument lists of one stage checked value by value (the axes it uses); beyond, each axis alone
+_MAX_CHECKED = 10_000
+
+
+def _check_stage_paths(st: Stage, base, axes, inputs, folder: Path, path, line) -> None:
+    """A stage writes only inside the variant's folder: the value of ``-o``/``--output`` must lie
+    there (``{out}``, ``{variant}``, ``{inputs}``), and every other argument that is a path (it
+    holds a ``/``, or is ``~``, ``.`` or ``..``; ``NAME=PATH`` too) there or in one of ``[sweep]
+    inputs`` (read, not written); relative paths are the working folder's. Checked for every value
+    of the axes the stage's arguments and flags use, with the ``[base]`` flags; bad input otherwise."""
+    import string
+
+    from .overrides import fill, set_flag
+
+    try:
+        fields = {f for a in st.args for _, f, _, _ in string.Formatter().parse(a) if f is not None}
+    except ValueError:
+        return  # an argument that is no format string: named later (check_placeholders)
+    used = [a for a in axes if a.name in fields or (a.target.kind == "flag" and a.target.stage == st.name)]
+    choices = [a.values if a.uniform is None else a.uniform for a in used]
+    combos = itertools.product(*choices) if math.prod(len(c) for c in choices) <= _MAX_CHECKED else \
+        [tuple(c[k] if j == i else c[0] for j, c in enumerate(choices)) for i, cs in enumerate(choices)
+         for k in range(min(len(cs), _MAX_CHECKED))]
+    fixed = {"out": _VARIANT + "/out", "inputs": _VARIANT + "/inputs", "variant": _VARIANT, "id": "id",
+             "index": "0", "sweep_dir": str(folder)}
+    readable = [os.path.normpath(folder / rel) for rel in inputs]
+    cwd = os.getcwd()
+
+    def resolve(p: str) -> str:
+        p = os.path.expanduser(p)
+        return os.path.normpath(p if os.path.isabs(p) else os.path.join(cwd, p))
+
+    def show(p: str) -> str:
+        return p.replace(_VARIANT, "{variant}")
+
+    def inside(p: str) -> bool:
+        return p == _VARIANT or p.startswith(_VARIANT + "/")
+
+    def is_input(p: str) -> bool:
+        return any(p == r or p.startswith(r + "/") for r in readable)
+
+    for combo in combos:
+        vals = dict(fixed)
+        vals.update((a.name, v) for a, v in zip(used, combo))
+        try:
+            args = [fill(a, vals) for a in st.args]
+        except (KeyError, ValueError, IndexError, AttributeError):
+            return  # an unknown placeholder: named later (check_placeholders)
+        for t, v in list(base) + [(a.target, v) for a, v in zip(used, combo)]:
+            if t.kind == "flag" and t.stage == st.name:
+                args = set_flag(args, t.key, v)
+        with_axes = "".join(f" with {a.name} = {format_value(v)}" for a, v in zip(used, combo))
+        outputs = set()
+        for i, a in enumerate(args):
+            value = None
+            if a in OUTPUT_FLAGS and i + 1 < len(args):
+                value, outputs = args[i + 1], outputs | {i + 1}
+            elif a.startswith("--output="):
+                value = a.split("=", 1)[1]
+            elif a.startswith("-o") and not a.startswith("--") and len(a) > 2:
+                value = a[2:]
+            if value is not None and not inside(resolve(value)):
+                flag = "--output" if a.startswith("--") else "-o"
+                raise FormatError(path, line, f"[[stage]] {st.name}: an output ({flag}) inside the variant's folder "
+                                  "({out}, {variant})", f"{shorten(show(value))}{with_axes}")
+        for i, a in enumerate(args):
+            if i in outputs:
+                continue
+            head, eq, tail = a.partition("=")
+            if a.startswith("-"):
+                if not eq:
+                    continue  # a flag or a negative number
+                p = tail  # --flag=PATH
+            else:
+                p = tail if eq and "/" not in head else a  # NAME=PATH
+            if "/" not in p and not p.startswith("~") and p not in (".", ".."):
+                continue
+            r = resolve(p)
+            if not (inside(r) or is_input(r)):
+                raise FormatError(path, line, f"[[stage]] {st.name}: paths inside the variant's folder ({{out}}, "
+                                  "{inputs}, {variant}) or of [sweep] inputs (read, not written)",
+                                  f"{shorten(show(a))}{with_axes}")
 
 
 def read_sweep(path) -> Sweep:

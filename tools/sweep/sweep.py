@@ -19,15 +19,20 @@ from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from pathlib import Path
 
+from inflo.formats.atomic import output_lock
 from inflo.formats.errors import InputError
-from inflo.tools.common.cli import progress
+from inflo.tools.common.cli import one_line, progress, stall_notice
 
 from .overrides import check_placeholders
 from .results import write_contact_sheet, write_heatmap, write_results_csv
 from .spec import Sweep, variants
 from .variant import cached_result, failed_result, prepare, run_batch, variant_dir
 
-__all__ = ["SweepSummary", "check_runnable", "run_sweep", "auto_batch"]
+__all__ = ["SweepSummary", "check_runnable", "check_copies", "run_sweep", "auto_batch", "MAX_COPY_BYTES"]
+
+#: the most bytes of input copies one sweep writes: its variants x the bytes each copies (the
+#: pipeline folder or the inputs); 50 GB holds some 50,000 copies of a species pipeline
+MAX_COPY_BYTES = 50_000_000_000
 
 
 @dataclass
@@ -59,6 +64,30 @@ def check_runnable(sweep: Sweep) -> None:
                          f"{sweep.pipeline.make!r}")
 
 
+def _copied_bytes(sweep: Sweep) -> int:
+    """The bytes one variant copies: the pipeline folder's files or the inputs (as prepare copies them)."""
+    srcs = [(sweep.pipeline.path, sweep.pipeline.path)] if sweep.pipeline is not None else \
+        [(sweep.folder / rel, sweep.folder) for rel in sweep.inputs]
+    total = 0
+    for src, rel_to in srcs:
+        for p in [src] if src.is_file() else sorted(src.rglob("*")):
+            parts = p.relative_to(rel_to).parts
+            if any(x in ("__pycache__", ".git") or x.startswith(".") for x in parts) or not p.is_file():
+                continue
+            total += p.stat().st_size
+    return total
+
+
+def check_copies(sweep: Sweep) -> None:
+    """Bad input (one line, before anything is written) when the variants' copies of the inputs
+    would exceed :data:`MAX_COPY_BYTES`."""
+    n = sweep.samples if sweep.sampling == "random" else math.prod(len(a.values) for a in sweep.axes)
+    size = _copied_bytes(sweep)
+    if n * size > MAX_COPY_BYTES:
+        raise InputError(f"{sweep.path}: expected variants x the bytes each copies within {MAX_COPY_BYTES:.3g} "
+                         f"bytes, found {n} variants x {size} bytes = {n * size:.3g}")
+
+
 def auto_batch(sweep: Sweep, pending: int, workers: int) -> int:
     """Variants per Dask task: ``[sweep] batch`` when given; 1 for pipelines (each is minutes);
     for stage sweeps about four tasks per worker, at most 200 variants a task."""
@@ -80,27 +109,35 @@ def _dashboard(client) -> str | None:
 def run_sweep(sweep: Sweep, out_dir, *, scheduler: str | None = None, workers: int | None = None,
               quiet: bool = False, force: bool = False, dry_run: bool = False, dashboard: str = ":8787",
               echo=print) -> SweepSummary:
-    """Run every variant not done before; return the results of all of them."""
+    """Run every variant not done before; return the results of all of them. A second sweep into
+    the same OUT_DIR while this one runs is refused (one line)."""
     out_dir = Path(out_dir)
     allv = variants(sweep)
+    with output_lock(out_dir, "inflo-sweep"):
+        return _run_locked(sweep, out_dir, allv, scheduler=scheduler, workers=workers, quiet=quiet, force=force,
+                           dry_run=dry_run, dashboard=dashboard, echo=echo)
+
+
+def _run_locked(sweep, out_dir, allv, *, scheduler, workers, quiet, force, dry_run, dashboard, echo) -> SweepSummary:
     summary = SweepSummary()
     pending = []
-    out_dir.mkdir(parents=True, exist_ok=True)
-    for v in allv:
-        try:
-            fp = prepare(sweep, out_dir, v)
-        except (InputError, OSError) as exc:
-            summary.results.append(failed_result(v, f"inputs: {exc}", 2))
-            continue
-        res = None if force else cached_result(sweep, out_dir, v, fp)
-        if res is not None:
-            summary.results.append(res)
-            summary.cached += 1
-        else:
-            pending.append((v, fp))
+    with stall_notice("inflo-sweep") as tick:  # a million variants take minutes to prepare: never silent
+        for k, v in enumerate(allv):
+            tick(k, len(allv), "variants prepared")
+            try:
+                fp = prepare(sweep, out_dir, v)
+            except (InputError, OSError) as exc:
+                summary.results.append(failed_result(v, f"inputs: {exc}", 2))
+                continue
+            res = None if force else cached_result(sweep, out_dir, v, fp)
+            if res is not None:
+                summary.results.append(res)
+                summary.cached += 1
+            else:
+                pending.append((v, fp))
     if dry_run:
         for v, _ in pending:
-            echo(f"inflo-sweep: would run {v.id} ({v.label() or 'base'}) in {variant_dir(out_dir, v)}")
+            echo(f"inflo-sweep: would run {v.id} ({one_line(v.label()) or 'base'}) in {variant_dir(out_dir, v)}")
         echo(f"inflo-sweep: {len(allv)} variants, {summary.cached} done before, {len(pending)} to run")
         summary.results += [dict(failed_result(v, "not run (--dry-run)", 0), status="pending") for v, _ in pending]
         return summary
@@ -119,18 +156,28 @@ def run_sweep(sweep: Sweep, out_dir, *, scheduler: str | None = None, workers: i
 
 
 def _run_pending(sweep, out_dir, pending, summary, *, scheduler, workers, quiet, dashboard, echo):
+    import warnings
+
     import dask
     from distributed import Client, LocalCluster, as_completed
 
     cluster = None
     with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
         if scheduler:
-            client = Client(scheduler, timeout="30s")
+            try:
+                client = Client(scheduler, timeout="30s")
+            except OSError as exc:
+                raise InputError(f"--scheduler: expected a Dask scheduler at {scheduler}, found "
+                                 f"{one_line(exc)}") from None
             if workers:
                 client.wait_for_workers(workers, timeout=120)
         else:
             n = workers or max(1, min(len(pending), os.cpu_count() or 1))
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=dashboard)
+            with warnings.catch_warnings():
+                # the dashboard's port taken (another sweep): it takes another, and the link below says which
+                warnings.filterwarnings("ignore", message=r"Port \d+ is already in use", category=UserWarning)
+                cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                       dashboard_address=dashboard)
             client = Client(cluster)
     try:
         nworkers = sum(client.nthreads().values()) or 1
