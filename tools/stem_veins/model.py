@@ -44,6 +44,8 @@ import numpy as np
 from numba import njit
 from scipy.spatial import Delaunay, QhullError, cKDTree
 
+from inflo.tools.common.linalg import norm
+
 __all__ = [
     "StemModel",
     "StemRun",
@@ -170,7 +172,7 @@ def _delaunay_pairs(pos: np.ndarray) -> np.ndarray | None:
     s = np.sort(tri.simplices.astype(np.int64), axis=1)
     faces = np.concatenate([s[:, [0, 1, 2]], s[:, [0, 1, 3]], s[:, [0, 2, 3]], s[:, [1, 2, 3]]])
     sides = np.stack([faces[:, [0, 1]], faces[:, [0, 2]], faces[:, [1, 2]]], axis=1)   # (f, 3, 2)
-    length = np.linalg.norm(pos[sides[:, :, 0]] - pos[sides[:, :, 1]], axis=2)
+    length = norm(pos[sides[:, :, 0]] - pos[sides[:, :, 1]], axis=2)
     order = np.sort(length, axis=1)
     strict = order[:, 2] > order[:, 1] * (1.0 + 1e-12)
     longest = sides[np.arange(len(sides)), length.argmax(axis=1)][strict]
@@ -199,7 +201,7 @@ def relative_neighbour_pairs(pos: np.ndarray, tree: cKDTree | None = None) -> np
         return relative_neighbour_pairs_brute(pos)
     tree = cKDTree(pos) if tree is None else tree
     mid = 0.5 * (pos[pairs[:, 0]] + pos[pairs[:, 1]])
-    length = np.linalg.norm(pos[pairs[:, 0]] - pos[pairs[:, 1]], axis=1)
+    length = norm(pos[pairs[:, 0]] - pos[pairs[:, 1]], axis=1)
     lists = tree.query_ball_point(mid, r=length * (math.sqrt(3.0) / 2.0) * (1.0 + 1e-9), return_sorted=True)
     counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
     ptr = np.zeros(len(lists) + 1, np.int64)
@@ -309,13 +311,13 @@ class _Graph:
         """Nodes ``idx`` grow one node each, D along ``acc`` (eq. 3.1), kept inside the cylinder; a
         new node on an existing one (or on another new one) is that node. The new nodes belong to
         ``traces`` (default: their parents' traces)."""
-        norm = np.linalg.norm(acc, axis=1)
-        ok = norm > 1e-12 * max(len(self.P), 1)
-        idx, acc, norm = idx[ok], acc[ok], norm[ok]
+        size = norm(acc, axis=1)
+        ok = size > 1e-12 * max(len(self.P), 1)
+        idx, acc, size = idx[ok], acc[ok], size[ok]
         traces = self.T[idx] if traces is None else np.asarray(traces)[ok]
         if not len(idx):
             return
-        new = _inside(self.P[idx] + model.D * acc / norm[:, None], model.radius)
+        new = _inside(self.P[idx] + model.D * acc / size[:, None], model.radius)
         same = _coincident(self.P, new, 1e-6 * model.D)
         keep = same < 0
         start = len(self.P)
@@ -372,7 +374,7 @@ def _closed_step(g: _Graph, model: StemModel, it: int) -> bool:
     pairs = relative_neighbour_pairs(P)
     if not len(pairs):
         return False
-    length = np.linalg.norm(P[pairs[:, 0]] - P[pairs[:, 1]], axis=1)
+    length = norm(P[pairs[:, 0]] - P[pairs[:, 1]], axis=1)
     free = np.fromiter(((int(i), int(j)) not in g.edges for i, j in pairs), dtype=bool, count=len(pairs))
     # 1. relative neighbours not yet joined and at most D apart are joined
     close = free & (length <= D)
@@ -402,7 +404,7 @@ def _open_step(g: _Graph, model: StemModel, it: int, at, pending: list, prim_nod
     _, near = tree.query(src, k=1)
     acc = np.zeros((len(g.P), 3))
     d = src - g.P[near]
-    dist = np.linalg.norm(d, axis=1)
+    dist = norm(d, axis=1)
     unit = d / np.maximum(dist, 1e-300)[:, None]
     np.add.at(acc, near, unit)
     # a node pulled by sources on opposite sides may step closer to none of them (and then again to
@@ -412,10 +414,10 @@ def _open_step(g: _Graph, model: StemModel, it: int, at, pending: list, prim_nod
     for k in first:
         v = near[k]
         a = acc[v]
-        na = np.linalg.norm(a)
+        na = norm(a)
         step = g.P[v] + D * a / na if na > 0 else g.P[v]
         mine = near == v
-        if na == 0 or not (np.linalg.norm(src[mine] - step, axis=1) < dist[mine] - 1e-9 * D).any():
+        if na == 0 or not (norm(src[mine] - step, axis=1) < dist[mine] - 1e-9 * D).any():
             acc[v] = unit[k]
     # the vein grown towards a primordium is its leaf trace: a new node belongs to the trace of its
     # parent's closest source

@@ -24,6 +24,8 @@ import math
 
 import numpy as np
 
+from inflo.tools.common.linalg import norm
+
 from .model import StemRun, fibonacci_numbers
 
 __all__ = ["connectivity", "unrolled", "vein_mesh", "write_outputs", "summary_lines", "OUTPUT_FILES"]
@@ -119,11 +121,11 @@ def _frusta(p0, p1, r0, r1, sides):
     if k == 0:
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
     axis = p1 - p0
-    length = np.linalg.norm(axis, axis=1)
+    length = norm(axis, axis=1)
     axis = axis / np.maximum(length, 1e-300)[:, None]
     ref = np.where(np.abs(axis[:, 2:3]) < 0.9, np.array([[0.0, 0.0, 1.0]]), np.array([[1.0, 0.0, 0.0]]))
     u = np.cross(axis, ref)
-    u /= np.linalg.norm(u, axis=1)[:, None]
+    u /= norm(u, axis=1)[:, None]
     w = np.cross(axis, u)
     ang = 2 * math.pi * np.arange(sides) / sides
     ring = np.cos(ang)[None, :, None] * u[:, None, :] + np.sin(ang)[None, :, None] * w[:, None, :]
