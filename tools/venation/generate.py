@@ -56,7 +56,7 @@ def sim_params(p: Params, inputs: Inputs, seed: int | None = None) -> SimParams:
                      birth_vein=p.sources.birth_vein, darts=p.sources.darts,
                      roots=tuple(map(tuple, inputs.roots.tolist())), settle=p.sources.settle,
                      region=_region(p), blind_after=p.veins.blind_after, blind_gap=p.veins.blind_gap,
-                     inside=p.veins.inside,
+                     inside=p.veins.inside, placement=p.sources.placement,
                      max_iterations=p.run.max_iterations, max_nodes=p.run.max_nodes,
                      seed=p.run.seed if seed is None else seed)
 
@@ -90,6 +90,8 @@ def _header(p: Params, sp: SimParams, inputs: Inputs) -> str:
     nb += ", veins inside the blade" if sp.inside else ""
     return (f"venation (Runions ch. 4): {sp.pattern} pattern{nb}, growth {grow}; D {sp.step:g} d_k {sp.kill_distance:g} "
             f"b_s {sp.birth_source:g} b_v {sp.birth_vein:g} rho {sp.darts:g} ({sp.region}); seed {sp.seed}"
+            + ("; sources at the centres of the largest empty circles (sec. 5.2.2)"
+               if sp.placement == "largest_empty_circle" else "")
             + (f"; blind veinlets (areoles, sec. 5.2.4) from iteration {sp.blind_after}, gap {sp.blind_gap:g} D"
                if sp.blind_after >= 0 else "")
             + (f"; refined (sec. 5.2.6) at {p.refine.threshold:g}, alpha {p.refine.alpha:g}, jitter {p.refine.jitter:g}"

@@ -42,6 +42,9 @@ __all__ = ["SCHEMA", "Params", "Run", "BladeSpec", "GrowthSpec", "Veins", "Sourc
 PATTERNS = ("open", "closed")
 NEIGHBOURHOODS = ("relative", "urquhart")
 REGIONS = ("auto", "blade", "margin")
+PLACEMENTS = ("darts", "largest_empty_circle")
+#: sources.placement = "largest_empty_circle": circles of diameter min(b_s, b_v) the final blade holds at most
+MAX_CIRCLES = 20_000
 WIDTH_MODELS = ("pipe", "elongation")
 MAX_SAMPLES = 100_000
 #: blade coordinates (polygon, base, roots), blade.size and the growth scales: blade units
@@ -122,6 +125,7 @@ class Sources:
     darts: float = _key("float", 0.01)
     region: str = _key(("choice", REGIONS), "auto")
     settle: int = _key("int", 10)
+    placement: str = _key(("choice", PLACEMENTS), "darts")
 
 
 @dataclass(frozen=True)
@@ -379,6 +383,8 @@ def _check_ranges(p: dict, where: ParamText) -> None:
         fail("sources", "darts", "> 0 (darts per unit leaf area per step)")
     if s["region"] == "margin" and p["growth"]["type"] != "marginal":
         fail("sources", "region", "'margin' only with growth.type = 'marginal' (the band the margin sweeps)")
+    if s["placement"] == "largest_empty_circle" and s["region"] == "margin":
+        fail("sources", "region", "'auto' or 'blade' with placement = 'largest_empty_circle' (no darts are thrown)")
     if s["settle"] < 0:
         fail("sources", "settle", ">= 0")
     if s["settle"] > 1_000_000:
@@ -550,6 +556,14 @@ def _check_work(p: Params, blade: Blade, growth: Growth) -> None:
                                 ("sources", "birth_vein", p.sources.birth_vein)):
         if not value <= ext:
             fail(section, key, f"{section}.{key} <= the final blade's extent = {ext:.6g}", f"{value:g}")
+    if p.sources.placement == "largest_empty_circle":
+        b = min(p.sources.birth_source, p.sources.birth_vein)
+        room = area / (b * b)
+        if not room <= MAX_CIRCLES:
+            key = "birth_source" if p.sources.birth_source <= p.sources.birth_vein else "birth_vein"
+            fail("sources", key, f"min(sources.birth_source, birth_vein) >= sqrt(the final blade area {area:.6g} / "
+                 f"{MAX_CIRCLES}) = {math.sqrt(area / MAX_CIRCLES):.6g} with placement = 'largest_empty_circle' "
+                 f"(at most {MAX_CIRCLES} sources' room)", f"{b:g}")
     ms = p.output.mesh_spacing
     if ms and not ext / ms <= MAX_SPAN:
         fail("output", "mesh_spacing", f"output.mesh_spacing >= the final blade's extent / {MAX_SPAN} = "

@@ -76,6 +76,7 @@ from .neighbourhood import (
     nearest_incremental,
     relative_neighbourhoods,
 )
+from .placement import largest_empty_circles
 
 __all__ = ["SimParams", "VenationResult", "simulate", "Snapshot"]
 
@@ -103,6 +104,8 @@ class SimParams:
         to the relative neighbour it heads for (sec. 5.2.5: "less than D")
     inside : veins stay in the blade (a new node and the middle of its segment inside it); an open
         source whose closest node is stopped by this is removed (for dissected leaves)
+    placement : "darts" (dart throwing, sec. 4.2.3) or "largest_empty_circle" (sec. 5.2.2: each
+        iteration, sources at the centres of the largest empty circles while they support one)
     """
 
     pattern: str = "open"
@@ -118,6 +121,7 @@ class SimParams:
     blind_after: int = -1
     blind_gap: float = 1.0
     inside: bool = False
+    placement: str = "darts"
     max_iterations: int = 100_000
     max_nodes: int = 2_000_000
     seed: int = 1
@@ -376,12 +380,13 @@ def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra
 
 
 @njit(cache=True)
-def grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, step, gap2, grid, it):
+def grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, step, gap2, grid, it, ended_out):
     """The veins of removed areole sources extending toward their stored relative neighbours
     (sec. 5.2.5, fig. 5.5 f-g): each sprout's tip grows one node D toward its target; a sprout
     closer than the gap to its target, or whose next node would come within D/2 of another node,
     stops there without joining it (after the event of sec. 5.2.4: a blindly terminating vein,
-    fig. 5.4 i). Finished sprouts are dropped. Returns (n_nodes, n_sprouts, veins ended)."""
+    fig. 5.4 i). Finished sprouts are dropped; ``ended_out`` (n_sprouts, 2) gets a row (tip, target)
+    per vein that ended. Returns (n_nodes, n_sprouts, veins ended)."""
     half2 = 0.25 * step * step
     kept = 0
     ended = 0
@@ -390,11 +395,13 @@ def grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, step, gap2, grid, it):
         dx, dy = nodes.pos[u, 0] - nodes.pos[t, 0], nodes.pos[u, 1] - nodes.pos[t, 1]
         d2 = dx * dx + dy * dy
         if d2 < gap2 or d2 <= 0.0:
+            ended_out[ended, 0], ended_out[ended, 1] = t, u
             ended += 1
             continue
         d = math.sqrt(d2)
         wx, wy = nodes.pos[t, 0] + step * dx / d, nodes.pos[t, 1] + step * dy / d
         if _first_within(wx, wy, half2, nodes.pos, grid, t) >= 0:
+            ended_out[ended, 0], ended_out[ended, 1] = t, u
             ended += 1
             continue
         w = _add_node(nodes, n_nodes, wx, wy, t, it, grid)
@@ -498,6 +505,108 @@ def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, i
     return n_nodes
 
 
+def _add_sources(src, n_src, src_grid, pts, it):
+    """Sources at ``pts`` (k, 2) placed in iteration ``it`` (as :func:`throw_darts` makes them);
+    returns the new count."""
+    for x, y in pts:
+        s = n_src
+        src.pos[s, 0], src.pos[s, 1] = x, y
+        src.alive[s] = True
+        src.born[s] = it
+        src.died[s] = -1
+        src.tag_iter[s] = -1
+        src.ntag[s] = 0
+        src.near[s] = -1
+        src.near_d2[s] = np.inf
+        src.areole[s] = False
+        grid_insert(src_grid, src.pos, s, s + 1)
+        n_src += 1
+    return n_src
+
+
+def _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2) -> bool:
+    """The midvein (fig. 5.1b, 5.7c): the first source reached by a vein, in iteration ``it``; the
+    event gives the reaching node and the vein's length from its initial node. True once seen."""
+    if not n_nodes:
+        return False
+    for s in np.flatnonzero(src.died[:n_src] == it).tolist():
+        d = ((nodes.pos[:n_nodes] - src.pos[s]) ** 2).sum(1)
+        v = int(np.argmin(d))
+        if not d[v] < dk2 or nodes.parent[v] < 0:  # removed unreached, or no vein grew to it
+            continue
+        length = 0.0
+        w = v
+        while nodes.parent[w] >= 0:
+            length += math.dist(nodes.pos[w], nodes.pos[nodes.parent[w]])
+            w = int(nodes.parent[w])
+        p = real(nodes.pos[v], lam)
+        events.append((it, "midvein", s, float(p[0]), float(p[1]), length / lam))
+        return True
+    return False
+
+
+class _Loops:
+    """Loops closed by anastomoses: an edge (a, b) closes one when a and b are already connected
+    (through the growth forest and the earlier anastomoses); the loop is the shortest path from a to
+    b (by length) plus the edge, and its polygon gives the area it encloses."""
+
+    def __init__(self, n_roots: int):
+        self.uf = list(range(n_roots))
+        self.count = 0
+
+    def _find(self, i):
+        while self.uf[i] != i:
+            self.uf[i] = self.uf[self.uf[i]]
+            i = self.uf[i]
+        return i
+
+    @staticmethod
+    def _root(v, parent):
+        while parent[v] >= 0:
+            v = int(parent[v])
+        return v
+
+    def add(self, extra, e, nodes, n_nodes, lam, real):
+        """The event of anastomosis ``extra[e]``: ("loop", index, cx, cy, area) or None."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import dijkstra
+
+        a, b = int(extra[e, 0]), int(extra[e, 1])
+        ra, rb = self._find(self._root(a, nodes.parent)), self._find(self._root(b, nodes.parent))
+        if ra != rb:
+            self.uf[ra] = rb
+            return None
+        pos = nodes.pos[:n_nodes]
+        par = nodes.parent[:n_nodes]
+        child = np.flatnonzero(par >= 0)
+        i = np.concatenate([child, extra[:e, 0]])
+        j = np.concatenate([par[child], extra[:e, 1]])
+        w = np.hypot(*(pos[i] - pos[j]).T) + 1e-300
+        g = coo_matrix((np.concatenate([w, w]), (np.concatenate([i, j]), np.concatenate([j, i]))),
+                       shape=(n_nodes, n_nodes)).tocsr()
+        _, pred = dijkstra(g, indices=a, return_predecessors=True)
+        if pred[b] < 0:
+            return None
+        path = [b]
+        while path[-1] != a:
+            path.append(int(pred[path[-1]]))
+        poly = real(pos[path], lam)
+        x, y = poly[:, 0], poly[:, 1]
+        cross = x * np.roll(y, -1) - np.roll(x, -1) * y
+        area2 = float(cross.sum())
+        if area2 == 0.0:
+            cx, cy = float(x.mean()), float(y.mean())
+        else:
+            cx = float(((x + np.roll(x, -1)) * cross).sum() / (3.0 * area2))
+            cy = float(((y + np.roll(y, -1)) * cross).sum() / (3.0 * area2))
+        self.count += 1
+        return ("loop", self.count, cx, cy, abs(area2) / 2.0)
+
+
+#: sources placed in one iteration by the largest empty circle at most (params bounds the blade's room)
+LEC_LIMIT = 1_000_000
+
+
 # --------------------------------------------------------------------------------------------
 # the loop
 
@@ -541,6 +650,12 @@ class VenationResult:
         grow (the guards of :func:`grow_veins`).
     blind_ends : int
         Veins of areole sources that stopped short of the node they headed for (sec. 5.2.4).
+    events : list of (iteration, event, index, x, y, measure)
+        The developmental events in the order they happened (``events.csv``, formats/venation.md):
+        ``source`` placed (measure: the radius of its empty circle with the largest-empty-circle
+        placement), ``midvein`` (the first source reached by a vein: measure the vein's length from
+        its initial node), ``loop`` (an anastomosis that closes a cycle: x, y its centroid, measure
+        the area it encloses), ``blind_end`` (measure: the gap left to the node it headed for).
     seconds : float
     """
 
@@ -557,6 +672,7 @@ class VenationResult:
     stopped: str
     sources_stalled: int = 0
     blind_ends: int = 0
+    events: list = field(default_factory=list)
     seconds: float = 0.0
     timings: dict = field(default_factory=dict)
 
@@ -651,6 +767,9 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         return Snapshot(it_now, real(nodes.pos[:n_nodes], lam_now), nodes.parent[:n_nodes].copy(),
                         extra[:n_extra].copy(), margin, real(src.pos[alive], lam_now))
 
+    events: list = []  # (iteration, event, index, x, y, measure), in the order they happen
+    midvein_seen = False
+    loops = _Loops(len(roots))
     last_frame = -1
     idle = 0
     stalled_total = 0
@@ -707,6 +826,28 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         margin_only = sp.region == "margin"
         if margin_only and it > 0 and not np.any(sc > prev_sc):
             n_darts = 0  # the margin did not move: no new blade
+        if sp.placement == "largest_empty_circle":
+            n_darts = 0
+            poly_now = blade.scaled(blade_scale)
+            alive_now = np.flatnonzero(src.alive[:n_src])
+            new_src = largest_empty_circles(poly_now, lambda q, _s=blade_scale: blade.contains(q, _s),
+                                            nodes.pos[:n_nodes], src.pos[alive_now], math.sqrt(bs2), math.sqrt(bv2),
+                                            LEC_LIMIT)
+            if n_src + len(new_src) > scap:
+                scap = max(2 * scap, n_src + len(new_src) + 1024)
+                src = _grow_rows(src, scap)
+                src_grid = Grid(src_grid.head, np.concatenate([src_grid.nxt, np.full(scap - len(src_grid.nxt), -1, np.int64)]),
+                                src_grid.geom)
+            before = n_src
+            n_src = _add_sources(src, n_src, src_grid, new_src[:, :2], it)
+            placed = n_src - before
+            for k_, (x_, y_, r_) in enumerate(new_src.tolist()):
+                p_ = real(np.array([x_, y_]), lam)
+                events.append((it, "source", before + k_, float(p_[0]), float(p_[1]), r_ / lam))
+            if placed and closed and 0 <= sp.blind_after <= it:
+                src.areole[before:n_src] = True
+            if placed:
+                live = np.concatenate([live, np.arange(before, n_src, dtype=np.int64)])
         if n_darts > 0:
             if margin_only:
                 cand = _band_darts(blade, prev_sc if it > 0 else np.zeros(2), sc, n_darts, rng)
@@ -729,6 +870,8 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
             n_src = throw_darts(cand, base, np.ascontiguousarray(blade_scale, dtype=np.float64), prev_arg,
                                 blade.bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it)
             placed = n_src - before
+            for k_, p_ in enumerate(real(src.pos[before:n_src], lam).tolist()):
+                events.append((it, "source", before + k_, float(p_[0]), float(p_[1]), math.nan))
             if placed and closed and 0 <= sp.blind_after <= it:
                 src.areole[before:n_src] = True
             if placed:
@@ -755,8 +898,15 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         if n_sprouts + k * MAX_NEIGHBOURS > len(sprouts):
             sprouts = np.concatenate([sprouts, np.zeros((len(sprouts) + k * MAX_NEIGHBOURS, 2), np.int64)])
         gap2 = gap2_1 * lam * lam
+        extra_before = n_extra
         _, n_stalled, n_extra, n_sprouts = update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra,
                                                           n_extra, sprouts, n_sprouts, gap2, sp.inside)
+        if not midvein_seen:
+            midvein_seen = _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2)
+        for e_ in range(extra_before, n_extra):
+            ev = loops.add(extra, e_, nodes, n_nodes, lam, real)
+            if ev is not None:
+                events.append((it,) + ev)
         t2 = time.perf_counter()
         timings["sources"] += t2 - t1
         stalled_total += n_stalled
@@ -770,8 +920,14 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         n_nodes = grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, D, dk2, node_grid, it, sp.inside, base,
                              np.ascontiguousarray(blade_scale, dtype=np.float64), blade.bands)
         if n_sprouts:
-            n_nodes, n_sprouts, ended = grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, D, gap2, node_grid, it)
+            ended_rows = np.zeros((n_sprouts, 2), np.int64)
+            n_nodes, n_sprouts, ended = grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, D, gap2, node_grid, it,
+                                                     ended_rows)
             blind_ends += ended
+            for k_, (t_, u_) in enumerate(ended_rows[:ended].tolist()):
+                p_ = real(nodes.pos[t_], lam)
+                events.append((it, "blind_end", blind_ends - ended + k_ + 1, float(p_[0]), float(p_[1]),
+                               float(math.dist(nodes.pos[t_], nodes.pos[u_]) / lam)))
         if n_nodes > n_before:
             hull_support(nodes.pos, n_before, n_nodes, support)
             new = nodes.pos[n_before:n_nodes]
@@ -812,7 +968,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         node_iter=nodes.iteration[:n_nodes].copy(), extra_edges=extra[:n_extra].copy(), blade=margin,
         source_pos=real(src.pos[:n_src], lam), source_born=src.born[:n_src].copy(),
         source_died=src.died[:n_src].copy(), iterations=it, growth_steps=n_growth, stopped=stopped,
-        sources_stalled=stalled_total, blind_ends=blind_ends,
+        sources_stalled=stalled_total, blind_ends=blind_ends, events=events,
         seconds=time.perf_counter() - t_start, timings=timings)
 
 
