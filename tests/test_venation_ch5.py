@@ -63,3 +63,106 @@ def test_largest_empty_circles_repeat_until_too_small():
     assert left <= 2.0 + 0.05
     again = largest_empty_circles(SQUARE, blade.contains, np.array([[5.0, 0.0]]), np.zeros((0, 2)), 2.0, 2.0, 10_000)
     assert np.array_equal(got, again)  # deterministic
+
+
+CLOSED = """seed = 3
+[blade]
+polygon = [[0,0],[10,3],[12,12],[5,20],[-5,20],[-12,12],[-10,3]]
+[growth]
+type = "uniform"
+initial = 0.3
+rate = 0.05
+[veins]
+pattern = "closed"
+step = 0.5
+kill_distance = 0.5
+{veins}
+[sources]
+birth_source = 1.5
+birth_vein = 1.5
+{sources}
+"""
+
+
+def _run(tmp_path, veins="", sources="", name="p.toml"):
+    f = tmp_path / name
+    f.write_text(CLOSED.format(veins=veins, sources=sources))
+    out = tmp_path / ("out_" + name)
+    r = CliRunner().invoke(main, [str(f), "-o", str(out), "-q"])
+    assert r.exit_code == 0, r.output
+    return out
+
+
+def _events(out):
+    lines = (out / "events.csv").read_text().splitlines()
+    assert lines[0] == "iteration,event,index,x,y,measure"
+    rows = [ln.split(",") for ln in lines[1:]]
+    return [(int(r[0]), r[1], int(r[2]), float(r[3]), float(r[4]), float(r[5]) if r[5] else None) for r in rows]
+
+
+@pytest.mark.parametrize("sources", ["", 'placement = "largest_empty_circle"'])
+def test_events_loops_in_order_with_positive_areas(tmp_path, sources):
+    ev = _events(_run(tmp_path, sources=sources))
+    its = [e[0] for e in ev]
+    assert its == sorted(its)
+    loops = [e for e in ev if e[1] == "loop"]
+    assert len(loops) >= 3
+    assert [e[2] for e in loops] == list(range(1, len(loops) + 1))
+    assert all(e[5] > 0 for e in loops)
+    mid = [e for e in ev if e[1] == "midvein"]
+    assert len(mid) == 1 and mid[0][5] > 0
+    assert ev.index(mid[0]) < ev.index(loops[0])
+    placed = [e for e in ev if e[1] == "source"]
+    assert len(placed) >= 3
+    if sources:
+        assert all(e[5] > 1.5 for e in placed)  # every circle supports a source (radius > b_s)
+    else:
+        assert all(e[5] is None for e in placed)
+
+
+def test_events_blind_ends(tmp_path):
+    ev = _events(_run(tmp_path, veins="blind_after = 8"))
+    blind = [e for e in ev if e[1] == "blind_end"]
+    assert blind and all(e[0] >= 8 and e[5] >= 0 for e in blind)
+    assert [e[2] for e in blind] == list(range(1, len(blind) + 1))
+
+
+def test_largest_empty_circle_run_is_deterministic(tmp_path):
+    a = _run(tmp_path, sources='placement = "largest_empty_circle"', name="a.toml")
+    b = _run(tmp_path, sources='placement = "largest_empty_circle"', name="b.toml")
+    for f in ("veins.obj", "events.csv", "veins.widths"):
+        assert (a / f).read_bytes() == (b / f).read_bytes()
+
+
+def _refused(tmp_path, text, name="bad.toml"):
+    f = tmp_path / name
+    f.write_text(text)
+    out = tmp_path / "out"
+    out.mkdir(exist_ok=True)
+    (out / "keep.txt").write_text("earlier")
+    r = CliRunner().invoke(main, [str(f), "-o", str(out), "-q"])
+    assert r.exit_code == 2, r.output
+    err = r.output.strip()
+    assert len(err.splitlines()) == 1 and "error:" in err, err
+    assert sorted(p.name for p in out.iterdir()) == ["keep.txt"]
+    return err
+
+
+@pytest.mark.parametrize("sources,expect", [
+    ('placement = "largest"', "placement"),
+    ('placement = 3', "placement"),
+    ('placement = "largest_empty_circle"\nbirth_source = 0.001', "birth_source"),
+    ('placement = "largest_empty_circle"\nbirth_vein = 0.001', "birth_vein"),
+])
+def test_placement_refusals(tmp_path, sources, expect):
+    text = CLOSED.format(veins="", sources=sources)
+    if "birth_" in sources:
+        key = sources.split("\n")[1].split(" =")[0]
+        text = text.replace(f"{key} = 1.5\n", "")
+    assert expect in _refused(tmp_path, text)
+
+
+def test_placement_margin_region_refused(tmp_path):
+    text = CLOSED.format(veins="", sources='placement = "largest_empty_circle"\nregion = "margin"').replace(
+        '"uniform"', '"marginal"')
+    assert "region" in _refused(tmp_path, text)

@@ -38,7 +38,7 @@ def main(params, output, seed, frame_step, frame_textures, quiet, debug):
     files = [params] + ([p.blade.contour] if p.blade.contour else []) + (
         (scale if isinstance(scale, list) else [scale]) if scale else [])
     # the earlier run's files are replaced only when this one completes (no new veins on an old texture)
-    stale = (r"veins\.obj", r"veins\.widths", r"blade\.obj", r"blade\.mtl", r"texture\.png",
+    stale = (r"veins\.obj", r"veins\.widths", r"events\.csv", r"blade\.obj", r"blade\.mtl", r"texture\.png",
              r"frames/(veins|blade|texture)_\d+\.(obj|widths|png|mtl)")
     with staged_output(output, "venation", stale_patterns=stale, inputs=[(f, "input") for f in files + referenced_files(params)],
                         subfolders=("frames",) if step else ()) as stage, \

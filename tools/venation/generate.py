@@ -25,6 +25,7 @@ from .output import (
     stale_frames,
     texture_box,
     write_blade_mesh,
+    write_events,
     write_graph,
     write_margin,
     write_widths,
@@ -170,7 +171,8 @@ def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None,
                             spacing=spacing)
     img = render_texture(res.node_pos, res.node_parent, widths, res.extra_edges, res.blade, style, box=box)
     save_png(img, out / "texture.png")
-    written += [out / n for n in ("veins.obj", "veins.widths", "blade.obj", "blade.mtl", "texture.png")]
+    write_events(out / "events.csv", res.events)
+    written += [out / n for n in ("veins.obj", "veins.widths", "blade.obj", "blade.mtl", "texture.png", "events.csv")]
     return VenationRun(result=res, widths=widths, orders=orders, loops=loops, written=written, mesh=mesh,
                        header=header, simulated_nodes=simulated)
 

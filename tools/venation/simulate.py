@@ -50,6 +50,7 @@ inside the blade (``inside``), when no vein node has been added for ``settle`` i
 """
 from __future__ import annotations
 
+import heapq
 import math
 import time
 from collections.abc import Callable
@@ -524,6 +525,77 @@ def _add_sources(src, n_src, src_grid, pts, it):
     return n_src
 
 
+@njit(cache=True)
+def _forest_root(parent, v):
+    while parent[v] >= 0:
+        v = parent[v]
+    return v
+
+
+@njit(cache=True)
+def _shortest_path(pos, parent, n, extra, e, a, b):
+    """The shortest path (by length) from node a to node b over the growth forest's edges and the
+    anastomoses ``extra[:e]`` (Dijkstra); the nodes from b back to a, or empty when none."""
+    deg = np.zeros(n + 1, np.int64)
+    for v in range(n):
+        if parent[v] >= 0:
+            deg[v + 1] += 1
+            deg[parent[v] + 1] += 1
+    for k in range(e):
+        deg[extra[k, 0] + 1] += 1
+        deg[extra[k, 1] + 1] += 1
+    start = np.cumsum(deg)
+    fill = start[:-1].copy()
+    adj = np.empty(start[-1], np.int64)
+    for v in range(n):
+        u = parent[v]
+        if u >= 0:
+            adj[fill[v]] = u
+            fill[v] += 1
+            adj[fill[u]] = v
+            fill[u] += 1
+    for k in range(e):
+        u, v = extra[k, 0], extra[k, 1]
+        adj[fill[u]] = v
+        fill[u] += 1
+        adj[fill[v]] = u
+        fill[v] += 1
+    dist = np.full(n, np.inf)
+    pred = np.full(n, -1, np.int64)
+    done = np.zeros(n, np.bool_)
+    dist[a] = 0.0
+    heap = [(0.0, a)]
+    while len(heap):
+        d, v = heapq.heappop(heap)
+        if done[v]:
+            continue
+        done[v] = True
+        if v == b:
+            break
+        for q in range(start[v], start[v + 1]):
+            u = adj[q]
+            if done[u]:
+                continue
+            nd = d + math.sqrt((pos[u, 0] - pos[v, 0]) ** 2 + (pos[u, 1] - pos[v, 1]) ** 2)
+            if nd < dist[u]:
+                dist[u] = nd
+                pred[u] = v
+                heapq.heappush(heap, (nd, u))
+    if not done[b]:
+        return np.zeros(0, np.int64)
+    m = 1
+    w = b
+    while w != a:
+        w = pred[w]
+        m += 1
+    path = np.empty(m, np.int64)
+    w = b
+    for k in range(m):
+        path[k] = w
+        w = pred[w]
+    return path
+
+
 def _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2) -> bool:
     """The midvein (fig. 5.1b, 5.7c): the first source reached by a vein, in iteration ``it``; the
     event gives the reaching node and the vein's length from its initial node. True once seen."""
@@ -560,36 +632,18 @@ class _Loops:
             i = self.uf[i]
         return i
 
-    @staticmethod
-    def _root(v, parent):
-        while parent[v] >= 0:
-            v = int(parent[v])
-        return v
-
-    def add(self, extra, e, nodes, n_nodes, lam, real):
+    def add(self, extra, e, nodes, n_nodes, lam, real, step):
         """The event of anastomosis ``extra[e]``: ("loop", index, cx, cy, area) or None."""
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import dijkstra
-
         a, b = int(extra[e, 0]), int(extra[e, 1])
-        ra, rb = self._find(self._root(a, nodes.parent)), self._find(self._root(b, nodes.parent))
+        ra = self._find(_forest_root(nodes.parent, a))
+        rb = self._find(_forest_root(nodes.parent, b))
         if ra != rb:
             self.uf[ra] = rb
             return None
         pos = nodes.pos[:n_nodes]
-        par = nodes.parent[:n_nodes]
-        child = np.flatnonzero(par >= 0)
-        i = np.concatenate([child, extra[:e, 0]])
-        j = np.concatenate([par[child], extra[:e, 1]])
-        w = np.hypot(*(pos[i] - pos[j]).T) + 1e-300
-        g = coo_matrix((np.concatenate([w, w]), (np.concatenate([i, j]), np.concatenate([j, i]))),
-                       shape=(n_nodes, n_nodes)).tocsr()
-        _, pred = dijkstra(g, indices=a, return_predecessors=True)
-        if pred[b] < 0:
+        path = _shortest_path(pos, nodes.parent, n_nodes, extra, e, a, b)
+        if len(path) < 3:
             return None
-        path = [b]
-        while path[-1] != a:
-            path.append(int(pred[path[-1]]))
         poly = real(pos[path], lam)
         x, y = poly[:, 0], poly[:, 1]
         cross = x * np.roll(y, -1) - np.roll(x, -1) * y
@@ -904,7 +958,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         if not midvein_seen:
             midvein_seen = _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2)
         for e_ in range(extra_before, n_extra):
-            ev = loops.add(extra, e_, nodes, n_nodes, lam, real)
+            ev = loops.add(extra, e_, nodes, n_nodes, lam, real, D)
             if ev is not None:
                 events.append((it,) + ev)
         t2 = time.perf_counter()
