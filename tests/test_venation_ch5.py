@@ -166,3 +166,120 @@ def test_placement_margin_region_refused(tmp_path):
     text = CLOSED.format(veins="", sources='placement = "largest_empty_circle"\nregion = "margin"').replace(
         '"uniform"', '"marginal"')
     assert "region" in _refused(tmp_path, text)
+
+
+# --------------------------------------------------------------------------------------------
+# local-to-global growth (sec. 5.2.1, eq. 5.1)
+
+
+def _lin(a, b):
+    from inflo.formats.func import Function
+
+    return Function.from_points([(0.0, a), (1.0, b)])
+
+
+def test_local_to_global_constant_rates_are_uniform_anisotropic_growth():
+    from inflo.tools.venation.blade import LocalToGlobal
+
+    g = LocalToGlobal(_lin(1.02, 1.02), _lin(1.05, 1.05), [1.0, -2.0], 10.0)
+    rng = np.random.default_rng(0)
+    mat = np.array([1.0, -2.0]) + rng.uniform(-5, 12, (50, 2))
+    for t in (0, 1, 7, 30):
+        got = g.forward(mat, t)
+        want = np.array([1.0, -2.0]) + (mat - [1.0, -2.0]) * [1.02 ** t, 1.05 ** t]
+        assert np.allclose(got, want, rtol=1e-12, atol=1e-9)
+        assert np.allclose(g.inverse(got, t), mat, atol=1e-9)
+
+
+@pytest.mark.parametrize("k,t", [(0.1, 5), (0.3, 12), (0.05, 40)])
+def test_local_to_global_linear_rerg_y_matches_eq_5_1(k, t):
+    from inflo.tools.venation.blade import LocalToGlobal
+
+    h = 8.0
+    g = LocalToGlobal(_lin(1.0, 1.0 + k), _lin(1.0, 1.0 + k), [0.0, 0.0], h)
+    y0 = np.linspace(0.0, h, 33)
+    x0 = np.full_like(y0, 2.0)
+    got = g.forward(np.column_stack([x0, y0]), t)
+    u = y0 / h
+    # eq. 5.1: y1 = integral_0^y0 (1 + k y / h)^t dy
+    want_y = h * ((1.0 + k * u) ** (t + 1) - 1.0) / (k * (t + 1))
+    assert np.allclose(got[:, 1], want_y, rtol=1e-5)
+    assert np.allclose(got[:, 0], 2.0 * (1.0 + k * u) ** t, rtol=1e-12)
+    # growing from t1 to t2 goes through t0: eq. 5.1 solved for y0, then eq. 5.1 again
+    mid = g.forward(np.column_stack([x0, y0]), t // 2)
+    assert np.allclose(g.forward(g.inverse(mid, t // 2), t), got, rtol=1e-6)
+
+
+LTG = """seed = 2
+max_iterations = 400
+[blade]
+polygon = [[0,0],[1,0.5],[1.2,2],[0.6,3.2],[0,3.5],[-0.6,3.2],[-1.2,2],[-1,0.5]]
+[growth]
+type = "local_to_global"
+rerg = ["rx.func", "ry.func"]
+steps = {steps}
+[veins]
+pattern = "closed"
+step = 0.25
+kill_distance = 0.25
+[sources]
+birth_source = 0.8
+birth_vein = 0.8
+placement = "{placement}"
+"""
+
+
+def _write_ltg(tmp_path, rx=(1.02, 1.02), ry=(1.03, 1.03), steps=40, placement="largest_empty_circle", extra=""):
+    from inflo.formats.func import write_func
+
+    write_func(tmp_path / "rx.func", _lin(*rx))
+    write_func(tmp_path / "ry.func", _lin(*ry))
+    f = tmp_path / "ltg.toml"
+    f.write_text(LTG.format(steps=steps, placement=placement) + extra)
+    return f
+
+
+@pytest.mark.parametrize("placement", ["darts", "largest_empty_circle"])
+def test_local_to_global_run_grows_the_blade_and_veins(tmp_path, placement):
+    f = _write_ltg(tmp_path, placement=placement)
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, [str(f), "-o", str(out), "-q"])
+    assert r.exit_code == 0, r.output
+    v = np.array([[float(x) for x in ln.split()[1:3]] for ln in (out / "blade.obj").read_text().splitlines()
+                  if ln.startswith("v ")])
+    poly = np.array([[0, 0], [1, 0.5], [1.2, 2], [0.6, 3.2], [0, 3.5], [-0.6, 3.2], [-1.2, 2], [-1, 0.5]], float)
+    want = poly * [1.02 ** 40, 1.03 ** 40]  # constant rates: uniform anisotropic growth
+    assert all(np.hypot(*(v - w).T).min() < 1e-6 for w in want)  # the margin's corners are mesh vertices
+    ev = _events(out)
+    assert [e for e in ev if e[1] == "loop"]
+    nodes = np.array([[float(x) for x in ln.split()[1:3]] for ln in (out / "veins.obj").read_text().splitlines()
+                      if ln.startswith("v ")])
+    from matplotlib.path import Path as MPath
+
+    inside = MPath(want).contains_points(nodes, radius=0.3) | MPath(want).contains_points(nodes, radius=-0.3)
+    assert inside.mean() > 0.95
+
+
+@pytest.mark.parametrize("kw,expect", [
+    (dict(rx=(1.0, 0.9)), "rerg"),
+    (dict(ry=(1.5, 1.5), steps=100), "rerg"),
+    (dict(steps=0), "steps"),
+    (dict(extra="[sources]\n"), "sources"),
+])
+def test_local_to_global_refusals(tmp_path, kw, expect):
+    f = _write_ltg(tmp_path, **kw)
+    text = f.read_text()
+    assert expect in _refused(tmp_path, text, name="ltg.toml")
+
+
+@pytest.mark.parametrize("old,new,expect", [
+    ('rerg = ["rx.func", "ry.func"]', 'rerg = "rx.func"', "rerg"),
+    ('rerg = ["rx.func", "ry.func"]\n', '', "rerg"),
+    ('type = "local_to_global"', 'type = "uniform"', "rerg"),
+    ('placement = "largest_empty_circle"', 'placement = "darts"\n[growth.x]', "growth"),
+])
+def test_local_to_global_key_refusals(tmp_path, old, new, expect):
+    f = _write_ltg(tmp_path)
+    text = f.read_text()
+    assert old in text
+    assert expect in _refused(tmp_path, text.replace(old, new), name="ltg.toml")

@@ -34,9 +34,9 @@ def main(params, output, seed, frame_step, frame_textures, quiet, debug):
     check_frames(p, inputs, step, p.output.frame_textures if frame_textures is None else frame_textures,
                  option=frame_step is not None)
     limit = max(p.run.max_iterations, 1)
-    scale = p.growth.scale
-    files = [params] + ([p.blade.contour] if p.blade.contour else []) + (
-        (scale if isinstance(scale, list) else [scale]) if scale else [])
+    files = [params] + ([p.blade.contour] if p.blade.contour else [])
+    for named in (p.growth.scale, p.growth.rerg):
+        files += (named if isinstance(named, list) else [named]) if named else []
     # the earlier run's files are replaced only when this one completes (no new veins on an old texture)
     stale = (r"veins\.obj", r"veins\.widths", r"events\.csv", r"blade\.obj", r"blade\.mtl", r"texture\.png",
              r"frames/(veins|blade|texture)_\d+\.(obj|widths|png|mtl)")

@@ -83,7 +83,9 @@ def texture_style(p: Params) -> TextureStyle:
 def _header(p: Params, sp: SimParams, inputs: Inputs) -> str:
     g = inputs.growth
     grow = g.kind
-    if g.kind != "none":
+    if g.ltg is not None:
+        grow += f" (RERG_x, RERG_y of the initial y, sec. 5.2.1) in {g.steps} steps"
+    elif g.kind != "none":
         s0, s1 = g.scale_at(0), g.final_scale
         grow += f" {s0[0]:g}" + (f",{s0[1]:g}" if s0[1] != s0[0] else "") + f" -> {s1[0]:g}" + \
             (f",{s1[1]:g}" if s1[1] != s1[0] else "") + f" in {g.steps} steps"
@@ -127,7 +129,7 @@ def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None,
     textures = p.output.frame_textures if frame_textures is None else frame_textures
     style = texture_style(p)
     g = inputs.growth
-    final_margin = inputs.blade.scaled(g.final_scale if g.kind != "none" else 1.0)
+    final_margin = g.margin(inputs.blade, g.steps)
     box = texture_box(final_margin)
     written: list = []
     frames: list[int] = []

@@ -60,7 +60,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .blade import Blade, Growth, _inside, inside_blade
+from .blade import Blade, Growth, _inside, inside_blade, polygon_area
 from .neighbourhood import (
     HULL_DIRECTIONS,
     MAX_NEIGHBOURS,
@@ -202,14 +202,19 @@ def _first_within(x, y, r2, pos, grid, skip):
 
 
 @njit(cache=True)
-def throw_darts(cand, base, scale, prev_scale, bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it):
+def throw_darts(cand, base, scale, prev_scale, bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it,
+                known_inside):
     """Dart throwing (sec. 4.2.3): candidates ``cand`` (c, 2) in order; one inside the blade (at
     ``scale`` about ``base``) and, when ``prev_scale[0]`` > 0, outside the blade at ``prev_scale``
     (new sources only on the margin), farther than b_s from every live source and farther than b_v
     from every vein node becomes source ``n_src`` (inserted into ``src_grid``). Returns the new
-    count."""
+    count. ``known_inside`` (c,), when given (not empty), says instead which candidates lie in the
+    blade (a blade that is no scaled copy: local-to-global growth)."""
     inside = np.zeros(cand.shape[0], np.bool_)
-    inside_blade(cand, base, scale, bands, inside)
+    if known_inside.shape[0] == cand.shape[0] and cand.shape[0] > 0:
+        inside[:] = known_inside
+    else:
+        inside_blade(cand, base, scale, bands, inside)
     before = np.zeros(cand.shape[0], np.bool_)
     if prev_scale[0] > 0.0:
         inside_blade(cand, base, prev_scale, bands, before)
@@ -657,6 +662,8 @@ class _Loops:
         return ("loop", self.count, cx, cy, abs(area2) / 2.0)
 
 
+_NO_MASK = np.zeros(0, np.bool_)
+
 #: sources placed in one iteration by the largest empty circle at most (params bounds the blade's room)
 LEC_LIMIT = 1_000_000
 
@@ -817,13 +824,24 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         # the live sources of the snapshot only: the loop's own list must stay as it is (its
         # cells are cleared from the source grid at the next iteration)
         alive = np.flatnonzero(src.alive[:n_src])
-        margin = blade.scaled(sc_now if kind != "none" else 1.0)
+        margin = blade.scaled(sc_now if kind != "none" else 1.0) if ltg is None else ltg_margin
         return Snapshot(it_now, real(nodes.pos[:n_nodes], lam_now), nodes.parent[:n_nodes].copy(),
                         extra[:n_extra].copy(), margin, real(src.pos[alive], lam_now))
 
     events: list = []  # (iteration, event, index, x, y, measure), in the order they happen
     midvein_seen = False
     loops = _Loops(len(roots))
+    # local-to-global growth (sec. 5.2.1): vein nodes and sources kept by their positions at t0
+    ltg = growth.ltg if kind == "local_to_global" else None
+    t_ltg = 0
+    node_mat = nodes.pos[:n_nodes].copy()
+    src_mat = np.zeros((0, 2))
+    ltg_margin = blade.polygon if ltg is None else ltg.forward(blade.polygon, 0)
+    area_ltg = abs(polygon_area(ltg_margin))
+
+    def ltg_contains(q):
+        return blade.contains(ltg.inverse(q, t_ltg))
+
     last_frame = -1
     idle = 0
     stalled_total = 0
@@ -851,6 +869,18 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                 grid_rebuild(node_grid, nodes.pos, np.arange(n_nodes, dtype=np.int64))
                 support[:] = -np.inf
                 hull_support(nodes.pos, 0, n_nodes, support)
+        elif ltg is not None:
+            blade_scale = np.ones(2)
+            t_now = min(it, n_growth)
+            if t_now != t_ltg:
+                t_ltg = t_now
+                nodes.pos[:n_nodes] = ltg.forward(node_mat[:n_nodes], t_ltg)
+                src.pos[:n_src] = ltg.forward(src_mat[:n_src], t_ltg)
+                grid_rebuild(node_grid, nodes.pos, np.arange(n_nodes, dtype=np.int64))
+                support[:] = -np.inf
+                hull_support(nodes.pos, 0, n_nodes, support)
+                ltg_margin = ltg.forward(blade.polygon, t_ltg)
+                area_ltg = abs(polygon_area(ltg_margin))
         elif kind == "marginal":
             blade_scale = sc
         else:
@@ -872,6 +902,8 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         # 2. auxin sources by dart throwing
         t0 = time.perf_counter()
         area_real = blade.area * float(sc[0] * sc[1]) if kind != "none" else blade.area
+        if ltg is not None:
+            area_real = area_ltg
         want = sp.darts * area_real + dart_carry
         n_darts = int(math.floor(want))
         dart_carry = want - n_darts
@@ -882,9 +914,10 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
             n_darts = 0  # the margin did not move: no new blade
         if sp.placement == "largest_empty_circle":
             n_darts = 0
-            poly_now = blade.scaled(blade_scale)
+            poly_now = blade.scaled(blade_scale) if ltg is None else ltg_margin
             alive_now = np.flatnonzero(src.alive[:n_src])
-            new_src = largest_empty_circles(poly_now, lambda q, _s=blade_scale: blade.contains(q, _s),
+            contains = ltg_contains if ltg is not None else (lambda q, _s=blade_scale: blade.contains(q, _s))
+            new_src = largest_empty_circles(poly_now, contains,
                                             nodes.pos[:n_nodes], src.pos[alive_now], math.sqrt(bs2), math.sqrt(bv2),
                                             LEC_LIMIT)
             if n_src + len(new_src) > scap:
@@ -907,10 +940,10 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                 cand = _band_darts(blade, prev_sc if it > 0 else np.zeros(2), sc, n_darts, rng)
                 n_draw = len(cand)
             else:
-                poly_now = blade.scaled(blade_scale)
+                poly_now = blade.scaled(blade_scale) if ltg is None else ltg_margin
                 blo, bhi = poly_now.min(0), poly_now.max(0)
                 box_area = float(np.prod(bhi - blo))
-                area_int = blade.area * float(blade_scale[0] * blade_scale[1])
+                area_int = blade.area * float(blade_scale[0] * blade_scale[1]) if ltg is None else area_ltg
                 n_draw = int(math.ceil(n_darts * box_area / max(area_int, 1e-300)))
             if n_src + n_draw > scap:
                 scap = max(2 * scap, n_src + n_draw + 1024)
@@ -919,10 +952,11 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                                 src_grid.geom)
             if not margin_only:
                 cand = blo + (bhi - blo) * rng.random((n_draw, 2))
+            known = ltg_contains(cand) if ltg is not None else _NO_MASK
             prev_arg = np.ascontiguousarray(prev_sc if (margin_only and it > 0) else np.zeros(2), dtype=np.float64)
             before = n_src
             n_src = throw_darts(cand, base, np.ascontiguousarray(blade_scale, dtype=np.float64), prev_arg,
-                                blade.bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it)
+                                blade.bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it, known)
             placed = n_src - before
             for k_, p_ in enumerate(real(src.pos[before:n_src], lam).tolist()):
                 events.append((it, "source", before + k_, float(p_[0]), float(p_[1]), math.nan))
@@ -994,6 +1028,11 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                 live_now = np.flatnonzero(src.alive[:n_src]).astype(np.int64)
                 grid_insert_idx(src_grid, src.pos, live_now)
                 live = live_now
+        if ltg is not None:  # the new nodes and sources at t0 (eq. 5.1 solved for y0)
+            if n_nodes > len(node_mat):
+                node_mat = np.vstack([node_mat, ltg.inverse(nodes.pos[len(node_mat):n_nodes], t_ltg)])
+            if n_src > len(src_mat):
+                src_mat = np.vstack([src_mat, ltg.inverse(src.pos[len(src_mat):n_src], t_ltg)])
         timings["growth"] += time.perf_counter() - t2
         it += 1
         if progress is not None:
@@ -1016,7 +1055,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
     if on_frame is not None and frame_step > 0 and last_frame != it - 1:
         on_frame(snapshot(it - 1, lam, growth.scale_at(max(it - 1, 0))))
     sc_end = growth.scale_at(max(it - 1, 0))
-    margin = blade.scaled(sc_end if kind != "none" else 1.0)
+    margin = blade.scaled(sc_end if kind != "none" else 1.0) if ltg is None else ltg_margin
     return VenationResult(
         node_pos=real(nodes.pos[:n_nodes], lam), node_parent=nodes.parent[:n_nodes].copy(),
         node_iter=nodes.iteration[:n_nodes].copy(), extra_edges=extra[:n_extra].copy(), blade=margin,
