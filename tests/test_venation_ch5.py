@@ -283,3 +283,19 @@ def test_local_to_global_key_refusals(tmp_path, old, new, expect):
     text = f.read_text()
     assert old in text
     assert expect in _refused(tmp_path, text.replace(old, new), name="ltg.toml")
+
+
+def test_arabidopsis_example_midvein_before_loops(tmp_path):
+    from pathlib import Path
+
+    here = Path(__file__).resolve().parents[1] / "pipelines" / "examples" / "venation" / "arabidopsis_ltg.toml"
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, [str(here), "-o", str(out), "-q"])
+    assert r.exit_code == 0, r.output
+    ev = _events(out)
+    kinds = [e[1] for e in ev]
+    assert kinds[0] == "source" and ev[0][3] == pytest.approx(0.0, abs=1e-9)  # the tip, on the midline
+    mid = kinds.index("midvein")
+    first_loop = kinds.index("loop")
+    assert mid < first_loop
+    assert kinds[mid + 1:first_loop].count("source") >= 2  # margin sources before the first loops
