@@ -4,7 +4,8 @@
 
 Writes ``OUT_DIR/veins.obj`` (the venation graph as ``l`` polylines), ``OUT_DIR/veins.widths``,
 ``OUT_DIR/blade.obj`` + ``blade.mtl`` (the blade, textured), ``OUT_DIR/texture.png`` (the veins by
-width over the blade) and, with a frame step, ``OUT_DIR/frames/``. Parameters and files:
+width over the blade), ``OUT_DIR/events.csv`` (the developmental events in order: sources, the
+midvein, loops, blind vein ends) and, with a frame step, ``OUT_DIR/frames/``. Parameters and files:
 ``formats/venation.md``.
 """
 from __future__ import annotations

@@ -65,9 +65,14 @@ def _triangulate(pts: np.ndarray):
     if len(pts) < 3:
         return None
     try:
-        return Delaunay(pts, incremental=True)
+        return Delaunay(pts)
     except (QhullError, ValueError):  # collinear or repeated points: no triangle
         return None
+
+
+#: the new triangles of a source lie within this many times its circle's radius (its Delaunay
+#: neighbours after insertion bound empty circles no larger than the largest one in the blade)
+LOCAL_REACH = 2.5
 
 
 def largest_empty_circles(margin: np.ndarray, contains: Callable, node_pos: np.ndarray, src_pos: np.ndarray,
@@ -76,53 +81,68 @@ def largest_empty_circles(margin: np.ndarray, contains: Callable, node_pos: np.n
     of the largest circle, among the candidates, that is empty of vein nodes (``node_pos``), of
     sources (``src_pos`` and those placed before it) and farther than ``bs`` from every source and
     ``bv`` from every vein node; at most ``limit`` of them. ``contains(pts)`` says which points
-    lie in the blade, whose margin is the polygon ``margin``."""
+    lie in the blade, whose margin is the polygon ``margin``.
+
+    The triangulation of vein nodes and sources is made once; after each source is placed its
+    update is local: the candidates' distances to sources take the new one, and the circumcentres
+    of the triangles it makes with its Delaunay neighbours (found among the points within
+    :data:`LOCAL_REACH` times its circle's radius) join the candidates. A candidate's radius is
+    always its distance to the closest vein node or source, so every circle is empty."""
     node_pos = np.asarray(node_pos, dtype=np.float64).reshape(-1, 2)
     src_pos = np.asarray(src_pos, dtype=np.float64).reshape(-1, 2)
-    msamp = margin_samples(margin, 0.25 * min(bs, bv))
     node_tree = cKDTree(node_pos) if len(node_pos) else None
+    src_tree = cKDTree(src_pos) if len(src_pos) else None
 
-    def d_nodes(c):
-        if node_tree is None:
+    def d_tree(tree, c):
+        if tree is None:
             return np.full(len(c), np.inf)
-        return node_tree.query(c)[0]
+        return tree.query(c)[0]
 
-    dm_v = d_nodes(msamp)
-    dm_s = cKDTree(src_pos).query(msamp)[0] if len(src_pos) else np.full(len(msamp), np.inf)
+    cand = [margin_samples(margin, 0.25 * min(bs, bv))]
     allp = np.vstack([node_pos, src_pos])
     tri = _triangulate(allp)
+    if tri is not None:
+        cc = circumcentres(tri.points, tri.simplices)
+        cc = cc[np.isfinite(cc).all(1)]
+        if len(cc):
+            cand.append(cc[contains(cc)])
+    cand = np.vstack(cand)
+    dv = d_tree(node_tree, cand)
+    ds = d_tree(src_tree, cand)
     placed: list = []
     while len(placed) < limit:
-        if tri is None and len(placed):
-            tri = _triangulate(np.vstack([allp, np.asarray(placed)[:, :2]]))
-        cand, dv, ds = msamp, dm_v, dm_s
-        if tri is not None:
-            cc = circumcentres(tri.points, tri.simplices)
-            ok = np.isfinite(cc).all(1)
-            cc = cc[ok]
-            if len(cc):
-                cc = cc[contains(cc)]
-            if len(cc):
-                cs_v = d_nodes(cc)
-                srcs = np.vstack([src_pos, np.asarray(placed)[:, :2]]) if placed else src_pos
-                cs_s = cKDTree(srcs).query(cc)[0] if len(srcs) else np.full(len(cc), np.inf)
-                cand = np.vstack([msamp, cc])
-                dv = np.concatenate([dm_v, cs_v])
-                ds = np.concatenate([dm_s, cs_s])
-        r = np.minimum(dv, ds)
-        r = np.where((ds > bs) & (dv > bv), r, -np.inf)
-        i = int(np.argmax(r))
-        if not r[i] > 0.0:
+        r = np.where((ds > bs) & (dv > bv), np.minimum(dv, ds), -np.inf)
+        i = int(np.argmax(r)) if len(r) else 0
+        if not len(r) or not r[i] > 0.0:
             break
-        c = cand[i]
-        placed.append((float(c[0]), float(c[1]), float(r[i])))
-        # the new source in the margin samples' distances and in the triangulation
-        dm_s = np.minimum(dm_s, np.hypot(msamp[:, 0] - c[0], msamp[:, 1] - c[1]))
-        if tri is not None:
-            try:
-                tri.add_points(c[None])
-            except (QhullError, ValueError):
-                tri = None
-    if tri is not None:
-        tri.close()
+        c = cand[i].copy()
+        ri = float(r[i])
+        placed.append((float(c[0]), float(c[1]), ri))
+        ds = np.minimum(ds, np.hypot(cand[:, 0] - c[0], cand[:, 1] - c[1]))
+        # the new source's triangles: with its Delaunay neighbours, among the points near it
+        reach = LOCAL_REACH * ri
+        near = [allp[node_tree.query_ball_point(c, reach)]] if node_tree is not None else []
+        if src_tree is not None:
+            near.append(src_pos[src_tree.query_ball_point(c, reach)])
+        pl = np.asarray(placed)[:-1, :2].reshape(-1, 2)
+        if len(pl):
+            near.append(pl[np.hypot(pl[:, 0] - c[0], pl[:, 1] - c[1]) <= reach])
+        local = np.vstack(near + [c[None]]) if near else c[None]
+        lt = _triangulate(local)
+        if lt is None:
+            continue
+        k = len(local) - 1
+        mine = lt.simplices[(lt.simplices == k).any(1)]
+        cc = circumcentres(lt.points, mine)
+        cc = cc[np.isfinite(cc).all(1)]
+        if len(cc):
+            cc = cc[contains(cc)]
+        if not len(cc):
+            continue
+        srcs = np.asarray(placed)[:, :2]
+        ds_new = np.minimum(d_tree(src_tree, cc),
+                            np.sqrt(((cc[:, None, :] - srcs[None]) ** 2).sum(-1)).min(1))
+        cand = np.vstack([cand, cc])
+        dv = np.concatenate([dv, d_tree(node_tree, cc)])
+        ds = np.concatenate([ds, ds_new])
     return np.asarray(placed, dtype=np.float64).reshape(-1, 3)

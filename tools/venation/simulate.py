@@ -32,6 +32,13 @@ that vein reaches it the vein bifurcates toward the stored neighbours (:func:`gr
 fig. 5.5 e-g), stopping short of each: a blindly terminating vein (fig. 5.4 i). With ``inside``
 the veins are kept in the blade (for dissected leaves, :func:`grow_veins`).
 
+Runions ch. 5 also gives the loop deterministic source placement (sec. 5.2.2, ``placement``
+"largest_empty_circle", :mod:`.placement`: sources at the centres of the largest circles empty of
+vein nodes and sources, while they support one) and local-to-global growth (sec. 5.2.1, eq. 5.1,
+growth kind "local_to_global", :class:`.blade.LocalToGlobal`: vein nodes and sources are kept by
+their positions at t0 and moved to the blade's each step). The developmental events (sources, the
+midvein, loops closed, blind vein ends) are collected as they happen (``events``).
+
 Two guards keep the graph clean. A node whose new direction repeats its last one (its sources
 unchanged) grows toward its closest source instead (branch-gen's SCA does the same); a new node
 that would come closer than D/2 to an existing node grows toward the closest source instead, and
