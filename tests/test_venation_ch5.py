@@ -95,9 +95,10 @@ def _run(tmp_path, veins="", sources="", name="p.toml"):
 
 def _events(out):
     lines = (out / "events.csv").read_text().splitlines()
-    assert lines[0] == "iteration,event,index,x,y,measure"
+    assert lines[0] == "iteration,event,index,x,y,measure,order"
     rows = [ln.split(",") for ln in lines[1:]]
-    return [(int(r[0]), r[1], int(r[2]), float(r[3]), float(r[4]), float(r[5]) if r[5] else None) for r in rows]
+    return [(int(r[0]), r[1], int(r[2]), float(r[3]), float(r[4]), float(r[5]) if r[5] else None,
+             int(r[6]) if r[6] else None) for r in rows]
 
 
 @pytest.mark.parametrize("sources", ["", 'placement = "largest_empty_circle"'])
@@ -109,6 +110,8 @@ def test_events_loops_in_order_with_positive_areas(tmp_path, sources):
     assert len(loops) >= 3
     assert [e[2] for e in loops] == list(range(1, len(loops) + 1))
     assert all(e[5] > 0 for e in loops)
+    assert all(e[6] >= 1 for e in loops) and max(e[6] for e in loops) >= 2  # loops inside earlier loops
+    assert all(e[6] is None for e in ev if e[1] != "loop")
     mid = [e for e in ev if e[1] == "midvein"]
     assert len(mid) == 1 and mid[0][5] > 0
     assert ev.index(mid[0]) < ev.index(loops[0])

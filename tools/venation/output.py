@@ -129,16 +129,18 @@ def write_widths(path, widths, header: str = "") -> None:
         fh.write(format_widths(widths, header))
 
 
-EVENTS_HEADER = "iteration,event,index,x,y,measure"
+EVENTS_HEADER = "iteration,event,index,x,y,measure,order"
 
 
 def format_events(events) -> str:
-    """``events.csv``: one row per developmental event (iteration, event, index, x, y, measure), in
-    the order they happened; an unknown measure is empty."""
+    """``events.csv``: one row per developmental event (iteration, event, index, x, y, measure and,
+    for a loop, its order), in the order they happened; an unknown measure or order is empty."""
     lines = [EVENTS_HEADER + "\n"]
-    for it, name, index, x, y, m in events:
+    for e in events:
+        it, name, index, x, y, m = e[:6]
+        order = "" if len(e) < 7 or e[6] is None else str(int(e[6]))
         ms = "" if m is None or not np.isfinite(m) else "%.8f" % m
-        lines.append(f"{int(it)},{name},{int(index)},{x:.8f},{y:.8f},{ms}\n")
+        lines.append(f"{int(it)},{name},{int(index)},{x:.8f},{y:.8f},{ms},{order}\n")
     return "".join(lines)
 
 

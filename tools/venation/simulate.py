@@ -629,14 +629,40 @@ def _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2) -> bo
     return False
 
 
+@njit(cache=True)
+def _enclosing(px, py, pos, flat, offs, which):
+    """How many of the loops ``which`` (node cycles ``flat[offs[i]:offs[i+1]]``, at the nodes'
+    current positions) enclose the point (px, py) (even-odd rule)."""
+    count = 0
+    for i in which:
+        inside = False
+        lo, hi = offs[i], offs[i + 1]
+        m = hi - lo
+        for k in range(m):
+            a = flat[lo + k]
+            b = flat[lo + (k + 1) % m]
+            ax, ay = pos[a, 0], pos[a, 1]
+            bx, by = pos[b, 0], pos[b, 1]
+            if (ay > py) != (by > py):
+                if px < ax + (py - ay) * (bx - ax) / (by - ay):
+                    inside = not inside
+        if inside:
+            count += 1
+    return count
+
+
 class _Loops:
     """Loops closed by anastomoses: an edge (a, b) closes one when a and b are already connected
     (through the growth forest and the earlier anastomoses); the loop is the shortest path from a to
-    b (by length) plus the edge, and its polygon gives the area it encloses."""
+    b (by length) plus the edge, and its polygon gives the area it encloses. Its order is 1 + the
+    number of earlier loops that enclose its centroid (the loops it subdivides)."""
 
     def __init__(self, n_roots: int):
         self.uf = list(range(n_roots))
         self.count = 0
+        self.flat = np.zeros(1024, np.int64)
+        self.offs = np.zeros(1025, np.int64)
+        self.box = np.zeros((1024, 4))  # each loop's box in coordinates growth does not change
 
     def _find(self, i):
         while self.uf[i] != i:
@@ -644,7 +670,7 @@ class _Loops:
             i = self.uf[i]
         return i
 
-    def add(self, extra, e, nodes, n_nodes, lam, real, step):
+    def add(self, extra, e, nodes, n_nodes, lam, real, fixed):
         """The event of anastomosis ``extra[e]``: ("loop", index, cx, cy, area) or None."""
         a, b = int(extra[e, 0]), int(extra[e, 1])
         ra = self._find(_forest_root(nodes.parent, a))
@@ -656,7 +682,9 @@ class _Loops:
         path = _shortest_path(pos, nodes.parent, n_nodes, extra, e, a, b)
         if len(path) < 3:
             return None
-        poly = real(pos[path], lam)
+        cycle = pos[path]
+        c_in = cycle.mean(0)
+        poly = real(cycle, lam)
         x, y = poly[:, 0], poly[:, 1]
         cross = x * np.roll(y, -1) - np.roll(x, -1) * y
         area2 = float(cross.sum())
@@ -665,8 +693,27 @@ class _Loops:
         else:
             cx = float(((x + np.roll(x, -1)) * cross).sum() / (3.0 * area2))
             cy = float(((y + np.roll(y, -1)) * cross).sum() / (3.0 * area2))
+        nxt = np.roll(cycle, -1, axis=0)
+        cr = cycle[:, 0] * nxt[:, 1] - nxt[:, 0] * cycle[:, 1]
+        if cr.sum() != 0.0:  # the centroid in the simulation's coordinates (the loops' test)
+            c_in = ((cycle + nxt) * cr[:, None]).sum(0) / (3.0 * cr.sum())
+        n, end = self.count, self.offs[self.count]
+        fc = fixed(np.vstack([c_in[None], cycle]))
+        b = self.box[:n]
+        which = np.flatnonzero((b[:, 0] <= fc[0, 0]) & (fc[0, 0] <= b[:, 2]) & (b[:, 1] <= fc[0, 1]) & (fc[0, 1] <= b[:, 3]))
+        order = 1 + _enclosing(float(c_in[0]), float(c_in[1]), pos, self.flat, self.offs, which)
+        if n + 1 > len(self.box):
+            self.box = np.vstack([self.box, np.zeros_like(self.box)])
+        self.box[n, :2] = fc[1:].min(0)
+        self.box[n, 2:] = fc[1:].max(0)
+        if end + len(path) > len(self.flat):
+            self.flat = np.concatenate([self.flat, np.zeros(len(self.flat) + len(path), np.int64)])
+        if n + 2 > len(self.offs):
+            self.offs = np.concatenate([self.offs, np.zeros(len(self.offs), np.int64)])
+        self.flat[end:end + len(path)] = path
+        self.offs[n + 1] = end + len(path)
         self.count += 1
-        return ("loop", self.count, cx, cy, abs(area2) / 2.0)
+        return ("loop", self.count, cx, cy, abs(area2) / 2.0, order)
 
 
 _NO_MASK = np.zeros(0, np.bool_)
@@ -719,7 +766,8 @@ class VenationResult:
     blind_ends : int
         Veins of areole sources that stopped short of the node they headed for (sec. 5.2.4).
     events : list of (iteration, event, index, x, y, measure)
-        The developmental events in the order they happened (``events.csv``, formats/venation.md):
+        The developmental events in the order they happened (``events.csv``, formats/venation.md;
+        a loop's row adds its order):
         ``source`` placed (measure: the radius of its empty circle with the largest-empty-circle
         placement), ``midvein`` (the first source reached by a vein: measure the vein's length from
         its initial node), ``loop`` (an anastomosis that closes a cycle: x, y its centroid, measure
@@ -848,6 +896,14 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
 
     def ltg_contains(q):
         return blade.contains(ltg.inverse(q, t_ltg))
+
+    def fixed(q):
+        """Positions in coordinates that growth does not change (the loops' boxes)."""
+        if ltg is not None:
+            return ltg.inverse(q, t_ltg)
+        if kind == "anisotropic":
+            return base + (q - base) / prev_scale
+        return q
 
     last_frame = -1
     idle = 0
@@ -999,7 +1055,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         if not midvein_seen:
             midvein_seen = _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2)
         for e_ in range(extra_before, n_extra):
-            ev = loops.add(extra, e_, nodes, n_nodes, lam, real, D)
+            ev = loops.add(extra, e_, nodes, n_nodes, lam, real, fixed)
             if ev is not None:
                 events.append((it,) + ev)
         t2 = time.perf_counter()
