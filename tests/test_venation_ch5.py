@@ -302,3 +302,12 @@ def test_arabidopsis_example_midvein_before_loops(tmp_path):
     first_loop = kinds.index("loop")
     assert mid < first_loop
     assert kinds[mid + 1:first_loop].count("source") >= 2  # margin sources before the first loops
+
+
+def test_local_to_global_open_pattern_finishes(tmp_path):
+    f = _write_ltg(tmp_path, placement="darts")
+    f.write_text(f.read_text().replace('pattern = "closed"', 'pattern = "open"'))
+    out = tmp_path / "out"
+    r = CliRunner().invoke(main, [str(f), "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "max_iterations" not in r.output and "400 iterations" not in r.output

@@ -1035,7 +1035,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         nbr = np.full((k, MAX_NEIGHBOURS), -1, np.int64)
         nbr_n = np.zeros(k, np.int64)
         if k and n_nodes:
-            if nb_kind == NEAREST and kind != "anisotropic":
+            if nb_kind == NEAREST and kind not in ("anisotropic", "local_to_global"):
                 # nodes stay where they are: a source's nearest node changes only to a new one
                 nearest_incremental(src.pos, live, src.near, src.near_d2, nodes.pos, n_searched, n_nodes,
                                     node_grid, nbr, nbr_n)
