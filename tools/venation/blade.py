@@ -18,10 +18,10 @@ from numba import njit
 
 from inflo.tools.common import linalg as la
 
-__all__ = ["Blade", "BladeBands", "Growth", "blade_from_points", "inside_blade", "triangulate_blade",
+__all__ = ["Blade", "BladeBands", "Growth", "LocalToGlobal", "blade_from_points", "inside_blade", "triangulate_blade",
            "polygon_area", "self_intersections", "GROWTH_TYPES"]
 
-GROWTH_TYPES = ("none", "marginal", "uniform", "anisotropic")
+GROWTH_TYPES = ("none", "marginal", "uniform", "anisotropic", "local_to_global")
 """``none``: the blade does not grow; ``marginal``: the margin is scaled about the base, veins and
 sources stay (sec. 4.2.3); ``uniform``: isogonic growth, everything is scaled (by scaling the unit
 distance down instead, lambda_t = lambda_0 sigma_0 / sigma_t); ``anisotropic``: uniform
@@ -215,6 +215,69 @@ def blade_from_points(points, base=None) -> Blade:
 # growth
 
 
+class LocalToGlobal:
+    """The local-to-global growth model (Runions sec. 5.2.1, eq. 5.1, fig. 5.2).
+
+    The relative elementary rates of growth in the horizontal and vertical directions,
+    RERG_x(y0) and RERG_y(y0), are functions of y0, the initial vertical position of a point
+    (from the base B, normalized by the initial blade's height H above B: ``fx``, ``fy`` of
+    u = y0 / H in [0, 1], clamped). "By solving the equation dx/dt = x RERG_x(y0)", a point at
+    x1 at t1 is at x2 = x1 RERG_x(y0)^(t2 - t1) (x from B); in the vertical direction (eq. 5.1)
+    y1 = integral from 0 to y0 of RERG_y(y)^(t1 - t0) dy. Points are kept by their material
+    coordinates (their position at t0 = 0); a point made at time t is taken back to t0 by solving
+    eq. 5.1 for y0 ("a lookup table with precomputed values of integral (5.1)": the trapezoid rule
+    on ``samples`` values of u). Below B a point moves with the rates at u = 0, above the blade's
+    top with those at u = 1.
+    """
+
+    def __init__(self, fx, fy, base, height: float, samples: int = 4097):
+        self.base = np.asarray(base, dtype=np.float64).reshape(2)
+        self.height = float(height)
+        self.u = np.linspace(0.0, 1.0, samples)
+        self.rx = np.asarray(fx(self.u), dtype=np.float64)
+        self.ry = np.asarray(fy(self.u), dtype=np.float64)
+        self._tables: dict = {}
+
+    def table(self, t: float) -> np.ndarray:
+        """(samples,) the integral of eq. 5.1 from 0 to u H, at time t."""
+        key = float(t)
+        tab = self._tables.get(key)
+        if tab is None:
+            f = self.ry ** key
+            du = self.u[1] - self.u[0]
+            tab = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * du)]) * self.height
+            if len(self._tables) > 4:
+                self._tables.clear()
+            self._tables[key] = tab
+        return tab
+
+    def _rx(self, u, t):
+        return np.interp(np.clip(u, 0.0, 1.0), self.u, self.rx) ** t
+
+    def forward(self, mat, t: float) -> np.ndarray:
+        """(n, 2) positions at time t of points at ``mat`` (n, 2) at t0 (real coordinates)."""
+        m = np.asarray(mat, dtype=np.float64).reshape(-1, 2) - self.base
+        u = m[:, 1] / self.height
+        tab = self.table(t)
+        y = np.interp(np.clip(u, 0.0, 1.0), self.u, tab)
+        y = np.where(u > 1.0, tab[-1] + (m[:, 1] - self.height) * self.ry[-1] ** t, y)
+        y = np.where(u < 0.0, m[:, 1] * self.ry[0] ** t, y)
+        return self.base + np.column_stack([m[:, 0] * self._rx(u, t), y])
+
+    def inverse(self, pos, t: float) -> np.ndarray:
+        """(n, 2) positions at t0 of points at ``pos`` (n, 2) at time t (eq. 5.1 solved for y0)."""
+        p = np.asarray(pos, dtype=np.float64).reshape(-1, 2) - self.base
+        tab = self.table(t)
+        u = np.interp(p[:, 1], tab, self.u)
+        u = np.where(p[:, 1] > tab[-1], 1.0 + (p[:, 1] - tab[-1]) / (self.height * self.ry[-1] ** t), u)
+        u = np.where(p[:, 1] < 0.0, p[:, 1] / (self.height * self.ry[0] ** t), u)
+        return self.base + np.column_stack([p[:, 0] / self._rx(u, t), u * self.height])
+
+    def bound(self, t: float) -> np.ndarray:
+        """(2,) per-axis stretches no point exceeds at time t: max RERG_x^t, max RERG_y^t."""
+        return np.array([float(self.rx.max()) ** t, float(self.ry.max()) ** t])
+
+
 @dataclass(frozen=True)
 class Growth:
     """The growth schedule: the blade's scale (sx, sy) at every step (sec. 4.2.3).
@@ -230,13 +293,14 @@ class Growth:
     rate: tuple[float, float] = (0.0, 0.0)
     functions: tuple | None = None  # (fx, fy): callables of x in [0, 1]
     function_steps: int = 0
+    ltg: LocalToGlobal | None = None  # local-to-global growth (sec. 5.2.1); its steps are function_steps
 
     @property
     def steps(self) -> int:
         """Growth steps: after these the blade keeps its final size."""
         if self.kind == "none":
             return 0
-        if self.functions is not None:
+        if self.functions is not None or self.ltg is not None:
             return int(self.function_steps)
         n = 0
         for a, b, r in zip(self.initial, self.final, self.rate):
@@ -248,6 +312,8 @@ class Growth:
         """(2,) float64: (sx, sy) at step t (clamped to the end of growth)."""
         if self.kind == "none":
             return np.ones(2)
+        if self.ltg is not None:  # the blade is no scaled copy: the stretch that bounds it
+            return self.ltg.bound(min(max(t, 0), self.function_steps))
         if self.functions is not None:
             x = 1.0 if self.function_steps <= 0 else min(max(t / self.function_steps, 0.0), 1.0)
             return np.array([float(f(x)) for f in self.functions])
@@ -257,6 +323,14 @@ class Growth:
     @property
     def final_scale(self) -> np.ndarray:
         return self.scale_at(self.steps)
+
+    def margin(self, blade, t: int) -> np.ndarray:
+        """(m, 2): the margin of ``blade`` at step t."""
+        if self.kind == "none":
+            return blade.scaled(1.0)
+        if self.ltg is not None:
+            return self.ltg.forward(blade.polygon, min(max(t, 0), self.function_steps))
+        return blade.scaled(self.scale_at(t))
 
 
 # --------------------------------------------------------------------------------------------

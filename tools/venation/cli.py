@@ -4,7 +4,8 @@
 
 Writes ``OUT_DIR/veins.obj`` (the venation graph as ``l`` polylines), ``OUT_DIR/veins.widths``,
 ``OUT_DIR/blade.obj`` + ``blade.mtl`` (the blade, textured), ``OUT_DIR/texture.png`` (the veins by
-width over the blade) and, with a frame step, ``OUT_DIR/frames/``. Parameters and files:
+width over the blade), ``OUT_DIR/events.csv`` (the developmental events in order: sources, the
+midvein, loops, blind vein ends) and, with a frame step, ``OUT_DIR/frames/``. Parameters and files:
 ``formats/venation.md``.
 """
 from __future__ import annotations
@@ -34,11 +35,11 @@ def main(params, output, seed, frame_step, frame_textures, quiet, debug):
     check_frames(p, inputs, step, p.output.frame_textures if frame_textures is None else frame_textures,
                  option=frame_step is not None)
     limit = max(p.run.max_iterations, 1)
-    scale = p.growth.scale
-    files = [params] + ([p.blade.contour] if p.blade.contour else []) + (
-        (scale if isinstance(scale, list) else [scale]) if scale else [])
+    files = [params] + ([p.blade.contour] if p.blade.contour else [])
+    for named in (p.growth.scale, p.growth.rerg):
+        files += (named if isinstance(named, list) else [named]) if named else []
     # the earlier run's files are replaced only when this one completes (no new veins on an old texture)
-    stale = (r"veins\.obj", r"veins\.widths", r"blade\.obj", r"blade\.mtl", r"texture\.png",
+    stale = (r"veins\.obj", r"veins\.widths", r"events\.csv", r"blade\.obj", r"blade\.mtl", r"texture\.png",
              r"frames/(veins|blade|texture)_\d+\.(obj|widths|png|mtl)")
     with staged_output(output, "venation", stale_patterns=stale, inputs=[(f, "input") for f in files + referenced_files(params)],
                         subfolders=("frames",) if step else ()) as stage, \

@@ -25,6 +25,7 @@ from .output import (
     stale_frames,
     texture_box,
     write_blade_mesh,
+    write_events,
     write_graph,
     write_margin,
     write_widths,
@@ -56,7 +57,7 @@ def sim_params(p: Params, inputs: Inputs, seed: int | None = None) -> SimParams:
                      birth_vein=p.sources.birth_vein, darts=p.sources.darts,
                      roots=tuple(map(tuple, inputs.roots.tolist())), settle=p.sources.settle,
                      region=_region(p), blind_after=p.veins.blind_after, blind_gap=p.veins.blind_gap,
-                     inside=p.veins.inside,
+                     inside=p.veins.inside, placement=p.sources.placement,
                      max_iterations=p.run.max_iterations, max_nodes=p.run.max_nodes,
                      seed=p.run.seed if seed is None else seed)
 
@@ -82,7 +83,9 @@ def texture_style(p: Params) -> TextureStyle:
 def _header(p: Params, sp: SimParams, inputs: Inputs) -> str:
     g = inputs.growth
     grow = g.kind
-    if g.kind != "none":
+    if g.ltg is not None:
+        grow += f" (RERG_x, RERG_y of the initial y, sec. 5.2.1) in {g.steps} steps"
+    elif g.kind != "none":
         s0, s1 = g.scale_at(0), g.final_scale
         grow += f" {s0[0]:g}" + (f",{s0[1]:g}" if s0[1] != s0[0] else "") + f" -> {s1[0]:g}" + \
             (f",{s1[1]:g}" if s1[1] != s1[0] else "") + f" in {g.steps} steps"
@@ -90,6 +93,8 @@ def _header(p: Params, sp: SimParams, inputs: Inputs) -> str:
     nb += ", veins inside the blade" if sp.inside else ""
     return (f"venation (Runions ch. 4): {sp.pattern} pattern{nb}, growth {grow}; D {sp.step:g} d_k {sp.kill_distance:g} "
             f"b_s {sp.birth_source:g} b_v {sp.birth_vein:g} rho {sp.darts:g} ({sp.region}); seed {sp.seed}"
+            + ("; sources at the centres of the largest empty circles (sec. 5.2.2)"
+               if sp.placement == "largest_empty_circle" else "")
             + (f"; blind veinlets (areoles, sec. 5.2.4) from iteration {sp.blind_after}, gap {sp.blind_gap:g} D"
                if sp.blind_after >= 0 else "")
             + (f"; refined (sec. 5.2.6) at {p.refine.threshold:g}, alpha {p.refine.alpha:g}, jitter {p.refine.jitter:g}"
@@ -124,7 +129,7 @@ def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None,
     textures = p.output.frame_textures if frame_textures is None else frame_textures
     style = texture_style(p)
     g = inputs.growth
-    final_margin = inputs.blade.scaled(g.final_scale if g.kind != "none" else 1.0)
+    final_margin = g.margin(inputs.blade, g.steps)
     box = texture_box(final_margin)
     written: list = []
     frames: list[int] = []
@@ -168,7 +173,8 @@ def run_venation(p: Params, inputs: Inputs, out_dir, *, seed: int | None = None,
                             spacing=spacing)
     img = render_texture(res.node_pos, res.node_parent, widths, res.extra_edges, res.blade, style, box=box)
     save_png(img, out / "texture.png")
-    written += [out / n for n in ("veins.obj", "veins.widths", "blade.obj", "blade.mtl", "texture.png")]
+    write_events(out / "events.csv", res.events)
+    written += [out / n for n in ("veins.obj", "veins.widths", "blade.obj", "blade.mtl", "texture.png", "events.csv")]
     return VenationRun(result=res, widths=widths, orders=orders, loops=loops, written=written, mesh=mesh,
                        header=header, simulated_nodes=simulated)
 

@@ -16,7 +16,7 @@ from .blade import triangulate_blade
 from .graph import polylines
 
 __all__ = ["TextureStyle", "render_texture", "write_graph", "write_widths", "write_blade_mesh", "write_margin",
-           "format_widths", "texture_box", "WIDTH_FMT"]
+           "format_widths", "texture_box", "WIDTH_FMT", "format_events", "write_events", "EVENTS_HEADER"]
 
 WIDTH_FMT = "%.8f"
 
@@ -127,6 +127,26 @@ def format_widths(widths, header: str = "") -> str:
 def write_widths(path, widths, header: str = "") -> None:
     with atomic_write(path) as fh:
         fh.write(format_widths(widths, header))
+
+
+EVENTS_HEADER = "iteration,event,index,x,y,measure,order"
+
+
+def format_events(events) -> str:
+    """``events.csv``: one row per developmental event (iteration, event, index, x, y, measure and,
+    for a loop, its order), in the order they happened; an unknown measure or order is empty."""
+    lines = [EVENTS_HEADER + "\n"]
+    for e in events:
+        it, name, index, x, y, m = e[:6]
+        order = "" if len(e) < 7 or e[6] is None else str(int(e[6]))
+        ms = "" if m is None or not np.isfinite(m) else "%.8f" % m
+        lines.append(f"{int(it)},{name},{int(index)},{x:.8f},{y:.8f},{ms},{order}\n")
+    return "".join(lines)
+
+
+def write_events(path, events) -> None:
+    with atomic_write(path) as fh:
+        fh.write(format_events(events))
 
 
 def write_graph(path, node_pos, node_parent, extra_edges, header: str = "") -> None:

@@ -42,6 +42,9 @@ __all__ = ["SCHEMA", "Params", "Run", "BladeSpec", "GrowthSpec", "Veins", "Sourc
 PATTERNS = ("open", "closed")
 NEIGHBOURHOODS = ("relative", "urquhart")
 REGIONS = ("auto", "blade", "margin")
+PLACEMENTS = ("darts", "largest_empty_circle")
+#: sources.placement = "largest_empty_circle": circles of diameter min(b_s, b_v) the final blade holds at most
+MAX_CIRCLES = 20_000
 WIDTH_MODELS = ("pipe", "elongation")
 MAX_SAMPLES = 100_000
 #: blade coordinates (polygon, base, roots), blade.size and the growth scales: blade units
@@ -97,6 +100,7 @@ class GrowthSpec:
     rate: float | list = _key("scale", 0.01)
     scale: str | list = _key("paths", "")
     steps: int = _key("int", 0)
+    rerg: str | list = _key("paths", "")
 
 
 @dataclass(frozen=True)
@@ -122,6 +126,7 @@ class Sources:
     darts: float = _key("float", 0.01)
     region: str = _key(("choice", REGIONS), "auto")
     settle: int = _key("int", 10)
+    placement: str = _key(("choice", PLACEMENTS), "darts")
 
 
 @dataclass(frozen=True)
@@ -348,7 +353,20 @@ def _check_ranges(p: dict, where: ParamText) -> None:
     fin = np.broadcast_to(np.asarray(g["final"], float), (2,))
     if np.any(fin < ini):
         fail("growth", "final", ">= growth.initial (growth does not shrink the blade)")
-    if g["scale"]:
+    ltg = g["type"] == "local_to_global"
+    if ltg:
+        if not (isinstance(g["rerg"], list) and len(g["rerg"]) == 2):
+            fail("growth", "rerg" if g["rerg"] else "type", "with type = 'local_to_global': growth.rerg = "
+                 "[\"rerg_x.func\", \"rerg_y.func\"] (RERG_x and RERG_y of the initial y, sec. 5.2.1)")
+        if g["scale"]:
+            fail("growth", "scale", "absent with type = 'local_to_global' (growth.rerg gives the growth)")
+        if not 1 <= g["steps"] <= 10_000_000:
+            fail("growth", "steps", "in [1, 10000000] (the steps of local-to-global growth)")
+    elif g["rerg"]:
+        fail("growth", "rerg", "absent unless type = 'local_to_global'")
+    if ltg:
+        pass  # checked above
+    elif g["scale"]:
         if isinstance(g["scale"], list) and len(g["scale"]) == 2 and not aniso:
             fail("growth", "scale", "one .func (two need type = 'anisotropic')")
         if g["steps"] < 1:
@@ -379,6 +397,10 @@ def _check_ranges(p: dict, where: ParamText) -> None:
         fail("sources", "darts", "> 0 (darts per unit leaf area per step)")
     if s["region"] == "margin" and p["growth"]["type"] != "marginal":
         fail("sources", "region", "'margin' only with growth.type = 'marginal' (the band the margin sweeps)")
+    if ltg and v["inside"]:
+        fail("veins", "inside", "false with growth.type = 'local_to_global'")
+    if s["placement"] == "largest_empty_circle" and s["region"] == "margin":
+        fail("sources", "region", "'auto' or 'blade' with placement = 'largest_empty_circle' (no darts are thrown)")
     if s["settle"] < 0:
         fail("sources", "settle", ">= 0")
     if s["settle"] > 1_000_000:
@@ -493,7 +515,7 @@ def load_inputs(p: Params) -> Inputs:
     if p.blade.base is not None and not _in_or_on(blade, blade.base[None], 1.0, tol)[0]:
         raise FormatError(p.source, line_of(p.text, "blade", "base", LINES), "blade.base inside the blade or within veins.step of its margin",
                           repr(p.blade.base))
-    growth = _growth(p)
+    growth = _growth(p, blade)
     s0 = growth.scale_at(0)
     roots = np.asarray(p.veins.roots, dtype=np.float64).reshape(-1, 2) if p.veins.roots else blade.base[None].copy()
     kind = growth.kind
@@ -527,7 +549,7 @@ def _check_work(p: Params, blade: Blade, growth: Growth) -> None:
         fail("", "max_nodes", f"max_nodes <= {MAX_NODES}", f"{p.run.max_nodes}")
     steps = growth.steps
     if steps > p.run.max_iterations:
-        key = "steps" if growth.functions is not None else "rate"
+        key = "steps" if growth.functions is not None or growth.ltg is not None else "rate"
         fail("growth", key, f"growth that reaches its final size within max_iterations = {p.run.max_iterations} "
              "steps (a rate that grows the blade)", f"{steps} steps")
     fs = growth.final_scale if growth.kind != "none" else np.ones(2)
@@ -550,6 +572,14 @@ def _check_work(p: Params, blade: Blade, growth: Growth) -> None:
                                 ("sources", "birth_vein", p.sources.birth_vein)):
         if not value <= ext:
             fail(section, key, f"{section}.{key} <= the final blade's extent = {ext:.6g}", f"{value:g}")
+    if p.sources.placement == "largest_empty_circle":
+        b = min(p.sources.birth_source, p.sources.birth_vein)
+        room = area / (b * b)
+        if not room <= MAX_CIRCLES:
+            key = "birth_source" if p.sources.birth_source <= p.sources.birth_vein else "birth_vein"
+            fail("sources", key, f"min(sources.birth_source, birth_vein) >= sqrt(the final blade area {area:.6g} / "
+                 f"{MAX_CIRCLES}) = {math.sqrt(area / MAX_CIRCLES):.6g} with placement = 'largest_empty_circle' "
+                 f"(at most {MAX_CIRCLES} sources' room)", f"{b:g}")
     ms = p.output.mesh_spacing
     if ms and not ext / ms <= MAX_SPAN:
         fail("output", "mesh_spacing", f"output.mesh_spacing >= the final blade's extent / {MAX_SPAN} = "
@@ -603,10 +633,37 @@ def _in_or_on(blade: Blade, pts, scale, tol) -> np.ndarray:
     return inside | near
 
 
-def _growth(p: Params) -> Growth:
+#: local-to-global growth: the most a relative elementary rate of growth may stretch the blade
+MAX_STRETCH = 1e6
+
+
+def _growth(p: Params, blade: Blade) -> Growth:
     g = p.growth
     if g.type == "none":
         return Growth("none")
+    if g.type == "local_to_global":
+        from inflo.formats.func import read_func
+
+        from .blade import LocalToGlobal
+
+        fns = [read_func(f) for f in g.rerg]
+        line = line_of(p.text, "growth", "rerg", LINES)
+        for f, name, axis in zip(fns, g.rerg, "xy"):
+            ys = np.asarray(f.sampled()[1])
+            if not (np.all(np.isfinite(ys)) and ys.min() >= 1.0):
+                raise FormatError(p.source, line, f"growth.rerg's RERG_{axis} >= 1 everywhere (a relative elementary "
+                                  "rate of growth; the blade does not shrink)",
+                                  f"{Path(name).name} from {ys[0]:g} to {ys[-1]:g}, least {ys.min():g}")
+            stretch = g.steps * math.log(float(ys.max()))
+            if not stretch <= math.log(MAX_STRETCH):
+                raise FormatError(p.source, line, f"growth.rerg's RERG_{axis} ^ growth.steps <= {MAX_STRETCH:g} "
+                                  "(the stretch of the blade)", f"{Path(name).name} up to {ys.max():g} over "
+                                  f"{g.steps} steps")
+        height = float(blade.polygon[:, 1].max() - blade.base[1])
+        if not height > 0:
+            raise FormatError(p.source, line_of(p.text, "blade", "base", LINES), "a blade above its base for local-to-global "
+                              "growth (y0 is measured up from it)", repr(blade.base.tolist()))
+        return Growth(g.type, function_steps=g.steps, ltg=LocalToGlobal(fns[0], fns[1], blade.base, height))
     if g.scale:
         from inflo.formats.func import read_func
 

@@ -32,6 +32,13 @@ that vein reaches it the vein bifurcates toward the stored neighbours (:func:`gr
 fig. 5.5 e-g), stopping short of each: a blindly terminating vein (fig. 5.4 i). With ``inside``
 the veins are kept in the blade (for dissected leaves, :func:`grow_veins`).
 
+Runions ch. 5 also gives the loop deterministic source placement (sec. 5.2.2, ``placement``
+"largest_empty_circle", :mod:`.placement`: sources at the centres of the largest circles empty of
+vein nodes and sources, while they support one) and local-to-global growth (sec. 5.2.1, eq. 5.1,
+growth kind "local_to_global", :class:`.blade.LocalToGlobal`: vein nodes and sources are kept by
+their positions at t0 and moved to the blade's each step). The developmental events (sources, the
+midvein, loops closed, blind vein ends) are collected as they happen (``events``).
+
 Two guards keep the graph clean. A node whose new direction repeats its last one (its sources
 unchanged) grows toward its closest source instead (branch-gen's SCA does the same); a new node
 that would come closer than D/2 to an existing node grows toward the closest source instead, and
@@ -50,6 +57,7 @@ inside the blade (``inside``), when no vein node has been added for ``settle`` i
 """
 from __future__ import annotations
 
+import heapq
 import math
 import time
 from collections.abc import Callable
@@ -59,7 +67,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .blade import Blade, Growth, _inside, inside_blade
+from .blade import Blade, Growth, _inside, inside_blade, polygon_area
 from .neighbourhood import (
     HULL_DIRECTIONS,
     MAX_NEIGHBOURS,
@@ -76,6 +84,7 @@ from .neighbourhood import (
     nearest_incremental,
     relative_neighbourhoods,
 )
+from .placement import largest_empty_circles
 
 __all__ = ["SimParams", "VenationResult", "simulate", "Snapshot"]
 
@@ -103,6 +112,8 @@ class SimParams:
         to the relative neighbour it heads for (sec. 5.2.5: "less than D")
     inside : veins stay in the blade (a new node and the middle of its segment inside it); an open
         source whose closest node is stopped by this is removed (for dissected leaves)
+    placement : "darts" (dart throwing, sec. 4.2.3) or "largest_empty_circle" (sec. 5.2.2: each
+        iteration, sources at the centres of the largest empty circles while they support one)
     """
 
     pattern: str = "open"
@@ -118,6 +129,7 @@ class SimParams:
     blind_after: int = -1
     blind_gap: float = 1.0
     inside: bool = False
+    placement: str = "darts"
     max_iterations: int = 100_000
     max_nodes: int = 2_000_000
     seed: int = 1
@@ -197,14 +209,19 @@ def _first_within(x, y, r2, pos, grid, skip):
 
 
 @njit(cache=True)
-def throw_darts(cand, base, scale, prev_scale, bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it):
+def throw_darts(cand, base, scale, prev_scale, bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it,
+                known_inside):
     """Dart throwing (sec. 4.2.3): candidates ``cand`` (c, 2) in order; one inside the blade (at
     ``scale`` about ``base``) and, when ``prev_scale[0]`` > 0, outside the blade at ``prev_scale``
     (new sources only on the margin), farther than b_s from every live source and farther than b_v
     from every vein node becomes source ``n_src`` (inserted into ``src_grid``). Returns the new
-    count."""
+    count. ``known_inside`` (c,), when given (not empty), says instead which candidates lie in the
+    blade (a blade that is no scaled copy: local-to-global growth)."""
     inside = np.zeros(cand.shape[0], np.bool_)
-    inside_blade(cand, base, scale, bands, inside)
+    if known_inside.shape[0] == cand.shape[0] and cand.shape[0] > 0:
+        inside[:] = known_inside
+    else:
+        inside_blade(cand, base, scale, bands, inside)
     before = np.zeros(cand.shape[0], np.bool_)
     if prev_scale[0] > 0.0:
         inside_blade(cand, base, prev_scale, bands, before)
@@ -376,12 +393,13 @@ def update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra, n_extra
 
 
 @njit(cache=True)
-def grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, step, gap2, grid, it):
+def grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, step, gap2, grid, it, ended_out):
     """The veins of removed areole sources extending toward their stored relative neighbours
     (sec. 5.2.5, fig. 5.5 f-g): each sprout's tip grows one node D toward its target; a sprout
     closer than the gap to its target, or whose next node would come within D/2 of another node,
     stops there without joining it (after the event of sec. 5.2.4: a blindly terminating vein,
-    fig. 5.4 i). Finished sprouts are dropped. Returns (n_nodes, n_sprouts, veins ended)."""
+    fig. 5.4 i). Finished sprouts are dropped; ``ended_out`` (n_sprouts, 2) gets a row (tip, target)
+    per vein that ended. Returns (n_nodes, n_sprouts, veins ended)."""
     half2 = 0.25 * step * step
     kept = 0
     ended = 0
@@ -390,11 +408,13 @@ def grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, step, gap2, grid, it):
         dx, dy = nodes.pos[u, 0] - nodes.pos[t, 0], nodes.pos[u, 1] - nodes.pos[t, 1]
         d2 = dx * dx + dy * dy
         if d2 < gap2 or d2 <= 0.0:
+            ended_out[ended, 0], ended_out[ended, 1] = t, u
             ended += 1
             continue
         d = math.sqrt(d2)
         wx, wy = nodes.pos[t, 0] + step * dx / d, nodes.pos[t, 1] + step * dy / d
         if _first_within(wx, wy, half2, nodes.pos, grid, t) >= 0:
+            ended_out[ended, 0], ended_out[ended, 1] = t, u
             ended += 1
             continue
         w = _add_node(nodes, n_nodes, wx, wy, t, it, grid)
@@ -498,6 +518,210 @@ def grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, step, dk2, grid, i
     return n_nodes
 
 
+def _add_sources(src, n_src, src_grid, pts, it):
+    """Sources at ``pts`` (k, 2) placed in iteration ``it`` (as :func:`throw_darts` makes them);
+    returns the new count."""
+    for x, y in pts:
+        s = n_src
+        src.pos[s, 0], src.pos[s, 1] = x, y
+        src.alive[s] = True
+        src.born[s] = it
+        src.died[s] = -1
+        src.tag_iter[s] = -1
+        src.ntag[s] = 0
+        src.near[s] = -1
+        src.near_d2[s] = np.inf
+        src.areole[s] = False
+        grid_insert(src_grid, src.pos, s, s + 1)
+        n_src += 1
+    return n_src
+
+
+@njit(cache=True)
+def _forest_root(parent, v):
+    while parent[v] >= 0:
+        v = parent[v]
+    return v
+
+
+@njit(cache=True)
+def _shortest_path(pos, parent, n, extra, e, a, b):
+    """The shortest path (by length) from node a to node b over the growth forest's edges and the
+    anastomoses ``extra[:e]`` (Dijkstra); the nodes from b back to a, or empty when none."""
+    deg = np.zeros(n + 1, np.int64)
+    for v in range(n):
+        if parent[v] >= 0:
+            deg[v + 1] += 1
+            deg[parent[v] + 1] += 1
+    for k in range(e):
+        deg[extra[k, 0] + 1] += 1
+        deg[extra[k, 1] + 1] += 1
+    start = np.cumsum(deg)
+    fill = start[:-1].copy()
+    adj = np.empty(start[-1], np.int64)
+    for v in range(n):
+        u = parent[v]
+        if u >= 0:
+            adj[fill[v]] = u
+            fill[v] += 1
+            adj[fill[u]] = v
+            fill[u] += 1
+    for k in range(e):
+        u, v = extra[k, 0], extra[k, 1]
+        adj[fill[u]] = v
+        fill[u] += 1
+        adj[fill[v]] = u
+        fill[v] += 1
+    dist = np.full(n, np.inf)
+    pred = np.full(n, -1, np.int64)
+    done = np.zeros(n, np.bool_)
+    dist[a] = 0.0
+    heap = [(0.0, a)]
+    while len(heap):
+        d, v = heapq.heappop(heap)
+        if done[v]:
+            continue
+        done[v] = True
+        if v == b:
+            break
+        for q in range(start[v], start[v + 1]):
+            u = adj[q]
+            if done[u]:
+                continue
+            nd = d + math.sqrt((pos[u, 0] - pos[v, 0]) ** 2 + (pos[u, 1] - pos[v, 1]) ** 2)
+            if nd < dist[u]:
+                dist[u] = nd
+                pred[u] = v
+                heapq.heappush(heap, (nd, u))
+    if not done[b]:
+        return np.zeros(0, np.int64)
+    m = 1
+    w = b
+    while w != a:
+        w = pred[w]
+        m += 1
+    path = np.empty(m, np.int64)
+    w = b
+    for k in range(m):
+        path[k] = w
+        w = pred[w]
+    return path
+
+
+def _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2) -> bool:
+    """The midvein (fig. 5.1b, 5.7c): the first source reached by a vein, in iteration ``it``; the
+    event gives the reaching node and the vein's length from its initial node. True once seen."""
+    if not n_nodes:
+        return False
+    for s in np.flatnonzero(src.died[:n_src] == it).tolist():
+        d = ((nodes.pos[:n_nodes] - src.pos[s]) ** 2).sum(1)
+        v = int(np.argmin(d))
+        if not d[v] < dk2 or nodes.parent[v] < 0:  # removed unreached, or no vein grew to it
+            continue
+        length = 0.0
+        w = v
+        while nodes.parent[w] >= 0:
+            length += math.dist(nodes.pos[w], nodes.pos[nodes.parent[w]])
+            w = int(nodes.parent[w])
+        p = real(nodes.pos[v], lam)
+        events.append((it, "midvein", s, float(p[0]), float(p[1]), length / lam))
+        return True
+    return False
+
+
+@njit(cache=True)
+def _enclosing(px, py, pos, flat, offs, which):
+    """How many of the loops ``which`` (node cycles ``flat[offs[i]:offs[i+1]]``, at the nodes'
+    current positions) enclose the point (px, py) (even-odd rule)."""
+    count = 0
+    for i in which:
+        inside = False
+        lo, hi = offs[i], offs[i + 1]
+        m = hi - lo
+        for k in range(m):
+            a = flat[lo + k]
+            b = flat[lo + (k + 1) % m]
+            ax, ay = pos[a, 0], pos[a, 1]
+            bx, by = pos[b, 0], pos[b, 1]
+            if (ay > py) != (by > py):
+                if px < ax + (py - ay) * (bx - ax) / (by - ay):
+                    inside = not inside
+        if inside:
+            count += 1
+    return count
+
+
+class _Loops:
+    """Loops closed by anastomoses: an edge (a, b) closes one when a and b are already connected
+    (through the growth forest and the earlier anastomoses); the loop is the shortest path from a to
+    b (by length) plus the edge, and its polygon gives the area it encloses. Its order is 1 + the
+    number of earlier loops that enclose its centroid (the loops it subdivides)."""
+
+    def __init__(self, n_roots: int):
+        self.uf = list(range(n_roots))
+        self.count = 0
+        self.flat = np.zeros(1024, np.int64)
+        self.offs = np.zeros(1025, np.int64)
+        self.box = np.zeros((1024, 4))  # each loop's box in coordinates growth does not change
+
+    def _find(self, i):
+        while self.uf[i] != i:
+            self.uf[i] = self.uf[self.uf[i]]
+            i = self.uf[i]
+        return i
+
+    def add(self, extra, e, nodes, n_nodes, lam, real, fixed):
+        """The event of anastomosis ``extra[e]``: ("loop", index, cx, cy, area) or None."""
+        a, b = int(extra[e, 0]), int(extra[e, 1])
+        ra = self._find(_forest_root(nodes.parent, a))
+        rb = self._find(_forest_root(nodes.parent, b))
+        if ra != rb:
+            self.uf[ra] = rb
+            return None
+        pos = nodes.pos[:n_nodes]
+        path = _shortest_path(pos, nodes.parent, n_nodes, extra, e, a, b)
+        if len(path) < 3:
+            return None
+        cycle = pos[path]
+        c_in = cycle.mean(0)
+        poly = real(cycle, lam)
+        x, y = poly[:, 0], poly[:, 1]
+        cross = x * np.roll(y, -1) - np.roll(x, -1) * y
+        area2 = float(cross.sum())
+        if area2 == 0.0:
+            cx, cy = float(x.mean()), float(y.mean())
+        else:
+            cx = float(((x + np.roll(x, -1)) * cross).sum() / (3.0 * area2))
+            cy = float(((y + np.roll(y, -1)) * cross).sum() / (3.0 * area2))
+        nxt = np.roll(cycle, -1, axis=0)
+        cr = cycle[:, 0] * nxt[:, 1] - nxt[:, 0] * cycle[:, 1]
+        if cr.sum() != 0.0:  # the centroid in the simulation's coordinates (the loops' test)
+            c_in = ((cycle + nxt) * cr[:, None]).sum(0) / (3.0 * cr.sum())
+        n, end = self.count, self.offs[self.count]
+        fc = fixed(np.vstack([c_in[None], cycle]))
+        b = self.box[:n]
+        which = np.flatnonzero((b[:, 0] <= fc[0, 0]) & (fc[0, 0] <= b[:, 2]) & (b[:, 1] <= fc[0, 1]) & (fc[0, 1] <= b[:, 3]))
+        order = 1 + _enclosing(float(c_in[0]), float(c_in[1]), pos, self.flat, self.offs, which)
+        if n + 1 > len(self.box):
+            self.box = np.vstack([self.box, np.zeros_like(self.box)])
+        self.box[n, :2] = fc[1:].min(0)
+        self.box[n, 2:] = fc[1:].max(0)
+        if end + len(path) > len(self.flat):
+            self.flat = np.concatenate([self.flat, np.zeros(len(self.flat) + len(path), np.int64)])
+        if n + 2 > len(self.offs):
+            self.offs = np.concatenate([self.offs, np.zeros(len(self.offs), np.int64)])
+        self.flat[end:end + len(path)] = path
+        self.offs[n + 1] = end + len(path)
+        self.count += 1
+        return ("loop", self.count, cx, cy, abs(area2) / 2.0, order)
+
+
+_NO_MASK = np.zeros(0, np.bool_)
+
+#: sources placed in one iteration by the largest empty circle at most (params bounds the blade's room)
+LEC_LIMIT = 1_000_000
+
+
 # --------------------------------------------------------------------------------------------
 # the loop
 
@@ -541,6 +765,13 @@ class VenationResult:
         grow (the guards of :func:`grow_veins`).
     blind_ends : int
         Veins of areole sources that stopped short of the node they headed for (sec. 5.2.4).
+    events : list of (iteration, event, index, x, y, measure)
+        The developmental events in the order they happened (``events.csv``, formats/venation.md;
+        a loop's row adds its order):
+        ``source`` placed (measure: the radius of its empty circle with the largest-empty-circle
+        placement), ``midvein`` (the first source reached by a vein: measure the vein's length from
+        its initial node), ``loop`` (an anastomosis that closes a cycle: x, y its centroid, measure
+        the area it encloses), ``blind_end`` (measure: the gap left to the node it headed for).
     seconds : float
     """
 
@@ -557,6 +788,7 @@ class VenationResult:
     stopped: str
     sources_stalled: int = 0
     blind_ends: int = 0
+    events: list = field(default_factory=list)
     seconds: float = 0.0
     timings: dict = field(default_factory=dict)
 
@@ -647,9 +879,31 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         # the live sources of the snapshot only: the loop's own list must stay as it is (its
         # cells are cleared from the source grid at the next iteration)
         alive = np.flatnonzero(src.alive[:n_src])
-        margin = blade.scaled(sc_now if kind != "none" else 1.0)
+        margin = blade.scaled(sc_now if kind != "none" else 1.0) if ltg is None else ltg_margin
         return Snapshot(it_now, real(nodes.pos[:n_nodes], lam_now), nodes.parent[:n_nodes].copy(),
                         extra[:n_extra].copy(), margin, real(src.pos[alive], lam_now))
+
+    events: list = []  # (iteration, event, index, x, y, measure), in the order they happen
+    midvein_seen = False
+    loops = _Loops(len(roots))
+    # local-to-global growth (sec. 5.2.1): vein nodes and sources kept by their positions at t0
+    ltg = growth.ltg if kind == "local_to_global" else None
+    t_ltg = 0
+    node_mat = nodes.pos[:n_nodes].copy()
+    src_mat = np.zeros((0, 2))
+    ltg_margin = blade.polygon if ltg is None else ltg.forward(blade.polygon, 0)
+    area_ltg = abs(polygon_area(ltg_margin))
+
+    def ltg_contains(q):
+        return blade.contains(ltg.inverse(q, t_ltg))
+
+    def fixed(q):
+        """Positions in coordinates that growth does not change (the loops' boxes)."""
+        if ltg is not None:
+            return ltg.inverse(q, t_ltg)
+        if kind == "anisotropic":
+            return base + (q - base) / prev_scale
+        return q
 
     last_frame = -1
     idle = 0
@@ -678,6 +932,18 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                 grid_rebuild(node_grid, nodes.pos, np.arange(n_nodes, dtype=np.int64))
                 support[:] = -np.inf
                 hull_support(nodes.pos, 0, n_nodes, support)
+        elif ltg is not None:
+            blade_scale = np.ones(2)
+            t_now = min(it, n_growth)
+            if t_now != t_ltg:
+                t_ltg = t_now
+                nodes.pos[:n_nodes] = ltg.forward(node_mat[:n_nodes], t_ltg)
+                src.pos[:n_src] = ltg.forward(src_mat[:n_src], t_ltg)
+                grid_rebuild(node_grid, nodes.pos, np.arange(n_nodes, dtype=np.int64))
+                support[:] = -np.inf
+                hull_support(nodes.pos, 0, n_nodes, support)
+                ltg_margin = ltg.forward(blade.polygon, t_ltg)
+                area_ltg = abs(polygon_area(ltg_margin))
         elif kind == "marginal":
             blade_scale = sc
         else:
@@ -699,6 +965,8 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         # 2. auxin sources by dart throwing
         t0 = time.perf_counter()
         area_real = blade.area * float(sc[0] * sc[1]) if kind != "none" else blade.area
+        if ltg is not None:
+            area_real = area_ltg
         want = sp.darts * area_real + dart_carry
         n_darts = int(math.floor(want))
         dart_carry = want - n_darts
@@ -707,15 +975,38 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         margin_only = sp.region == "margin"
         if margin_only and it > 0 and not np.any(sc > prev_sc):
             n_darts = 0  # the margin did not move: no new blade
+        if sp.placement == "largest_empty_circle":
+            n_darts = 0
+            poly_now = blade.scaled(blade_scale) if ltg is None else ltg_margin
+            alive_now = np.flatnonzero(src.alive[:n_src])
+            contains = ltg_contains if ltg is not None else (lambda q, _s=blade_scale: blade.contains(q, _s))
+            new_src = largest_empty_circles(poly_now, contains,
+                                            nodes.pos[:n_nodes], src.pos[alive_now], math.sqrt(bs2), math.sqrt(bv2),
+                                            LEC_LIMIT)
+            if n_src + len(new_src) > scap:
+                scap = max(2 * scap, n_src + len(new_src) + 1024)
+                src = _grow_rows(src, scap)
+                src_grid = Grid(src_grid.head, np.concatenate([src_grid.nxt, np.full(scap - len(src_grid.nxt), -1, np.int64)]),
+                                src_grid.geom)
+            before = n_src
+            n_src = _add_sources(src, n_src, src_grid, new_src[:, :2], it)
+            placed = n_src - before
+            for k_, (x_, y_, r_) in enumerate(new_src.tolist()):
+                p_ = real(np.array([x_, y_]), lam)
+                events.append((it, "source", before + k_, float(p_[0]), float(p_[1]), r_ / lam))
+            if placed and closed and 0 <= sp.blind_after <= it:
+                src.areole[before:n_src] = True
+            if placed:
+                live = np.concatenate([live, np.arange(before, n_src, dtype=np.int64)])
         if n_darts > 0:
             if margin_only:
                 cand = _band_darts(blade, prev_sc if it > 0 else np.zeros(2), sc, n_darts, rng)
                 n_draw = len(cand)
             else:
-                poly_now = blade.scaled(blade_scale)
+                poly_now = blade.scaled(blade_scale) if ltg is None else ltg_margin
                 blo, bhi = poly_now.min(0), poly_now.max(0)
                 box_area = float(np.prod(bhi - blo))
-                area_int = blade.area * float(blade_scale[0] * blade_scale[1])
+                area_int = blade.area * float(blade_scale[0] * blade_scale[1]) if ltg is None else area_ltg
                 n_draw = int(math.ceil(n_darts * box_area / max(area_int, 1e-300)))
             if n_src + n_draw > scap:
                 scap = max(2 * scap, n_src + n_draw + 1024)
@@ -724,11 +1015,14 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                                 src_grid.geom)
             if not margin_only:
                 cand = blo + (bhi - blo) * rng.random((n_draw, 2))
+            known = ltg_contains(cand) if ltg is not None else _NO_MASK
             prev_arg = np.ascontiguousarray(prev_sc if (margin_only and it > 0) else np.zeros(2), dtype=np.float64)
             before = n_src
             n_src = throw_darts(cand, base, np.ascontiguousarray(blade_scale, dtype=np.float64), prev_arg,
-                                blade.bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it)
+                                blade.bands, src, n_src, src_grid, bs2, nodes, node_grid, bv2, it, known)
             placed = n_src - before
+            for k_, p_ in enumerate(real(src.pos[before:n_src], lam).tolist()):
+                events.append((it, "source", before + k_, float(p_[0]), float(p_[1]), math.nan))
             if placed and closed and 0 <= sp.blind_after <= it:
                 src.areole[before:n_src] = True
             if placed:
@@ -741,7 +1035,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         nbr = np.full((k, MAX_NEIGHBOURS), -1, np.int64)
         nbr_n = np.zeros(k, np.int64)
         if k and n_nodes:
-            if nb_kind == NEAREST and kind != "anisotropic":
+            if nb_kind == NEAREST and kind not in ("anisotropic", "local_to_global"):
                 # nodes stay where they are: a source's nearest node changes only to a new one
                 nearest_incremental(src.pos, live, src.near, src.near_d2, nodes.pos, n_searched, n_nodes,
                                     node_grid, nbr, nbr_n)
@@ -755,8 +1049,15 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         if n_sprouts + k * MAX_NEIGHBOURS > len(sprouts):
             sprouts = np.concatenate([sprouts, np.zeros((len(sprouts) + k * MAX_NEIGHBOURS, 2), np.int64)])
         gap2 = gap2_1 * lam * lam
+        extra_before = n_extra
         _, n_stalled, n_extra, n_sprouts = update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra,
                                                           n_extra, sprouts, n_sprouts, gap2, sp.inside)
+        if not midvein_seen:
+            midvein_seen = _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2)
+        for e_ in range(extra_before, n_extra):
+            ev = loops.add(extra, e_, nodes, n_nodes, lam, real, fixed)
+            if ev is not None:
+                events.append((it,) + ev)
         t2 = time.perf_counter()
         timings["sources"] += t2 - t1
         stalled_total += n_stalled
@@ -770,8 +1071,14 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         n_nodes = grow_veins(closed, live, nbr, nbr_n, src, nodes, n_nodes, D, dk2, node_grid, it, sp.inside, base,
                              np.ascontiguousarray(blade_scale, dtype=np.float64), blade.bands)
         if n_sprouts:
-            n_nodes, n_sprouts, ended = grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, D, gap2, node_grid, it)
+            ended_rows = np.zeros((n_sprouts, 2), np.int64)
+            n_nodes, n_sprouts, ended = grow_sprouts(sprouts, n_sprouts, nodes, n_nodes, D, gap2, node_grid, it,
+                                                     ended_rows)
             blind_ends += ended
+            for k_, (t_, u_) in enumerate(ended_rows[:ended].tolist()):
+                p_ = real(nodes.pos[t_], lam)
+                events.append((it, "blind_end", blind_ends - ended + k_ + 1, float(p_[0]), float(p_[1]),
+                               float(math.dist(nodes.pos[t_], nodes.pos[u_]) / lam)))
         if n_nodes > n_before:
             hull_support(nodes.pos, n_before, n_nodes, support)
             new = nodes.pos[n_before:n_nodes]
@@ -784,6 +1091,11 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                 live_now = np.flatnonzero(src.alive[:n_src]).astype(np.int64)
                 grid_insert_idx(src_grid, src.pos, live_now)
                 live = live_now
+        if ltg is not None:  # the new nodes and sources at t0 (eq. 5.1 solved for y0)
+            if n_nodes > len(node_mat):
+                node_mat = np.vstack([node_mat, ltg.inverse(nodes.pos[len(node_mat):n_nodes], t_ltg)])
+            if n_src > len(src_mat):
+                src_mat = np.vstack([src_mat, ltg.inverse(src.pos[len(src_mat):n_src], t_ltg)])
         timings["growth"] += time.perf_counter() - t2
         it += 1
         if progress is not None:
@@ -806,13 +1118,13 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
     if on_frame is not None and frame_step > 0 and last_frame != it - 1:
         on_frame(snapshot(it - 1, lam, growth.scale_at(max(it - 1, 0))))
     sc_end = growth.scale_at(max(it - 1, 0))
-    margin = blade.scaled(sc_end if kind != "none" else 1.0)
+    margin = blade.scaled(sc_end if kind != "none" else 1.0) if ltg is None else ltg_margin
     return VenationResult(
         node_pos=real(nodes.pos[:n_nodes], lam), node_parent=nodes.parent[:n_nodes].copy(),
         node_iter=nodes.iteration[:n_nodes].copy(), extra_edges=extra[:n_extra].copy(), blade=margin,
         source_pos=real(src.pos[:n_src], lam), source_born=src.born[:n_src].copy(),
         source_died=src.died[:n_src].copy(), iterations=it, growth_steps=n_growth, stopped=stopped,
-        sources_stalled=stalled_total, blind_ends=blind_ends,
+        sources_stalled=stalled_total, blind_ends=blind_ends, events=events,
         seconds=time.perf_counter() - t_start, timings=timings)
 
 
