@@ -95,7 +95,7 @@ def _run(tmp_path, veins="", sources="", name="p.toml"):
 
 def _events(out):
     lines = (out / "events.csv").read_text().splitlines()
-    assert lines[0] == "iteration,event,index,x,y,measure,order"
+    assert lines[0] == "iteration,event,index,x,y,measure,order,midvein"
     rows = [ln.split(",") for ln in lines[1:]]
     return [(int(r[0]), r[1], int(r[2]), float(r[3]), float(r[4]), float(r[5]) if r[5] else None,
              int(r[6]) if r[6] else None) for r in rows]

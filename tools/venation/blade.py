@@ -18,14 +18,16 @@ from numba import njit
 
 from inflo.tools.common import linalg as la
 
-__all__ = ["Blade", "BladeBands", "Growth", "LocalToGlobal", "blade_from_points", "inside_blade", "triangulate_blade",
+__all__ = ["Blade", "BladeBands", "Growth", "KeyFrames", "LocalToGlobal", "blade_from_points", "inside_blade", "triangulate_blade",
            "polygon_area", "self_intersections", "GROWTH_TYPES"]
 
-GROWTH_TYPES = ("none", "marginal", "uniform", "anisotropic", "local_to_global")
+GROWTH_TYPES = ("none", "marginal", "uniform", "anisotropic", "local_to_global", "key_frames")
 """``none``: the blade does not grow; ``marginal``: the margin is scaled about the base, veins and
 sources stay (sec. 4.2.3); ``uniform``: isogonic growth, everything is scaled (by scaling the unit
 distance down instead, lambda_t = lambda_0 sigma_0 / sigma_t); ``anisotropic``: uniform
-anisotropic growth (fig. 4.2d), a scale per axis applied to the blade, the veins and the sources."""
+anisotropic growth (fig. 4.2d), a scale per axis applied to the blade, the veins and the sources;
+``local_to_global``: relative elementary rates of growth of the initial height (sec. 5.2.1, eq. 5.1);
+``key_frames``: key-frame interpolation of blade surfaces (sec. 5.2.1, eq. 5.2, fig. 5.9)."""
 
 
 class BladeBands(NamedTuple):
@@ -278,6 +280,180 @@ class LocalToGlobal:
         return np.array([float(self.rx.max()) ** t, float(self.ry.max()) ** t])
 
 
+#: key-frame growth: margin samples per side of the (u, v) square, the inversion's start grid
+KF_SIDE_SAMPLES = 64
+KF_GRID = 65
+
+
+def _bernstein(s):
+    """(n, 4) cubic Bernstein values and (n, 4) their derivatives at s (n,)."""
+    r = 1.0 - s
+    b = np.stack([r * r * r, 3.0 * s * r * r, 3.0 * s * s * r, s * s * s], axis=-1)
+    d = np.stack([-3.0 * r * r, 3.0 * r * r - 6.0 * s * r, 6.0 * s * r - 3.0 * s * s, 3.0 * s * s], axis=-1)
+    return b, d
+
+
+def bezier_eval(control, u, v, derivatives: bool = False):
+    """The bicubic patch ``control`` (4, 4, 2) at (u, v) (n,): positions (n, 2) and, with
+    ``derivatives``, dQ/du and dQ/dv (n, 2) each. Sums in a fixed order (no BLAS)."""
+    bu, du = _bernstein(np.asarray(u, dtype=np.float64))
+    bv, dv = _bernstein(np.asarray(v, dtype=np.float64))
+    q = np.zeros(bu.shape[:-1] + (2,))
+    qu = np.zeros_like(q)
+    qv = np.zeros_like(q)
+    for i in range(4):
+        for j in range(4):
+            c = control[i, j]
+            w = (bu[..., i] * bv[..., j])[..., None]
+            q += w * c
+            if derivatives:
+                qu += (du[..., i] * bv[..., j])[..., None] * c
+                qv += (bu[..., i] * dv[..., j])[..., None] * c
+    return (q, qu, qv) if derivatives else q
+
+
+class KeyFrames:
+    """Key-frame interpolation of leaf-blade surfaces (Runions sec. 5.2.1, figs. 5.3, 5.9).
+
+    The growing blade is a set of surfaces with times S = {(Q_1, t_1), ..., (Q_n, t_n)}, each
+    Q_i(u, v): [0, 1]^2 -> R^2 a bicubic Bezier patch (a B-spline surface of one span: its control
+    net ``controls[i]`` (4, 4, 2)); at t_i <= t <= t_(i+1) the blade is
+    Q_t = (t_(i+1) - t) / (t_(i+1) - t_i) Q_i + (1 - (t_(i+1) - t) / (t_(i+1) - t_i)) Q_(i+1),
+    which, a patch being linear in its control points, is the patch of the interpolated net.
+    A vein node or source is kept by its (u, v) (its material coordinates): at time t it is at
+    Q_t(u, v). A new point P is embedded by point inversion, minimizing E_P(u, v) = ||Q_t(u, v) - P||
+    (eq. 5.2) from the nearest of a grid of samples of Q_t (the thesis starts from the nearest
+    embedded point; both are only a start) by damped Gauss-Newton steps kept in [0, 1]^2.
+    Before t_1 the blade is Q_1, after t_n it is Q_n. The margin is the image of the square's edges.
+    """
+
+    def __init__(self, controls, times):
+        self.controls = np.ascontiguousarray(np.asarray(controls, dtype=np.float64).reshape(-1, 4, 4, 2))
+        self.times = np.asarray(times, dtype=np.float64).reshape(-1)
+        if len(self.times) != len(self.controls) or len(self.times) < 1:
+            raise ValueError("one time per key frame")
+        if np.any(np.diff(self.times) <= 0):
+            raise ValueError("key-frame times must increase")
+        s = np.linspace(0.0, 1.0, KF_SIDE_SAMPLES + 1)[:-1]
+        one, zero = np.ones_like(s), np.zeros_like(s)
+        # the square's boundary, counter-clockwise in (u, v)
+        self._edge_uv = np.concatenate([np.column_stack([s, zero]), np.column_stack([one, s]),
+                                        np.column_stack([1.0 - s, one]), np.column_stack([zero, 1.0 - s])])
+        g = np.linspace(0.0, 1.0, KF_GRID)
+        gu, gv = np.meshgrid(g, g, indexing="ij")
+        self._grid_uv = np.column_stack([gu.ravel(), gv.ravel()])
+        self._cache: dict = {}
+
+    def control_at(self, t: float) -> np.ndarray:
+        """(4, 4, 2): the control net of Q_t (the key frames' nets interpolated linearly)."""
+        tt = self.times
+        if t <= tt[0]:
+            return self.controls[0]
+        if t >= tt[-1]:
+            return self.controls[-1]
+        i = int(np.searchsorted(tt, t, side="right")) - 1
+        a = (tt[i + 1] - t) / (tt[i + 1] - tt[i])
+        return a * self.controls[i] + (1.0 - a) * self.controls[i + 1]
+
+    def forward(self, mat, t: float) -> np.ndarray:
+        """(n, 2) positions at time t of the points with material coordinates (u, v) ``mat`` (n, 2)."""
+        m = np.asarray(mat, dtype=np.float64).reshape(-1, 2)
+        return bezier_eval(self.control_at(t), m[:, 0], m[:, 1])
+
+    def _state(self, t: float):
+        key = float(t)
+        st = self._cache.get(key)
+        if st is None:
+            from scipy.spatial import cKDTree
+
+            c = self.control_at(t)
+            margin = _dedupe_ring(bezier_eval(c, self._edge_uv[:, 0], self._edge_uv[:, 1]))
+            blade = blade_from_points(margin)
+            tree = cKDTree(bezier_eval(c, self._grid_uv[:, 0], self._grid_uv[:, 1]))
+            if len(self._cache) > 4:
+                self._cache.clear()
+            st = self._cache[key] = (c, blade, tree)
+        return st
+
+    def inverse(self, pos, t: float, iterations: int = 40) -> np.ndarray:
+        """(n, 2) material coordinates (u, v) in [0, 1]^2 of points ``pos`` (n, 2) at time t: the
+        minimizers of eq. 5.2 (the nearest point of the blade for a point outside it)."""
+        p = np.asarray(pos, dtype=np.float64).reshape(-1, 2)
+        if not len(p):
+            return np.zeros((0, 2))
+        c, _, tree = self._state(t)
+        _, k = tree.query(p)
+        uv = self._grid_uv[k].copy()
+        q = bezier_eval(c, uv[:, 0], uv[:, 1])
+        err = ((q - p) ** 2).sum(1)
+        for _ in range(iterations):
+            q, qu, qv = bezier_eval(c, uv[:, 0], uv[:, 1], derivatives=True)
+            r = q - p
+            # Gauss-Newton on E^2 with Levenberg damping: (J^T J + mu I) d = -J^T r
+            a11 = (qu * qu).sum(1)
+            a12 = (qu * qv).sum(1)
+            a22 = (qv * qv).sum(1)
+            g1 = (qu * r).sum(1)
+            g2 = (qv * r).sum(1)
+            mu = 1e-9 * (a11 + a22) + 1e-300
+            det = (a11 + mu) * (a22 + mu) - a12 * a12
+            d1 = -((a22 + mu) * g1 - a12 * g2) / det
+            d2 = -((a11 + mu) * g2 - a12 * g1) / det
+            ok = np.isfinite(d1) & np.isfinite(d2)
+            d1 = np.where(ok, d1, 0.0)
+            d2 = np.where(ok, d2, 0.0)
+            step = 1.0
+            cand = uv.copy()
+            better = np.zeros(len(p), np.bool_)
+            for _h in range(6):  # halve the step until E decreases (steepest-descent safeguard)
+                trial = np.clip(uv + step * np.column_stack([d1, d2]), 0.0, 1.0)
+                e = ((bezier_eval(c, trial[:, 0], trial[:, 1]) - p) ** 2).sum(1)
+                take = ~better & (e < err)
+                cand[take] = trial[take]
+                err = np.where(take, e, err)
+                better |= take
+                if better.all():
+                    break
+                step *= 0.5
+            moved = np.abs(cand - uv).max(1) if len(p) else np.zeros(0)
+            uv = cand
+            if not np.any(better & (moved > 1e-13)):
+                break
+        return uv
+
+    def margin(self, t: float) -> np.ndarray:
+        """(m, 2): the blade's margin at time t, counter-clockwise."""
+        return self._state(t)[1].polygon
+
+    def blade_at(self, t: float) -> Blade:
+        """The blade at time t (its margin and its base, the image of (0, 0))."""
+        return self._state(t)[1]
+
+    def contains(self, pts, t: float) -> np.ndarray:
+        """(n,) bool: points (n, 2) inside the blade at time t."""
+        return self._state(t)[1].contains(pts)
+
+    def extent(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi): a box holding the blade at every time (Q_t is a convex combination of two key
+        frames, whose control nets hold their patches)."""
+        pts = self.controls.reshape(-1, 2)
+        return pts.min(0), pts.max(0)
+
+    def bound(self, t: float) -> np.ndarray:
+        """(2,) the extent of the blade at time t over its extent at t_1, per axis (at least 1)."""
+        e0 = np.ptp(self.margin(self.times[0]), axis=0)
+        e = np.ptp(self.margin(t), axis=0)
+        return np.maximum(e / np.maximum(e0, 1e-300), 1.0)
+
+
+def _dedupe_ring(p: np.ndarray) -> np.ndarray:
+    """The ring ``p`` without points that repeat their predecessor (a collapsed edge of the square)."""
+    ext = float(np.ptp(p, axis=0).max()) if len(p) else 0.0
+    nxt = np.roll(p, 1, axis=0)
+    keep = np.abs(p - nxt).max(1) > 1e-12 * max(ext, 1e-300)
+    return p[keep] if keep.sum() >= 3 else p
+
+
 @dataclass(frozen=True)
 class Growth:
     """The growth schedule: the blade's scale (sx, sy) at every step (sec. 4.2.3).
@@ -294,13 +470,20 @@ class Growth:
     functions: tuple | None = None  # (fx, fy): callables of x in [0, 1]
     function_steps: int = 0
     ltg: LocalToGlobal | None = None  # local-to-global growth (sec. 5.2.1); its steps are function_steps
+    kf: KeyFrames | None = None  # key-frame interpolation (sec. 5.2.1); its steps are function_steps
+
+    @property
+    def material(self):
+        """The growth that moves every point by its material coordinates (local-to-global or key
+        frames), or None."""
+        return self.ltg if self.ltg is not None else self.kf
 
     @property
     def steps(self) -> int:
         """Growth steps: after these the blade keeps its final size."""
         if self.kind == "none":
             return 0
-        if self.functions is not None or self.ltg is not None:
+        if self.functions is not None or self.material is not None:
             return int(self.function_steps)
         n = 0
         for a, b, r in zip(self.initial, self.final, self.rate):
@@ -314,6 +497,8 @@ class Growth:
             return np.ones(2)
         if self.ltg is not None:  # the blade is no scaled copy: the stretch that bounds it
             return self.ltg.bound(min(max(t, 0), self.function_steps))
+        if self.kf is not None:
+            return self.kf.bound(min(max(t, 0), self.function_steps))
         if self.functions is not None:
             x = 1.0 if self.function_steps <= 0 else min(max(t / self.function_steps, 0.0), 1.0)
             return np.array([float(f(x)) for f in self.functions])
@@ -330,6 +515,8 @@ class Growth:
             return blade.scaled(1.0)
         if self.ltg is not None:
             return self.ltg.forward(blade.polygon, min(max(t, 0), self.function_steps))
+        if self.kf is not None:
+            return self.kf.margin(min(max(t, 0), self.function_steps))
         return blade.scaled(self.scale_at(t))
 
 

@@ -85,6 +85,8 @@ def _header(p: Params, sp: SimParams, inputs: Inputs) -> str:
     grow = g.kind
     if g.ltg is not None:
         grow += f" (RERG_x, RERG_y of the initial y, sec. 5.2.1) in {g.steps} steps"
+    elif g.kf is not None:
+        grow += f" ({len(g.kf.times)} blade surfaces interpolated, sec. 5.2.1) in {g.steps} steps"
     elif g.kind != "none":
         s0, s1 = g.scale_at(0), g.final_scale
         grow += f" {s0[0]:g}" + (f",{s0[1]:g}" if s0[1] != s0[0] else "") + f" -> {s1[0]:g}" + \

@@ -129,18 +129,20 @@ def write_widths(path, widths, header: str = "") -> None:
         fh.write(format_widths(widths, header))
 
 
-EVENTS_HEADER = "iteration,event,index,x,y,measure,order"
+EVENTS_HEADER = "iteration,event,index,x,y,measure,order,midvein"
 
 
 def format_events(events) -> str:
     """``events.csv``: one row per developmental event (iteration, event, index, x, y, measure and,
-    for a loop, its order), in the order they happened; an unknown measure or order is empty."""
+    for a loop, its order and whether it runs along the midvein), in the order they happened; an
+    unknown measure, order or flag is empty."""
     lines = [EVENTS_HEADER + "\n"]
     for e in events:
         it, name, index, x, y, m = e[:6]
         order = "" if len(e) < 7 or e[6] is None else str(int(e[6]))
+        mid = "" if len(e) < 8 or e[7] is None else str(int(e[7]))
         ms = "" if m is None or not np.isfinite(m) else "%.8f" % m
-        lines.append(f"{int(it)},{name},{int(index)},{x:.8f},{y:.8f},{ms},{order}\n")
+        lines.append(f"{int(it)},{name},{int(index)},{x:.8f},{y:.8f},{ms},{order},{mid}\n")
     return "".join(lines)
 
 

@@ -51,6 +51,8 @@ MAX_SAMPLES = 100_000
 MAX_COORDINATE = 1e6
 #: initial vein nodes (veins.roots)
 MAX_ROOTS = 1_000_000
+#: growth.key_frames: the most key frames
+MAX_KEY_FRAMES = 1_000
 MAX_TEXTURE = 16_384
 
 _NUM = (int, float)
@@ -62,7 +64,7 @@ def _key(kind, default):
     Kinds: ``"float"``, ``"int"``, ``"str"``, ``"bool"``, ``("choice", options)``, ``"path"`` (a file
     name, resolved against the parameter file; "" for none), ``"point"`` ([x, y]), ``"points"``
     (a list of [x, y]), ``"scale"`` (a number or [sx, sy]), ``"paths"`` (one file name or a list of
-    one or two), ``"color"`` ("#rrggbb"; "" for none where allowed).
+    one or two), ``"files"`` (a list of file names), ``"numbers"`` (a list of numbers), ``"color"`` ("#rrggbb"; "" for none where allowed).
     """
     if isinstance(default, list):
         return field(default_factory=lambda: list(default), metadata={"kind": kind})
@@ -101,6 +103,8 @@ class GrowthSpec:
     scale: str | list = _key("paths", "")
     steps: int = _key("int", 0)
     rerg: str | list = _key("paths", "")
+    key_frames: list = _key("files", [])
+    times: list = _key("numbers", [])
 
 
 @dataclass(frozen=True)
@@ -283,6 +287,14 @@ def _check(value, kind, section, key, w: ParamText, base):
             return ""
         out = [str(Path(v) if Path(v).is_absolute() else base / v) for v in items]
         return out[0] if isinstance(value, str) else out
+    if kind == "files":
+        if not isinstance(value, list) or not 1 <= len(value) <= MAX_KEY_FRAMES or not all(isinstance(v, str) and v for v in value):
+            raise bad(f"a list of 1 to {MAX_KEY_FRAMES} file names")
+        return [str(Path(v) if Path(v).is_absolute() else base / v) for v in value]
+    if kind == "numbers":
+        if not isinstance(value, list) or not 1 <= len(value) <= MAX_KEY_FRAMES or not all(number(v) for v in value):
+            raise bad(f"a list of 1 to {MAX_KEY_FRAMES} finite numbers")
+        return [float(v) for v in value]
     if kind == "point":
         if not isinstance(value, list) or len(value) != 2 or not all(number(v) for v in value):
             raise bad("[x, y]")
@@ -317,9 +329,14 @@ def _check_ranges(p: dict, where: ParamText) -> None:
     if not 0 <= r["seed"] <= 2**32 - 1:
         fail("", "seed", "in [0, 4294967295]")
     b = p["blade"]
+    g = p["growth"]
+    kf = g["type"] == "key_frames"
+    if kf and (b["contour"] or b["polygon"]):
+        fail("blade", "contour" if b["contour"] else "polygon", "absent with growth.type = 'key_frames' (the first key "
+             "frame is the blade)")
     if b["contour"] and b["polygon"]:
         fail("blade", "polygon", "absent when blade.contour is given (one blade)")
-    if not b["contour"] and not b["polygon"]:
+    if not b["contour"] and not b["polygon"] and not kf:
         raise FormatError(where.path, where.line("blade", None), "a blade: [blade] contour = \"leaf.con\" or "
                           "polygon = [[x, y], ...]", "neither")
     if b["polygon"] and len(b["polygon"]) < 3:
@@ -364,7 +381,27 @@ def _check_ranges(p: dict, where: ParamText) -> None:
             fail("growth", "steps", "in [1, 10000000] (the steps of local-to-global growth)")
     elif g["rerg"]:
         fail("growth", "rerg", "absent unless type = 'local_to_global'")
-    if ltg:
+    if kf:
+        if len(g["key_frames"]) < 2:
+            fail("growth", "key_frames" if g["key_frames"] else "type", "with type = 'key_frames': growth.key_frames = "
+                 "[\"a.s\", \"b.s\", ...], at least two blade surfaces (sec. 5.2.1, fig. 5.9)")
+        if len(g["times"]) != len(g["key_frames"]):
+            fail("growth", "times" if g["times"] else "key_frames", f"growth.times: one iteration per key frame "
+                 f"({len(g['key_frames'])})")
+        tt = g["times"]
+        if tt[0] != 0 or any(b_ <= a_ for a_, b_ in zip(tt, tt[1:])) or any(t_ != int(t_) for t_ in tt):
+            fail("growth", "times", "whole iterations increasing from 0 (the time of each key frame)")
+        if tt[-1] > 10_000_000:
+            fail("growth", "times", "<= 10000000 (the steps of key-frame growth)")
+        if g["scale"] or g["steps"]:
+            fail("growth", "scale" if g["scale"] else "steps", "absent with type = 'key_frames' (growth.times gives "
+                 "the steps)")
+    else:
+        if g["key_frames"]:
+            fail("growth", "key_frames", "absent unless type = 'key_frames'")
+        if g["times"]:
+            fail("growth", "times", "absent unless type = 'key_frames'")
+    if ltg or kf:
         pass  # checked above
     elif g["scale"]:
         if isinstance(g["scale"], list) and len(g["scale"]) == 2 and not aniso:
@@ -397,8 +434,8 @@ def _check_ranges(p: dict, where: ParamText) -> None:
         fail("sources", "darts", "> 0 (darts per unit leaf area per step)")
     if s["region"] == "margin" and p["growth"]["type"] != "marginal":
         fail("sources", "region", "'margin' only with growth.type = 'marginal' (the band the margin sweeps)")
-    if ltg and v["inside"]:
-        fail("veins", "inside", "false with growth.type = 'local_to_global'")
+    if (ltg or kf) and v["inside"]:
+        fail("veins", "inside", f"false with growth.type = '{g['type']}'")
     if s["placement"] == "largest_empty_circle" and s["region"] == "margin":
         fail("sources", "region", "'auto' or 'blade' with placement = 'largest_empty_circle' (no darts are thrown)")
     if s["settle"] < 0:
@@ -503,19 +540,21 @@ def load_inputs(p: Params) -> Inputs:
         area, a base or initial vein node outside the blade at its initial size (by more than D), a growth function
         that is not positive and non-decreasing.
     """
-    margin = _margin(p)
+    kf = _key_frames(p) if p.growth.type == "key_frames" else None
+    margin = _margin(p) if kf is None else kf.margin(0)
     try:
-        blade = blade_from_points(margin, base=p.blade.base)
+        base = p.blade.base if kf is None or p.blade.base is not None else [0.0, 0.0]
+        blade = blade_from_points(margin, base=base)
     except ValueError as exc:
         key = "polygon" if p.blade.polygon else "contour"
         raise FormatError(p.source, line_of(p.text, "blade", key, LINES), f"a simple closed margin for blade.{key}",
                           str(exc)) from None
     ext = float(np.ptp(blade.polygon, axis=0).max())
     tol = max(1e-6 * ext, p.veins.step)  # within D of the sampled margin counts as on it
-    if p.blade.base is not None and not _in_or_on(blade, blade.base[None], 1.0, tol)[0]:
+    if (p.blade.base is not None or kf is not None) and not _in_or_on(blade, blade.base[None], 1.0, tol)[0]:
         raise FormatError(p.source, line_of(p.text, "blade", "base", LINES), "blade.base inside the blade or within veins.step of its margin",
                           repr(p.blade.base))
-    growth = _growth(p, blade)
+    growth = _growth(p, blade) if kf is None else Growth("key_frames", function_steps=int(p.growth.times[-1]), kf=kf)
     s0 = growth.scale_at(0)
     roots = np.asarray(p.veins.roots, dtype=np.float64).reshape(-1, 2) if p.veins.roots else blade.base[None].copy()
     kind = growth.kind
@@ -549,7 +588,8 @@ def _check_work(p: Params, blade: Blade, growth: Growth) -> None:
         fail("", "max_nodes", f"max_nodes <= {MAX_NODES}", f"{p.run.max_nodes}")
     steps = growth.steps
     if steps > p.run.max_iterations:
-        key = "steps" if growth.functions is not None or growth.ltg is not None else "rate"
+        key = ("times" if growth.kf is not None else "steps" if growth.functions is not None or growth.ltg is not None
+               else "rate")
         fail("growth", key, f"growth that reaches its final size within max_iterations = {p.run.max_iterations} "
              "steps (a rate that grows the blade)", f"{steps} steps")
     fs = growth.final_scale if growth.kind != "none" else np.ones(2)
@@ -631,6 +671,43 @@ def _in_or_on(blade: Blade, pts, scale, tol) -> np.ndarray:
     inside = blade.contains(pts, scale)
     near = blade.distance_to_margin(pts, scale) <= tol * max(float(np.max(scale)), 1.0)
     return inside | near
+
+
+def _key_frames(p: Params):
+    """The key frames of ``growth.key_frames`` (Bezier surface files, formats/bezier_surface.md), each
+    placed as lpfg places a surface (contact point at the origin, heading along +y, up along +z,
+    lengths divided by SIZE) and seen from +z (z dropped): one patch each, its margin a simple curve,
+    not folded over itself, within the coordinate bound."""
+    from inflo.formats.bezier_surface import read_bezier_surface
+
+    from .blade import KeyFrames, _dedupe_ring, bezier_eval, blade_from_points
+
+    line = line_of(p.text, "growth", "key_frames", LINES)
+    nets = []
+    g = np.linspace(0.02, 0.98, 25)
+    gu, gv = np.meshgrid(g, g, indexing="ij")
+    edge = KeyFrames(np.zeros((1, 4, 4, 2)), [0.0])._edge_uv
+    for name in p.growth.key_frames:
+        surf = read_bezier_surface(name)
+        if len(surf.patches) != 1:
+            raise FormatError(p.source, line, "key frames of one Bezier patch each (a blade surface Q(u, v))",
+                              f"{Path(name).name} with {len(surf.patches)} patches")
+        net = np.asarray(surf.to_turtle_frame().patches[0].control_points, dtype=np.float64)[:, :, :2].copy()
+        if not np.abs(net).max() <= MAX_COORDINATE:
+            raise FormatError(p.source, line, f"key frames with coordinates within +-{MAX_COORDINATE:g}", Path(name).name)
+        _, qu, qv = bezier_eval(net, gu.ravel(), gv.ravel(), derivatives=True)
+        det = qu[:, 0] * qv[:, 1] - qu[:, 1] * qv[:, 0]
+        scale = float(np.abs(det).max())
+        if not scale > 0 or (det.min() < -1e-9 * scale and det.max() > 1e-9 * scale):
+            raise FormatError(p.source, line, "key frames that do not fold over themselves (Q(u, v) one-to-one)",
+                              f"{Path(name).name}, whose patch folds")
+        try:
+            blade_from_points(_dedupe_ring(bezier_eval(net, edge[:, 0], edge[:, 1])))
+        except ValueError as exc:
+            raise FormatError(p.source, line, "key frames whose margin is a simple closed curve",
+                              f"{Path(name).name}: {exc}") from None
+        nets.append(net)
+    return KeyFrames(nets, p.growth.times)
 
 
 #: local-to-global growth: the most a relative elementary rate of growth may stretch the blade

@@ -608,11 +608,12 @@ def _shortest_path(pos, parent, n, extra, e, a, b):
     return path
 
 
-def _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2) -> bool:
+def _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2):
     """The midvein (fig. 5.1b, 5.7c): the first source reached by a vein, in iteration ``it``; the
-    event gives the reaching node and the vein's length from its initial node. True once seen."""
+    event gives the reaching node and the vein's length from its initial node. Returns the
+    midvein's nodes (from the reaching node to the initial node) once seen, else None."""
     if not n_nodes:
-        return False
+        return None
     for s in np.flatnonzero(src.died[:n_src] == it).tolist():
         d = ((nodes.pos[:n_nodes] - src.pos[s]) ** 2).sum(1)
         v = int(np.argmin(d))
@@ -620,13 +621,15 @@ def _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2) -> bo
             continue
         length = 0.0
         w = v
+        chain = [v]
         while nodes.parent[w] >= 0:
             length += math.dist(nodes.pos[w], nodes.pos[nodes.parent[w]])
             w = int(nodes.parent[w])
+            chain.append(w)
         p = real(nodes.pos[v], lam)
         events.append((it, "midvein", s, float(p[0]), float(p[1]), length / lam))
-        return True
-    return False
+        return np.asarray(chain, np.int64)
+    return None
 
 
 @njit(cache=True)
@@ -655,9 +658,12 @@ class _Loops:
     """Loops closed by anastomoses: an edge (a, b) closes one when a and b are already connected
     (through the growth forest and the earlier anastomoses); the loop is the shortest path from a to
     b (by length) plus the edge, and its polygon gives the area it encloses. Its order is 1 + the
-    number of earlier loops that enclose its centroid (the loops it subdivides)."""
+    number of earlier loops that enclose its centroid (the loops it subdivides). A loop that runs
+    along the midvein (two or more of its nodes on it) is a loop of secondary veins, as the loops
+    of fig. 5.7e-g (``midvein`` 1 in events.csv)."""
 
     def __init__(self, n_roots: int):
+        self.midvein = np.zeros(0, np.int64)  # the midvein's nodes, once it has formed
         self.uf = list(range(n_roots))
         self.count = 0
         self.flat = np.zeros(1024, np.int64)
@@ -713,7 +719,8 @@ class _Loops:
         self.flat[end:end + len(path)] = path
         self.offs[n + 1] = end + len(path)
         self.count += 1
-        return ("loop", self.count, cx, cy, abs(area2) / 2.0, order)
+        on_mid = int(np.isin(path, self.midvein).sum() >= 2)
+        return ("loop", self.count, cx, cy, abs(area2) / 2.0, order, on_mid)
 
 
 _NO_MASK = np.zeros(0, np.bool_)
@@ -835,6 +842,8 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         roots = base + (roots - base) * s0
     blade_box_scale = s0 if kind == "uniform" else (s_end if kind != "none" else np.ones(2))
     poly_box = blade.scaled(np.maximum(blade_box_scale, s0) if kind != "uniform" else s0)
+    if growth.kf is not None:  # a box holding the blade at every time
+        poly_box = np.vstack(growth.kf.extent())
     lo = np.minimum(poly_box.min(0), roots.min(0))
     hi = np.maximum(poly_box.max(0), roots.max(0))
     pad = 2.0 * sp.step + 1e-9 * float(np.max(hi - lo))
@@ -887,14 +896,22 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
     midvein_seen = False
     loops = _Loops(len(roots))
     # local-to-global growth (sec. 5.2.1): vein nodes and sources kept by their positions at t0
-    ltg = growth.ltg if kind == "local_to_global" else None
+    # key-frame interpolation (sec. 5.2.1, eq. 5.2): kept by their (u, v) on the blade surface
+    ltg = growth.material if kind in ("local_to_global", "key_frames") else None
+    kf = growth.kf if kind == "key_frames" else None
     t_ltg = 0
-    node_mat = nodes.pos[:n_nodes].copy()
+    node_mat = nodes.pos[:n_nodes].copy() if kf is None else kf.inverse(nodes.pos[:n_nodes], 0)
     src_mat = np.zeros((0, 2))
-    ltg_margin = blade.polygon if ltg is None else ltg.forward(blade.polygon, 0)
+
+    def mat_margin(t_):
+        return kf.margin(t_) if kf is not None else ltg.forward(blade.polygon, t_)
+
+    ltg_margin = blade.polygon if ltg is None else mat_margin(0)
     area_ltg = abs(polygon_area(ltg_margin))
 
     def ltg_contains(q):
+        if kf is not None:
+            return kf.contains(q, t_ltg)
         return blade.contains(ltg.inverse(q, t_ltg))
 
     def fixed(q):
@@ -942,7 +959,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                 grid_rebuild(node_grid, nodes.pos, np.arange(n_nodes, dtype=np.int64))
                 support[:] = -np.inf
                 hull_support(nodes.pos, 0, n_nodes, support)
-                ltg_margin = ltg.forward(blade.polygon, t_ltg)
+                ltg_margin = mat_margin(t_ltg)
                 area_ltg = abs(polygon_area(ltg_margin))
         elif kind == "marginal":
             blade_scale = sc
@@ -1035,7 +1052,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         nbr = np.full((k, MAX_NEIGHBOURS), -1, np.int64)
         nbr_n = np.zeros(k, np.int64)
         if k and n_nodes:
-            if nb_kind == NEAREST and kind not in ("anisotropic", "local_to_global"):
+            if nb_kind == NEAREST and kind not in ("anisotropic", "local_to_global", "key_frames"):
                 # nodes stay where they are: a source's nearest node changes only to a new one
                 nearest_incremental(src.pos, live, src.near, src.near_d2, nodes.pos, n_searched, n_nodes,
                                     node_grid, nbr, nbr_n)
@@ -1053,7 +1070,10 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
         _, n_stalled, n_extra, n_sprouts = update_sources(closed, live, nbr, nbr_n, src, nodes, dk2, it, extra,
                                                           n_extra, sprouts, n_sprouts, gap2, sp.inside)
         if not midvein_seen:
-            midvein_seen = _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2)
+            chain = _midvein_event(events, it, src, n_src, nodes, n_nodes, lam, real, dk2)
+            if chain is not None:
+                midvein_seen = True
+                loops.midvein = chain
         for e_ in range(extra_before, n_extra):
             ev = loops.add(extra, e_, nodes, n_nodes, lam, real, fixed)
             if ev is not None:
@@ -1091,7 +1111,7 @@ def simulate(blade: Blade, growth: Growth, sp: SimParams, *, on_frame: Callable 
                 live_now = np.flatnonzero(src.alive[:n_src]).astype(np.int64)
                 grid_insert_idx(src_grid, src.pos, live_now)
                 live = live_now
-        if ltg is not None:  # the new nodes and sources at t0 (eq. 5.1 solved for y0)
+        if ltg is not None:  # the new nodes and sources at t0 (eq. 5.1 solved for y0) or their (u, v) (eq. 5.2)
             if n_nodes > len(node_mat):
                 node_mat = np.vstack([node_mat, ltg.inverse(nodes.pos[len(node_mat):n_nodes], t_ltg)])
             if n_src > len(src_mat):
