@@ -12,6 +12,9 @@
   ch. 5 refinements), a close-up of its areoles with and without the blind veinlets of sec. 5.2.4
   (the same run with ``veins.blind_after = -1``), and the yarrow leaf (yarrow.toml: open, veins
   kept inside the dissected blade);
+- ``venation_arabidopsis.png``: the first leaf of Arabidopsis as it develops (Runions sec. 5.3):
+  the development sheets (development.py) of the key-frame run (arabidopsis_kf.toml, figs.
+  5.9-5.11) over the local-to-global run (arabidopsis_ltg.toml, fig. 5.7);
 - ``venation_textured.png``: the two leaves' ``blade.obj`` drawn by ``canopy-render
   --mtl-textures`` (the vein texture on the blade mesh, lit), face-on and tilted.
 
@@ -118,6 +121,9 @@ def main(argv=None) -> int:
     if len(argv) > 1 and argv[1] == "leaves":  # only the species leaves' pictures
         leaves(out_dir, font)
         return 0
+    if len(argv) > 1 and argv[1] == "arabidopsis":  # only the development sheets
+        arabidopsis(out_dir, font)
+        return 0
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         panels = []
@@ -136,7 +142,40 @@ def main(argv=None) -> int:
             print(f"poplar {nb}: {_figures(r)}, {r.result.seconds:.2f} s", flush=True)
         _save(_row(panels), out_dir / "venation_closed.png")
     leaves(out_dir, font)
+    arabidopsis(out_dir, font)
     return 0
+
+
+def arabidopsis(out_dir: Path, font) -> None:
+    """The two development sheets, key frames over local-to-global, each under a title line."""
+    sys.path.insert(0, str(HERE))
+    from development import sheet
+
+    sheets = []
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        for name, its, title in (
+                ("arabidopsis_kf", [30, 70, 100, 130, 160, 190, 210, 230],
+                 "key frames (sec. 5.3.2, figs. 5.9-5.11): the midvein, three pairs of loops in turn, "
+                 "then higher orders, blind veins"),
+                ("arabidopsis_ltg", [10, 20, 40, 60, 70, 80, 90, 110],
+                 "local-to-global growth (sec. 5.3.1, fig. 5.7): the loops form together, as the thesis reports")):
+            data = tomllib.loads((HERE / f"{name}.toml").read_text())
+            data.setdefault("output", {})["frame_step"] = 10
+            lines = [f"{k} = {_toml(v)}" for k, v in data.items() if not isinstance(v, dict)]
+            for section, table in data.items():
+                if isinstance(table, dict):
+                    lines.append(f"[{section}]")
+                    lines += [f"{k} = {_toml(v)}" for k, v in table.items()]
+            p = parse_params("\n".join(lines) + "\n", HERE / f"{name}.toml")
+            r = run_venation(p, load_inputs(p), work / name)
+            png = sheet(work / name, work / f"{name}.png", its)
+            img = Image.open(png).convert("RGB")
+            head = Image.new("RGB", (img.width, 48), "white")
+            ImageDraw.Draw(head).multiline_text((8, 4), f"{title}\n{_figures(r)}", fill=(20, 20, 20), font=font)
+            sheets += [head, img]
+            print(f"{name}: {_figures(r)}, {r.result.seconds:.2f} s", flush=True)
+    _save(_column(sheets), out_dir / "venation_arabidopsis.png")
 
 
 def _crop(img: Image.Image, box) -> Image.Image:
