@@ -343,6 +343,7 @@ class KeyFrames:
         gu, gv = np.meshgrid(g, g, indexing="ij")
         self._grid_uv = np.column_stack([gu.ravel(), gv.ravel()])
         self._cache: dict = {}
+        self._extents: dict = {}
 
     def control_at(self, t: float) -> np.ndarray:
         """(4, 4, 2): the control net of Q_t (the key frames' nets interpolated linearly)."""
@@ -439,11 +440,21 @@ class KeyFrames:
         pts = self.controls.reshape(-1, 2)
         return pts.min(0), pts.max(0)
 
+    def _extent(self, t: float) -> np.ndarray:
+        key = float(t)
+        e = self._extents.get(key)
+        if e is None:
+            c = self.control_at(t)
+            e = np.ptp(bezier_eval(c, self._edge_uv[:, 0], self._edge_uv[:, 1]), axis=0)
+            if len(self._extents) > 64:
+                self._extents.clear()
+            self._extents[key] = e
+        return e
+
     def bound(self, t: float) -> np.ndarray:
         """(2,) the extent of the blade at time t over its extent at t_1, per axis (at least 1)."""
-        e0 = np.ptp(self.margin(self.times[0]), axis=0)
-        e = np.ptp(self.margin(t), axis=0)
-        return np.maximum(e / np.maximum(e0, 1e-300), 1.0)
+        e0 = self._extent(self.times[0])
+        return np.maximum(self._extent(t) / np.maximum(e0, 1e-300), 1.0)
 
 
 def _dedupe_ring(p: np.ndarray) -> np.ndarray:
