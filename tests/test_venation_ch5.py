@@ -311,3 +311,35 @@ def test_local_to_global_open_pattern_finishes(tmp_path):
     r = CliRunner().invoke(main, [str(f), "-o", str(out)])
     assert r.exit_code == 0, r.output
     assert "max_iterations" not in r.output and "400 iterations" not in r.output
+
+
+def test_closed_sources_of_the_first_iteration_draw_veins():
+    """A source placed in iteration 0 stays until a vein reaches it (a node's "stalled in the
+    last iteration" mark used to read -1 as iteration -1 and removed every first-iteration source
+    of a closed pattern at once, with no vein)."""
+    from inflo.tools.venation.generate import sim_params
+    from inflo.tools.venation.params import load_inputs, parse_params
+    from inflo.tools.venation.simulate import simulate
+
+    text = """seed = 3
+[blade]
+polygon = [[-10.0, 0.0], [10.0, 0.0], [10.0, 20.0], [-10.0, 20.0]]
+base = [0.0, 0.0]
+[veins]
+pattern = "closed"
+step = 1.0
+kill_distance = 1.0
+[sources]
+birth_source = 3.0
+birth_vein = 3.0
+darts = 0.02
+"""
+    p = parse_params(text)
+    inp = load_inputs(p)
+    r = simulate(inp.blade, inp.growth, sim_params(p, inp))
+    first = np.flatnonzero(r.source_born == 0)
+    assert len(first) > 2
+    assert np.all(r.source_died[first] > 0)
+    # each was reached: a vein node within d_k of where it stood
+    d = np.sqrt(((r.node_pos[None] - r.source_pos[first][:, None]) ** 2).sum(-1)).min(1)
+    assert np.all(d <= 1.0 + 1e-9)

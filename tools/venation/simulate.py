@@ -146,7 +146,12 @@ class Nodes(NamedTuple):
     cnt: np.ndarray  # (cap,) int64 |S(v)| this iteration
     closest: np.ndarray  # (cap,) int64 closest source of S(v)
     closest_d2: np.ndarray  # (cap,) float64
-    stalled: np.ndarray  # (cap,) int64 last iteration in which the node was influenced but did not grow, -1
+    stalled: np.ndarray  # (cap,) int64 last iteration in which the node was influenced but did not grow, NEVER_STALLED
+
+
+#: ``Nodes.stalled`` of a node that has never stalled: no iteration (the test is ``stalled == it - 1``,
+#: so -1 would read as stalled in iteration 0 and remove every source of the first iteration)
+NEVER_STALLED = -(2 ** 62)
 
 
 class Sources(NamedTuple):
@@ -167,7 +172,7 @@ class Sources(NamedTuple):
 def _new_nodes(cap):
     return Nodes(np.zeros((cap, 2)), np.full(cap, -1, np.int64), np.full(cap, -1, np.int64), np.zeros((cap, 2)),
                  np.zeros((cap, 2)), np.zeros(cap, np.int64), np.full(cap, -1, np.int64), np.zeros(cap),
-                 np.full(cap, -1, np.int64))
+                 np.full(cap, NEVER_STALLED, np.int64))
 
 
 def _new_sources(cap):
@@ -433,7 +438,7 @@ def _add_node(nodes, w, x, y, parent, it, grid):
     nodes.iteration[w] = it
     nodes.last_dir[w, 0] = 0.0
     nodes.last_dir[w, 1] = 0.0
-    nodes.stalled[w] = -1
+    nodes.stalled[w] = NEVER_STALLED
     grid_insert(grid, nodes.pos, w, w + 1)
     return w
 
