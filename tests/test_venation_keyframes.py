@@ -4,7 +4,6 @@ interpolation and the point inversion against their analytic forms, the refusals
 developmental order of the example against the observed one."""
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import numpy as np

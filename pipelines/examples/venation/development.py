@@ -14,7 +14,6 @@ rows are.
 from __future__ import annotations
 
 import csv
-import math
 import sys
 from pathlib import Path
 
@@ -112,7 +111,7 @@ def sheet(run: Path, out: Path, iterations=None) -> Path:
             cx = 0.5 * (max(x for x, _ in blade) + min(x for x, _ in blade))
             y0 = min(y for _, y in blade)
 
-            def px(p):
+            def px(p, ox=ox, oy=oy, cx=cx, y0=y0, s=s):
                 return (ox + (p[0] - cx) * s, oy - (p[1] - y0) * s)
 
             d.polygon([px(p) for p in blade], fill=(222, 240, 210), outline=(90, 140, 70))
