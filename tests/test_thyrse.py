@@ -181,6 +181,20 @@ def test_cli_bad_input_one_line_exit_2_no_output(tmp_path, write, text, expect):
     assert not out.exists()
 
 
+def test_cli_refuses_a_floret_model_that_intersects_itself(tmp_path, write):
+    """A --room model crossing itself (as a branch mesh given as the model) is refused at once,
+    one line, exit 2: a floret may not intersect itself, and the room test of every placed copy
+    paid for its crossings once per floret (minutes, then no floret)."""
+    params = write("t.toml", "[thyrse]\nnodes = 3\norder = 0\ndensity = 6\nfloret_size = 0.05\n")
+    model = write("crossing.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0.2 0.2 -0.5\nv 0.3 0.3 0.5\nv 0.9 0.9 0\n"
+                                  "f 1 2 3\nf 4 5 6\n")
+    out = tmp_path / "out"
+    r = run_cli("thyrse", params, "-o", out, "--room", model)
+    assert r.returncode == 2, r.stderr
+    assert "does not intersect itself" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("data, expect", [
     ({"thyrse": {"length": -1.0}}, "length"),
     ({"thyrse": {"order": "missing.func"}}, "missing.func"),

@@ -14,6 +14,7 @@ import math
 import warnings
 
 import click
+import numpy as np
 
 from inflo.formats.atomic import staged_output
 from inflo.formats.errors import InputError
@@ -57,6 +58,7 @@ def _run(params, output, base, rooms, quiet):
         if m.n_faces == 0:
             raise InputError(f"{path}: expected a floret model with triangles (--room), found none")
         models.append((m.vertices, m.faces))
+    _check_rooms(rooms, models)
     inputs = [(params, "parameter file")] + [(r, "floret model") for r in rooms]
     inputs += [(f, "input") for f in (referenced_files(params) if params else [])]
     # a rerun replaces the earlier run's files only when it completes
@@ -66,6 +68,20 @@ def _run(params, output, base, rooms, quiet):
     if not quiet:
         click.echo(f"thyrse: {len(result.layout.floret_node)} florets, {len(result.branches.chain_list)} branches, "
                    f"{result.branches.branches_mesh.n_faces} triangles -> {output}", err=True)
+
+
+def _check_rooms(rooms, models) -> None:
+    """Refuse (one line) a floret model that intersects itself: a floret may not (fccompose's
+    first frame), and the room test of every placed copy would pay for its crossings once per
+    floret (a branch mesh given as the model took minutes and formed no floret)."""
+    from inflo.tools.collide import intersecting_pairs
+
+    for path, (v, f) in zip(rooms, models):
+        pairs = intersecting_pairs(np.asarray(v, np.float64), np.asarray(f, np.int32))
+        if len(pairs):
+            a, b = (int(x) for x in pairs[0])
+            raise InputError(f"{path}: expected a floret model that does not intersect itself (--room), found "
+                             f"{len(pairs)} intersecting triangle pairs (faces {a + 1} and {b + 1})")
 
 
 if __name__ == "__main__":  # python -m inflo.tools.thyrse.cli
