@@ -455,3 +455,26 @@ def test_con_generating_curve_end_to_end(tmp_path, write):
     res = run_cli("phyllotaxis", write("b.toml", "[surface]\ncurve = 'bad.con'\n"), "-o", tmp_path / "b")
     assert res.returncode == 2 and "bad.con" in res.stderr and "axis" in res.stderr
     assert not (tmp_path / "b").exists()
+
+
+@pytest.mark.parametrize("old, new, line_key, expect", [
+    ("[dynamics]\n", "[dynamics]\nmax_count = 10\n", "max_count = 10", "dynamics.max_count"),
+    ("inner_area = 1.0\n", "inner_area = 0.0001\n", "inner_area = 0.0001", "no primordium forms"),
+])
+def test_refusals_of_key_combinations_name_the_line(tmp_path, old, new, line_key, expect):
+    """A refusal raised by the model for a combination of keys names the file and the line of
+    the key its message names (one line, exit 2, no output)."""
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[1] / "pipelines" / "sunflower" / "draft" / "head.toml"
+    text = src.read_text()
+    assert old in text
+    text = text.replace(old, new, 1)
+    f = tmp_path / "head.toml"
+    f.write_text(text)
+    line = text.splitlines().index(line_key) + 1
+    r = run_cli("phyllotaxis", f, "-o", tmp_path / "out", "-q")
+    assert r.returncode == 2, r.stderr
+    err = r.stderr.strip()
+    assert len(err.splitlines()) == 1 and f"{f}:{line}: " in err and expect in err, err
+    assert not (tmp_path / "out").exists()

@@ -6,11 +6,12 @@ import warnings
 import click
 
 from inflo.formats.atomic import staged_output
+from inflo.formats.errors import InputError
 from inflo.formats.toml_params import referenced_files
 from inflo.tools.common.cli import inflo_command, portable_path, progress
 
 from .generate import OUTPUT_FILES, generate
-from .params import read_params
+from .params import locate_error, read_params
 
 
 @inflo_command("phyllotaxis", help="Place florets by Ridley phyllotaxis (thesis ch. 5): scene.scn and, when dynamic, rba/NNNN.rba.")
@@ -38,7 +39,10 @@ def _run(params, output, png, quiet):
     # a rerun replaces the earlier run's files only when it completes (never a new scene.scn with
     # an old run's RBA frames)
     with staged_output(output, "phyllotaxis", stale_patterns=OUTPUT_FILES, inputs=[(params, "parameter file")] + [(f, "input") for f in referenced_files(params)]) as stage:
-        summary = generate(p, stage, progress=bar, header=f"phyllotaxis {portable_path(params)}")
+        try:
+            summary = generate(p, stage, progress=bar, header=f"phyllotaxis {portable_path(params)}")
+        except InputError as exc:  # a combination of keys: the line of the key the message names
+            raise locate_error(exc, params) from None
     for msg in summary.messages:
         click.echo(f"phyllotaxis: warning: {msg}", err=True)
     if png:

@@ -217,7 +217,7 @@ def simulate(*, mode: str, frames: int, interval: float, primordium_area: float,
                          "raise max_count or slow the growth")
     if len(emergence) == 0:
         raise InputError("no primordium forms: the inner region never holds one primordium "
-                         f"(inner_area = {inner_area}, primordium_area = {primordium_area}"
+                         f"(dynamics.inner_area = {inner_area}, primordium_area = {primordium_area}"
                          + (f", threshold = {threshold}" if mode == "segregation" else "") + ")")
     phi = math.radians(divergence)
     inner_rank = np.cumsum(side == -1) - 1

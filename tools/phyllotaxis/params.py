@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 
@@ -439,3 +440,28 @@ def read_params(path) -> Params:
     except UnicodeDecodeError:
         raise FormatError(path, None, "UTF-8 TOML text", "undecodable bytes") from None
     return parse_params(text, path)
+
+
+_KEY_TOKEN = re.compile(r"\b([a-z_]+)\.([a-z_]+)\b")
+
+
+def locate_error(exc: Exception, path) -> Exception:
+    """An error raised by the model for a combination of keys (too many primordia, windows past the
+    last frame, ...), with ``path:line:`` of the first ``section.key`` its message names that the
+    parameter file holds (the key to change); ``exc`` itself when none is found or it has a line."""
+    if isinstance(exc, FormatError) or not isinstance(exc, InputError):
+        return exc
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return exc
+    from inflo.formats.toml_params import line_of
+
+    msg = str(exc)
+    for section, key in _KEY_TOKEN.findall(msg):
+        if section in SCHEMA and key in SCHEMA[section]:
+            line = line_of(text, section, key, LINES) or line_of(text, section, None, LINES)
+            if line:
+                return InputError(f"{os.fspath(path)}:{line}: {msg}")
+    return exc
+
