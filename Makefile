@@ -100,6 +100,11 @@ new-species: $(STAMP)
 $(SPECIES_DIRS): $(STAMP) bytecode
 	$(MAKE) -C pipelines/$@ QUALITY=$(QUALITY)
 
+# a species' plant (a stem with leaves carrying several of its flowers, offset in age): make lily-plant
+.PHONY: lily-plant
+lily-plant: $(STAMP) bytecode
+	$(MAKE) -C pipelines/lily plant QUALITY=$(QUALITY)
+
 clean:
 	rm -rf build bench/out .pytest_cache .hypothesis
 	find . -path ./$(VENV) -prune -o -name __pycache__ -type d -prune -exec rm -rf {} +
