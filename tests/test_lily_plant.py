@@ -1,0 +1,139 @@
+"""The lily plant (pipelines/lily/plant.py, check_plant.py; `make lily-plant`, Ijiri et al. fig. 15).
+
+From the draft lily build of the session (conftest's ``species_build``, shared with the golden-file
+tests; its painted and column keyframes made here if missing), plant.py writes the plant into a
+temporary folder (about 6 s), and:
+
+- at the last frame five flowers show at least three distinct stages (bud, opening, open), the
+  lowest the oldest, each flower's frames the built lily's frame clamp(f - offset), moved rigidly;
+- the stem, 34 leaves and five pedicels are in ``body.obj``, the stem from the ground up, every
+  leaf 5-10 units long;
+- no intersecting triangle pair (exact test, the joined parts excepted: check_plant.py) at plant
+  frames 1, 50, 80 and 100 and at the contact sheet's last frame;
+- the classification of check_plant.py is not vacuous: leaves and pedicels do reach into the stem
+  (pairs it excepts), and a flower moved onto another is caught;
+- canopy-export writes the USD with the six parts over 100 frames.
+
+The whole `plant` target (every frame checked, pictures; about 45 s) is not run here.
+"""
+from __future__ import annotations
+
+import importlib.util
+import shutil
+import subprocess
+import tomllib
+
+import numpy as np
+import pytest
+from conftest import REPO, run_cli
+
+from inflo.formats.obj import list_obj_sequence, read_obj
+
+LILY = REPO / "pipelines" / "lily"
+BUILD = REPO / "build" / "lily"
+
+
+def _module(name):
+    spec = importlib.util.spec_from_file_location(name, LILY / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def plant(species_build, tmp_path_factory):
+    species_build("lily")
+    if not (BUILD / "canopy").is_dir():
+        pytest.skip("make lily has not been run")
+    make = shutil.which("make") or "make"
+    r = subprocess.run([make, "-C", str(LILY), "QUALITY=draft", str(BUILD / "painted" / ".done"),
+                        str(BUILD / "column_keyframes" / ".done")], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    out = tmp_path_factory.mktemp("lily_plant")
+    assert _module("plant").main(BUILD, out) == 0
+    return out
+
+
+def test_flowers_at_distinct_stages(plant):
+    lay = tomllib.loads((plant / "plant.toml").read_text())
+    mod = _module("plant")
+    flowers = lay["flower"]
+    assert len(flowers) >= 3
+    offsets = [fl["offset"] for fl in flowers]
+    assert offsets == sorted(offsets) and offsets[0] == 0          # the lowest the oldest
+    assert [fl["node"] for fl in flowers] == sorted(fl["node"] for fl in flowers)
+    ages = [mod.age(lay["frames"] - 1, o) for o in offsets]
+    stages = {mod.stage(a) for a in ages}
+    assert len(stages) >= 3, (ages, stages)
+    # a flower's frame is the lily's frame clamp(f - offset), moved rigidly: edge lengths kept
+    tep = read_obj(BUILD / "canopy" / "frame_0029.obj")
+    k = 3  # flower 4, offset 70: lily frame 30 at plant frame 100
+    assert offsets[k] == 70
+    m = read_obj(list_obj_sequence(plant / f"flower_{k + 1}")[-1])
+    part = np.asarray(m.face_group) == m.groups.index("tepals")
+    f_tep = m.faces[part]
+    assert np.array_equal(f_tep, tep.faces)
+    e = lambda v, f: np.linalg.norm(v[f[:, 0]] - v[f[:, 1]], axis=1)
+    assert np.allclose(e(m.vertices, f_tep), e(tep.vertices, tep.faces), atol=3e-6)
+    assert len(list_obj_sequence(plant / f"flower_{k + 1}")) == lay["frames"] == 100
+
+
+def test_body_has_stem_leaves_pedicels(plant):
+    body = read_obj(plant / "body.obj")
+    g = body.groups
+    leaves = [n for n in g if n.startswith("leaf_")]
+    assert "stem" in g and len(leaves) == 34 and len([n for n in g if n.startswith("pedicel_")]) == 5
+    stem = body.vertices[np.unique(body.faces[np.asarray(body.face_group) == g.index("stem")])]
+    assert stem[:, 1].min() == pytest.approx(0.0, abs=0.01) and stem[:, 1].max() > 40
+    for name in leaves:
+        v = body.vertices[np.unique(body.faces[np.asarray(body.face_group) == g.index(name)])]
+        span = np.linalg.norm(v.max(axis=0) - v.min(axis=0))
+        assert 4.0 < span < 10.5, (name, span)
+
+
+def test_no_intersecting_pairs(plant, capsys):
+    check = _module("check_plant")
+    assert check.main(plant, [1, 50, 80, 100]) == 0, capsys.readouterr().out
+    lay = tomllib.loads((plant / "plant.toml").read_text())
+    body = read_obj(plant / "body.obj")
+    names = [f"f{k + 1}_{w}" for k in range(5) for w in ("tepals", "column")] + list(body.groups)
+    body_part = np.asarray(body.face_group) + 10
+    t, c = read_obj(plant / "sheet_tepals" / "100.obj"), read_obj(plant / "sheet_columns" / "100.obj")
+    parts = [(body, body_part), (t, 2 * np.asarray(t.face_group)), (c, 2 * np.asarray(c.face_group) + 1)]
+    bad, found, _ = check.test_mesh(parts, names)
+    assert bad == 0, found
+    assert lay["sheet"][-1] == 100
+
+
+def test_check_is_not_vacuous(plant):
+    """The joined pairs exist (so the exceptions matter) and a flower moved into another is caught."""
+    from inflo.tools.collide import intersecting_pairs
+
+    check = _module("check_plant")
+    body = read_obj(plant / "body.obj")
+    fg = np.asarray(body.face_group)
+    pairs = intersecting_pairs(body.vertices, body.faces)
+    joined = {tuple(sorted((body.groups[fg[a]], body.groups[fg[b]]))) for a, b in pairs}
+    assert any(p[0].startswith("leaf_") and p[1] == "stem" for p in joined)
+    assert any(p[0].startswith("pedicel_") and p[1] == "stem" for p in joined)
+    names = [f"f{k + 1}_{w}" for k in range(5) for w in ("tepals", "column")] + list(body.groups)
+    m1 = read_obj(list_obj_sequence(plant / "flower_1")[-1])
+    m2 = read_obj(list_obj_sequence(plant / "flower_2")[-1])
+    shift = m1.vertices[m1.faces].reshape(-1, 3).mean(axis=0) - m2.vertices[m2.faces].reshape(-1, 3).mean(axis=0)
+    m2.vertices = m2.vertices + shift + np.array([0.3, 0.2, 0.1])
+    parts = [(body, fg + 10), (m1, np.asarray(m1.face_group)), (m2, np.asarray(m2.face_group) + 2)]
+    bad, found, _ = check.test_mesh(parts, names)
+    assert bad > 0 and any("f1_tepals" in k and "f2_tepals" in k for k in found), found
+
+
+def test_usd_written(plant, tmp_path):
+    parts = [f"flower_{k}={plant / f'flower_{k}'}" for k in range(1, 6)] + [f"body={plant / 'body.obj'}"]
+    out = tmp_path / "lily_plant.usdc"
+    r = run_cli("canopy-export", "-q", *parts, "--colors", LILY / "plant_colors.toml", "--units", "cm", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert out.stat().st_size > 0
+    Usd = pytest.importorskip("pxr.Usd")
+    stage = Usd.Stage.Open(str(out))
+    meshes = {p.GetName() for p in stage.Traverse() if p.GetTypeName() == "Mesh"}
+    assert {f"flower_{k}" for k in range(1, 6)} | {"body"} <= meshes
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1.0, 100.0)
