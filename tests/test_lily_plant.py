@@ -92,37 +92,37 @@ def test_body_has_stem_leaves_pedicels(plant):
 
 
 def test_no_intersecting_pairs(plant, capsys):
-    check = _module("check_plant")
-    assert check.main(plant, [1, 50, 80, 100]) == 0, capsys.readouterr().out
+    from inflo.tools.plant.check import main, test_mesh
+
+    assert main(plant, [1, 50, 80, 100]) == 0, capsys.readouterr().out
     lay = tomllib.loads((plant / "plant.toml").read_text())
     body = read_obj(plant / "body.obj")
-    names = [f"f{k + 1}_{w}" for k in range(5) for w in ("tepals", "column")] + list(body.groups)
-    body_part = np.asarray(body.face_group) + 10
     t, c = read_obj(plant / "sheet_tepals" / "100.obj"), read_obj(plant / "sheet_columns" / "100.obj")
-    parts = [(body, body_part), (t, 2 * np.asarray(t.face_group)), (c, 2 * np.asarray(c.face_group) + 1)]
-    bad, found, _ = check.test_mesh(parts, names)
+    bad, found, _ = test_mesh([(body, body.groups), (t, t.groups), (c, c.groups)])
     assert bad == 0, found
-    assert lay["sheet"][-1] == 100
+    assert lay["sheet"][-1] == 100 and lay["sheet_parts"] == ["sheet_tepals", "sheet_columns"]
 
 
 def test_check_is_not_vacuous(plant):
     """The joined pairs exist (so the exceptions matter) and a flower moved into another is caught."""
     from inflo.tools.collide import intersecting_pairs
+    from inflo.tools.plant.check import joined, test_mesh
 
-    check = _module("check_plant")
     body = read_obj(plant / "body.obj")
     fg = np.asarray(body.face_group)
     pairs = intersecting_pairs(body.vertices, body.faces)
-    joined = {tuple(sorted((body.groups[fg[a]], body.groups[fg[b]]))) for a, b in pairs}
-    assert any(p[0].startswith("leaf_") and p[1] == "stem" for p in joined)
-    assert any(p[0].startswith("pedicel_") and p[1] == "stem" for p in joined)
-    names = [f"f{k + 1}_{w}" for k in range(5) for w in ("tepals", "column")] + list(body.groups)
+    found = {tuple(sorted((body.groups[fg[a]], body.groups[fg[b]]))) for a, b in pairs}
+    assert any(p[0].startswith("leaf_") and p[1] == "stem" for p in found)
+    assert any(p[0].startswith("pedicel_") and p[1] == "stem" for p in found)
+    assert all(joined(*p) for p in found), found            # and nothing else in the body meets
+    assert joined("f2_column", "pedicel_2") and not joined("f2_column", "pedicel_3")
+    assert not joined("f1_tepals", "f1_tepals") and not joined("f1_tepals", "pedicel_1")
     m1 = read_obj(list_obj_sequence(plant / "flower_1")[-1])
     m2 = read_obj(list_obj_sequence(plant / "flower_2")[-1])
     shift = m1.vertices[m1.faces].reshape(-1, 3).mean(axis=0) - m2.vertices[m2.faces].reshape(-1, 3).mean(axis=0)
     m2.vertices = m2.vertices + shift + np.array([0.3, 0.2, 0.1])
-    parts = [(body, fg + 10), (m1, np.asarray(m1.face_group)), (m2, np.asarray(m2.face_group) + 2)]
-    bad, found, _ = check.test_mesh(parts, names)
+    parts = [(body, body.groups), (m1, [f"f1_{g}" for g in m1.groups]), (m2, [f"f2_{g}" for g in m2.groups])]
+    bad, found, _ = test_mesh(parts)
     assert bad > 0 and any("f1_tepals" in k and "f2_tepals" in k for k in found), found
 
 

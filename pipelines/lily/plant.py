@@ -38,7 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from inflo.formats.obj import ObjMesh, list_obj_sequence, read_obj, write_obj
+from inflo.formats.obj import list_obj_sequence, read_obj, write_obj
+from inflo.tools import plant as P
 
 FRAMES = 100
 SHEET = (1, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100)
@@ -77,34 +78,12 @@ MTL_STEM, MTL_LEAF, MTL_PEDICEL = "mtl10", "mtl11", "mtl12"
 
 
 def stage(frame0: int) -> str:
-    name = STAGES[0][1]
-    for start, s in STAGES:
-        if frame0 >= start:
-            name = s
-    return name
+    return P.stage(frame0, STAGES)
 
 
 def age(plant_frame0: int, offset: int) -> int:
     """The built lily's 0-based frame a flower of age ``offset`` shows at 0-based plant frame f."""
-    return int(min(max(plant_frame0 - offset, 0), FRAMES - 1))
-
-
-# -- small vector helpers (elementwise, fixed order: no BLAS) --------------------------------------
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
-    return v / np.sqrt(np.sum(v * v, axis=-1, keepdims=True))
-
-
-def _cross(a, b):
-    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
-
-
-def transform(v: np.ndarray, basis: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    """Local points ``v`` (n, 3) -> ``origin + x * basis[0] + y * basis[1] + z * basis[2]``."""
-    return (origin + v[:, 0:1] * basis[0]) + v[:, 1:2] * basis[1] + v[:, 2:3] * basis[2]
+    return P.age(plant_frame0, offset, FRAMES)
 
 
 # -- the stem ---------------------------------------------------------------------------------------
@@ -118,83 +97,16 @@ def stem_radius(y):
     return STEM_R0 + (STEM_R1 - STEM_R0) * np.asarray(y, dtype=np.float64) / STEM_HEIGHT
 
 
-def tube(points: np.ndarray, radii: np.ndarray, sides: int, cap0: np.ndarray, cap1: np.ndarray):
-    """A generalized cylinder: a ring of ``sides`` vertices round each centre-line point, framed by
-    parallel transport, closed by a fan to ``cap0`` before the first ring and ``cap1`` after the
-    last. Returns (vertices, triangles)."""
-    pts = np.asarray(points, dtype=np.float64)
-    k = len(pts)
-    seg = _unit(np.diff(pts, axis=0))
-    tan = np.empty((k, 3))
-    tan[0], tan[-1] = seg[0], seg[-1]
-    tan[1:-1] = _unit(seg[:-1] + seg[1:])
-    ref = np.array([0.0, 0.0, 1.0]) if abs(tan[0][2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    n = _unit(ref - np.sum(ref * tan[0]) * tan[0])
-    ang = 2.0 * math.pi * np.arange(sides) / sides
-    ca, sa = np.cos(ang)[:, None], np.sin(ang)[:, None]
-    rings = []
-    for i in range(k):
-        if i:
-            n = _unit(n - np.sum(n * tan[i]) * tan[i])
-        b = _cross(tan[i], n)
-        rings.append(pts[i] + radii[i] * (ca * n + sa * b))
-    v = np.vstack(rings + [np.asarray(cap0, float)[None], np.asarray(cap1, float)[None]])
-    c0, c1 = k * sides, k * sides + 1
-    f = []
-    for i in range(k - 1):
-        for j in range(sides):
-            a, b = i * sides + j, i * sides + (j + 1) % sides
-            f += [(a, b, b + sides), (a, b + sides, a + sides)]
-    for j in range(sides):
-        f.append((c0, (j + 1) % sides, j))
-        last = (k - 1) * sides
-        f.append((c1, last + j, last + (j + 1) % sides))
-    return v, np.array(f, dtype=np.int32)
-
-
 def make_stem():
     y = STEM_HEIGHT * (np.arange(STEM_RINGS) / (STEM_RINGS - 1)) ** 1.0
     pts = stem_point(y)
     r = stem_radius(y)
     # a rounded apex: the last rings narrow over the last few millimetres
     top = STEM_HEIGHT + 0.25
-    return tube(pts, r, STEM_SIDES, cap0=stem_point(0.0), cap1=stem_point(top))
+    return P.tube(pts, r, STEM_SIDES, cap0=stem_point(0.0), cap1=stem_point(top))
 
 
 # -- leaves -------------------------------------------------------------------------------------------
-
-def leaf_mesh(base, e_out, length, half_width, angle0, curl, fold):
-    """A linear-lanceolate leaf: rows along its midline from the base (at ``base``, inside the stem)
-    to a single tip vertex; the midline leaves at ``angle0`` (degrees from vertical) in the plane of
-    +Y and ``e_out`` and bends ``curl`` degrees outward/downward toward the tip; the margins rise
-    ``fold`` x the half-width above the midrib (the fold). Returns (vertices, triangles)."""
-    up = np.array([0.0, 1.0, 0.0])
-    side = _cross(up, e_out)
-    s = np.arange(LEAF_ROWS + 1) / LEAF_ROWS
-    ang = np.radians(angle0 + curl * s ** 1.6)
-    d = np.cos(ang)[:, None] * up + np.sin(ang)[:, None] * e_out          # midline direction
-    nrm = np.sin(ang)[:, None] * up - np.cos(ang)[:, None] * e_out          # upper face normal
-    ds = length / LEAF_ROWS
-    mid = np.vstack([base, base + np.cumsum(0.5 * (d[:-1] + d[1:]) * ds, axis=0)])
-    w = np.where(s < 0.3, 0.45 + 0.55 * np.sin(0.5 * math.pi * s / 0.3),
-                 np.cos(0.5 * math.pi * np.clip((s - 0.3) / 0.7, 0.0, 1.0)) ** 0.9) * half_width
-    u = np.linspace(-1.0, 1.0, LEAF_ACROSS)
-    verts = []
-    for i in range(LEAF_ROWS):   # the last row is the tip
-        verts.append(mid[i] + (u[:, None] * w[i]) * side + (fold * np.abs(u)[:, None] * w[i]) * nrm[i])
-    verts.append(mid[-1][None])
-    v = np.vstack(verts)
-    tip = LEAF_ROWS * LEAF_ACROSS
-    f = []
-    for i in range(LEAF_ROWS - 1):
-        for j in range(LEAF_ACROSS - 1):
-            a = i * LEAF_ACROSS + j
-            f += [(a, a + 1, a + 1 + LEAF_ACROSS), (a, a + 1 + LEAF_ACROSS, a + LEAF_ACROSS)]
-    last = (LEAF_ROWS - 1) * LEAF_ACROSS
-    for j in range(LEAF_ACROSS - 1):
-        f.append((last + j, last + j + 1, tip))
-    return v, np.array(f, dtype=np.int32)
-
 
 def make_leaves():
     out = []
@@ -207,7 +119,8 @@ def make_leaves():
         half = 0.065 * length + 0.05
         angle0 = 52.0 - 22.0 * t          # the upper leaves more ascending
         base = stem_point(y) + 0.45 * stem_radius(y) * e_out
-        out.append(leaf_mesh(base, e_out, length, half, angle0, curl=38.0 - 10.0 * t, fold=0.35))
+        out.append(P.leaf_mesh(base, e_out, length, half, angle0, curl=38.0 - 10.0 * t, fold=0.35,
+                               rows=LEAF_ROWS, across=LEAF_ACROSS))
     return out
 
 
@@ -216,17 +129,10 @@ def make_leaves():
 def flower_frame(fl: dict):
     """(origin, basis) of a flower: its receptacle (the lily's origin) at the end of its pedicel,
     its axis (the lily's +Y) tilted outward by ``tilt`` from vertical, spun by ``spin``."""
-    phi, th, sp = (math.radians(fl[k]) for k in ("azimuth", "tilt", "spin"))
+    phi = math.radians(fl["azimuth"])
     e_r = np.array([math.cos(phi), 0.0, math.sin(phi)])
-    e_t = np.array([-math.sin(phi), 0.0, math.cos(phi)])
-    up = np.array([0.0, 1.0, 0.0])
-    a = math.sin(th) * e_r + math.cos(th) * up
-    b1 = math.cos(th) * e_r - math.sin(th) * up
-    b2 = e_t
-    x = math.cos(sp) * b1 + math.sin(sp) * b2
-    z = -math.sin(sp) * b1 + math.cos(sp) * b2
-    origin = stem_point(fl["node"]) + fl["reach"] * e_r + fl["rise"] * up
-    return origin, np.stack([x, a, z])
+    origin = stem_point(fl["node"]) + fl["reach"] * e_r + fl["rise"] * np.array([0.0, 1.0, 0.0])
+    return origin, P.flower_basis(fl["azimuth"], fl["tilt"], fl["spin"])
 
 
 def make_pedicel(fl: dict):
@@ -239,54 +145,9 @@ def make_pedicel(fl: dict):
     span = float(np.sqrt(np.sum((p3 - p0) ** 2)))
     p1 = p0 + 0.4 * span * d0
     p2 = p3 - 0.4 * span * axis
-    t = (np.arange(PEDICEL_RINGS) / (PEDICEL_RINGS - 1))[:, None]
-    pts = ((1 - t) ** 3) * p0 + (3 * t * (1 - t) ** 2) * p1 + (3 * t * t * (1 - t)) * p2 + (t ** 3) * p3
-    r = PEDICEL_R0 + (PEDICEL_R1 - PEDICEL_R0) * t[:, 0]
-    return tube(pts, r, PEDICEL_SIDES, cap0=p0, cap1=p3 + 0.05 * axis)
-
-
-def join(parts):
-    """[(name, material, (v, f))] -> ObjMesh with one group per part."""
-    vs, fs, gs, ms, mats = [], [], [], [], []
-    n = 0
-    for gi, (_name, mat, (v, f)) in enumerate(parts):
-        if mat not in mats:
-            mats.append(mat)
-        vs.append(v)
-        fs.append(f + n)
-        gs.append(np.full(len(f), gi, np.int32))
-        ms.append(np.full(len(f), mats.index(mat), np.int32))
-        n += len(v)
-    return ObjMesh(vertices=np.vstack(vs), faces=np.vstack(fs), groups=[p[0] for p in parts],
-                   face_group=np.concatenate(gs), materials=mats, face_material=np.concatenate(ms))
-
-
-def merge(meshes, names, colors: bool = False) -> ObjMesh:
-    """Placed flower meshes -> one ObjMesh, one group per input, materials by name."""
-    vs, fs, gs, ms, cs, mats = [], [], [], [], [], []
-    n = 0
-    for gi, m in enumerate(meshes):
-        local = []
-        for name in m.materials:
-            if name not in mats:
-                mats.append(name)
-            local.append(mats.index(name))
-        vs.append(m.vertices)
-        fs.append(m.faces + n)
-        gs.append(np.full(m.n_faces, gi, np.int32))
-        ms.append(np.asarray(local, np.int32)[m.face_material])
-        if colors:
-            cs.append(m.vertex_colors)
-        n += m.n_vertices
-    return ObjMesh(vertices=np.vstack(vs), faces=np.vstack(fs), groups=list(names),
-                   face_group=np.concatenate(gs), materials=mats, face_material=np.concatenate(ms),
-                   vertex_colors=np.vstack(cs) if colors else None)
-
-
-def placed(mesh: ObjMesh, origin, basis) -> ObjMesh:
-    return ObjMesh(vertices=transform(mesh.vertices, basis, origin), faces=mesh.faces,
-                   vertex_colors=mesh.vertex_colors, groups=mesh.groups, face_group=mesh.face_group,
-                   materials=mesh.materials, face_material=mesh.face_material)
+    pts = P.bezier(p0, p1, p2, p3, PEDICEL_RINGS)
+    r = PEDICEL_R0 + (PEDICEL_R1 - PEDICEL_R0) * (np.arange(PEDICEL_RINGS) / (PEDICEL_RINGS - 1))
+    return P.tube(pts, r, PEDICEL_SIDES, cap0=p0, cap1=p3 + 0.05 * axis)
 
 
 def main(lily: Path, out: Path) -> int:
@@ -304,7 +165,7 @@ def main(lily: Path, out: Path) -> int:
     leaves = make_leaves()
     parts += [(f"leaf_{j + 1:02d}", MTL_LEAF, lf) for j, lf in enumerate(leaves)]
     parts += [(f"pedicel_{k + 1}", MTL_PEDICEL, make_pedicel(fl)) for k, fl in enumerate(FLOWERS)]
-    body = join(parts)
+    body = P.join(parts)
     write_obj(out / "body.obj", body, header="lily plant: stem, leaves, pedicels (pipelines/lily/plant.py)")
 
     # every flower's frames in plant coordinates: tepals + column
@@ -318,7 +179,7 @@ def main(lily: Path, out: Path) -> int:
         for f in range(FRAMES):
             t = age(f, fl["offset"])
             if t not in cache:
-                cache[t] = merge([placed(tep[t], o, b), placed(col[t], o, b)], ["tepals", "column"])
+                cache[t] = P.merge([P.placed(tep[t], o, b), P.placed(col[t], o, b)], ["tepals", "column"])
             write_obj(folder / f"frame_{f:04d}.obj", cache[t],
                       header=f"lily plant flower {k + 1} (age offset {fl['offset']}): lily frame {t + 1} at plant frame {f + 1}")
 
@@ -330,14 +191,15 @@ def main(lily: Path, out: Path) -> int:
         for k, fl in enumerate(FLOWERS):
             t1 = age(n - 1, fl["offset"]) + 1
             o, b = frames[k]
-            ts.append(placed(read_obj(lily / "painted" / f"{t1}.obj"), o, b))
-            cs.append(placed(read_obj(lily / "column_keyframes" / f"{t1}.obj"), o, b))
-        write_obj(out / "sheet_tepals" / f"{n}.obj", merge(ts, [f"f{k + 1}_tepals" for k in range(len(ts))], True))
-        write_obj(out / "sheet_columns" / f"{n}.obj", merge(cs, [f"f{k + 1}_column" for k in range(len(cs))]))
+            ts.append(P.placed(read_obj(lily / "painted" / f"{t1}.obj"), o, b))
+            cs.append(P.placed(read_obj(lily / "column_keyframes" / f"{t1}.obj"), o, b))
+        write_obj(out / "sheet_tepals" / f"{n}.obj", P.merge(ts, [f"f{k + 1}_tepals" for k in range(len(ts))], True))
+        write_obj(out / "sheet_columns" / f"{n}.obj", P.merge(cs, [f"f{k + 1}_column" for k in range(len(cs))]))
 
     # the layout, for the check and the record
     lines = ["# the lily plant's layout (written by pipelines/lily/plant.py; read by check_plant.py)",
-             f"frames = {FRAMES}", f"sheet = {list(SHEET)}", f"stem_height = {STEM_HEIGHT}",
+             'title = "lily plant"', f"frames = {FRAMES}", f"sheet = {list(SHEET)}",
+             'sheet_parts = ["sheet_tepals", "sheet_columns"]', f"stem_height = {STEM_HEIGHT}",
              f"leaves = {LEAF_COUNT}", f"body_triangles = {body.n_faces}",
              f"flower_triangles = {tep[0].n_faces + col[0].n_faces}",
              f"stages = {[[s, n] for s, n in STAGES]}", ""]
