@@ -1,4 +1,5 @@
-"""The lily plant (pipelines/lily/plant.py, check_plant.py; `make lily-plant`, Ijiri et al. fig. 15).
+"""The lily and Eustoma plants (pipelines/lily/plant.py, pipelines/eustoma/plant.py, inflo.tools.plant;
+`make lily-plant`, `make eustoma-plant`; Ijiri et al. fig. 15).
 
 From the draft lily build of the session (conftest's ``species_build``, shared with the golden-file
 tests; its painted and column keyframes made here if missing), plant.py writes the plant into a
@@ -12,7 +13,10 @@ temporary folder (about 6 s), and:
   frames 1, 50, 80 and 100 and at the contact sheet's last frame;
 - the classification of check_plant.py is not vacuous: leaves and pedicels do reach into the stem
   (pairs it excepts), and a flower moved onto another is caught;
-- canopy-export writes the USD with the six parts over 100 frames.
+- canopy-export writes the USD with the six parts over 100 frames;
+- the Eustoma plant (pipelines/eustoma/plant.py, from the session's eustoma build): five flowers at
+  three stages at the last frame, stem, 14 leaves, 5 branches, no intersecting pair at frames 1, 60
+  and 100, its USD written.
 
 The whole `plant` target (every frame checked, pictures; about 45 s) is not run here.
 """
@@ -137,3 +141,40 @@ def test_usd_written(plant, tmp_path):
     meshes = {p.GetName() for p in stage.Traverse() if p.GetTypeName() == "Mesh"}
     assert {f"flower_{k}" for k in range(1, 6)} | {"body"} <= meshes
     assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1.0, 100.0)
+
+
+# -- the Eustoma plant (pipelines/eustoma/plant.py, `make eustoma-plant`): the same checks, shorter
+
+EUSTOMA = REPO / "pipelines" / "eustoma"
+
+
+@pytest.fixture(scope="module")
+def eustoma_plant(species_build, tmp_path_factory):
+    species_build("eustoma")
+    build = REPO / "build" / "eustoma"
+    if not (build / "mellow_yellow").is_dir():
+        pytest.skip("make eustoma has not been run")
+    spec = importlib.util.spec_from_file_location("eustoma_plant", EUSTOMA / "plant.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    out = tmp_path_factory.mktemp("eustoma_plant")
+    assert mod.main(build, out) == 0
+    return out
+
+
+def test_eustoma_plant(eustoma_plant, capsys, tmp_path):
+    from inflo.tools.plant import age, stage
+    from inflo.tools.plant.check import main
+
+    lay = tomllib.loads((eustoma_plant / "plant.toml").read_text())
+    stages = [tuple(s) for s in lay["stages"]]
+    ages = [age(99, fl["offset"], 100) for fl in lay["flower"]]
+    assert len(lay["flower"]) == 5 and len({stage(a, stages) for a in ages}) >= 3, ages
+    body = read_obj(eustoma_plant / "body.obj")
+    assert "stem" in body.groups and sum(g.startswith("leaf_") for g in body.groups) == 14
+    assert sum(g.startswith("pedicel_") for g in body.groups) == 5
+    assert main(eustoma_plant, [1, 60, 100]) == 0, capsys.readouterr().out
+    parts = [f"flower_{k}={eustoma_plant / f'flower_{k}'}" for k in range(1, 6)] + [f"body={eustoma_plant / 'body.obj'}"]
+    r = run_cli("canopy-export", "-q", *parts, "--colors", EUSTOMA / "plant_colors.toml", "--units", "mm",
+                "-o", tmp_path / "eustoma_plant.usdc")
+    assert r.returncode == 0 and (tmp_path / "eustoma_plant.usdc").stat().st_size > 0, r.stderr
