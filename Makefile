@@ -100,6 +100,15 @@ new-species: $(STAMP)
 $(SPECIES_DIRS): $(STAMP) bytecode
 	$(MAKE) -C pipelines/$@ QUALITY=$(QUALITY)
 
+# a species' plant (a stem with leaves carrying several of its flowers, offset in age): make lily-plant,
+# make eustoma-plant
+.PHONY: lily-plant eustoma-plant
+lily-plant: $(STAMP) bytecode
+	$(MAKE) -C pipelines/lily plant QUALITY=$(QUALITY)
+
+eustoma-plant: $(STAMP) bytecode
+	$(MAKE) -C pipelines/eustoma plant QUALITY=$(QUALITY)
+
 clean:
 	rm -rf build bench/out .pytest_cache .hypothesis
 	find . -path ./$(VENV) -prune -o -name __pycache__ -type d -prune -exec rm -rf {} +
