@@ -19,8 +19,10 @@ Prints, and exits 1 when any fails:
 - the rays per head (dimorph over the whole corymb, fig. 6.4a): printed as a distribution; on
   average 3-7 (real heads have about 5), every head with fewer rays than disk florets (a head
   enclosed by its neighbours may have none);
-- heads with a body (issue 43; thresholds in species.toml [check]): the receptacles
-  (``receptacles/``, one frame per canopy frame) cross no floret or bract in any frame; each head
+- heads with a body (thresholds in species.toml [check]): the receptacles (``receptacles/``, one
+  frame per canopy frame; fccompose simulates them as obstacles, the ``#@ type: obstacle``
+  placements after every floret and bract of ``typed.scn``, left out here) cross no floret or
+  bract in any frame; each head
   has its ``bracts`` involucral bracts; the median gap from a ray floret to the nearest disk floret
   of its head, in the ray's lengths (its farthest point from its base), at most ``ligule_gap``; the
   median distance from a floret's base to its head's receptacle, in floret sizes, at most
@@ -142,6 +144,11 @@ def main(build: Path) -> int:
     branches = sorted((build / "branches" / "frames").glob("branches_*.obj"))
     head_rba = list_rba_sequence(build / "heads" / "rba")
     typed = read_scn(build / "corymb" / "typed.scn")
+    # the receptacles' obstacle placements (after every floret and bract; fccompose does not write
+    # them): the florets are the others, their indices unchanged
+    n_obst = sum(p.type == "obstacle" for p in typed.placements)
+    typed.placements = [p for p in typed.placements if p.type != "obstacle"]
+    print(f"receptacles as obstacles of the canopy simulation: {n_obst}")
     print(f"one clock: {len(canopy)} canopy frames, {len(branches)} branch frames, {len(head_rba)} head RBA frames")
     if not len(canopy) == len(branches) == len(head_rba):
         fail.append("the canopy, branch and head sequences differ in length")

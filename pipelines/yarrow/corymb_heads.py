@@ -2,6 +2,7 @@
 `corymb` stage's last step).
 
 Usage: python corymb_heads.py PATTERN_DIR HEAD.scn FRAMES HEAD_SCALE BUD OUT_DIR [INVOLUCRE.scn RECEPTACLE.obj]
+       python corymb_heads.py --obstacles TYPED.scn RECEPTACLES.scn OUT.scn
 
 PATTERN_DIR is a dynamic recursive-segregation pattern (``phyllotaxis``, ``[hierarchy]`` with
 ``dynamic = true``, thesis sec. 5.4, fig. 5.3): ``scene.scn`` (one ``rba:`` placement per head) and
@@ -41,7 +42,13 @@ Writes under OUT_DIR, atomically per file:
 - ``receptacles/frame_NNNN.obj`` (FRAMES files, with RECEPTACLE.obj): every head's receptacle on
   its pose in that frame, scaled as its florets (a group ``receptacle_H`` per head, its faces from
   the head's emergence on; before it, its vertices rest on the head's first pose: the vertex count
-  and order are those of every frame, as formats/obj.md asks of a sequence).
+  and order are those of every frame, as formats/obj.md asks of a sequence);
+- with RECEPTACLE.obj, the receptacles as **obstacles** of the canopy (formats/fcc.md
+  "Obstacles": fixed parts the florets and bracts collide with, not written): an ``rba:``
+  placement per head (id 3, ``#@ type: obstacle``, its window from the head's emergence) in
+  ``corymb/receptacles.scn``, its RBA row (id ``n_heads * n + h``, after every floret and bract) in
+  every ``corymb/rba`` frame from the head's emergence, the pose of ``receptacles/``; ``--obstacles``
+  appends these placements to dimorph's typed scene (dimorph types florets, not receptacles).
 """
 from __future__ import annotations
 
@@ -57,6 +64,9 @@ from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import RbaFrame, list_rba_sequence, read_rba, write_rba
 from inflo.formats.scn import Group, Scene, read_scn, write_scn
 
+#: the animation id of the receptacles' obstacle placements (yarrow.fcc)
+OBSTACLE_ID = 3
+
 
 def canopy_clock(frames_in: list, n: int) -> tuple[list, int]:
     """The pattern's RBA frames on the canopy's clock: ``n`` frames from the one before the first
@@ -69,6 +79,54 @@ def canopy_clock(frames_in: list, n: int) -> tuple[list, int]:
     while len(seq) < n:
         seq.append(frames_in[-1])
     return seq, start
+
+
+#: the horizontal reach of a head's involucre (the bracts' bases on the sphere of radius 1.06, at
+#: most 104 degrees from its pole: 1.06 sin 104) in head units, beyond its receptacle's rim (1)
+INVOLUCRE_REACH = 1.03
+
+
+def drop_engulfed(scene: Scene, seq: list, reach: float) -> tuple[Scene, list, list]:
+    """The pattern without the heads that form within an older head's body: in some frame head b
+    stands closer to an older head a (emerged earlier, or as early and larger) than ``reach`` x
+    (size a + size b), the two involucres' reach (head scale x 1.03 head units each). The final
+    pattern's last cohort forms two heads so (pattern placements 27 and 50: 0.61 and 0.90 of that
+    distance from heads 13 and 37, the smaller head more than half under the larger one's florets),
+    where a receptacle and bracts of one head stand in the other's receptacle: no collision
+    response can part them (their bases are fixed). Such a primordium aborts; the others keep their
+    poses. Returns the scene and frames renumbered (RBA ids are scene indices) and the dropped
+    placements' indices."""
+    first = {}
+    for k, f in enumerate(seq):
+        for i, pid in enumerate(f.ids):
+            first.setdefault(int(pid), (k, -float(f.scale[i, 0])))
+    kept, dropped = [], []
+    for pid in sorted(first, key=lambda q: (first[q], q)):
+        bad = False
+        for f in seq:
+            r = f.index(pid)
+            if r is None:
+                continue
+            for q in kept:
+                rq = f.index(q)
+                if rq is not None and np.linalg.norm(f.pos[r] - f.pos[rq]) < reach * (f.scale[r, 0] + f.scale[rq, 0]):
+                    bad = True
+                    break
+            if bad:
+                break
+        (dropped if bad else kept).append(pid)
+    if not dropped:
+        return scene, seq, []
+    keep = sorted(kept)
+    new_id = {old: i for i, old in enumerate(keep)}
+    out = Scene(groups=copy.deepcopy(scene.groups))
+    out.placements = [copy.deepcopy(scene.placements[i]) for i in keep]
+    frames = []
+    for f in seq:
+        rows = [i for i, pid in enumerate(f.ids) if int(pid) in new_id]
+        frames.append(RbaFrame(np.array([new_id[int(f.ids[i])] for i in rows], np.int32), f.pos[rows], f.scale[rows],
+                               f.up[rows], f.right[rows]))
+    return out, frames, sorted(dropped)
 
 
 def sphere_centre(inv: Scene) -> np.ndarray:
@@ -120,6 +178,11 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
         for q in bracts:
             q.pos = q.pos - centre
     seq, start = canopy_clock(frames_in, n)
+    if involucre_path is not None:
+        scene, seq, dropped = drop_engulfed(scene, seq, head_scale * INVOLUCRE_REACH)
+        if dropped:
+            print(f"corymb_heads.py: {len(dropped)} heads formed within an older head's involucre left out "
+                  f"(pattern placements {', '.join(map(str, dropped))})")
     emerged = {}
     for k, f in enumerate(seq):
         for pid in f.ids:
@@ -167,6 +230,25 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
             p.emergence = float(emerged[pid])
             p.interpolation = None
     nf = len(members)
+    # with RECEPTACLE.obj: every head's receptacle is also an obstacle placement of the canopy
+    # (formats/fcc.md "Obstacles": fixed, simulated, not written), ids n_heads * nf + h after every
+    # floret and bract, its RBA row the head's pose scaled by head_scale (the geometry of
+    # receptacles/frame_NNNN.obj); corymb/receptacles.scn holds these placements, which
+    # ``corymb_heads.py --obstacles`` appends to the typed scene after dimorph
+    obstacles = Scene()
+    obstacles.groups = copy.deepcopy(flat.groups)
+    rec_local = placement_matrix(np.zeros(3), np.full(3, head_scale), np.array([0.0, 1.0, 0.0]),
+                                 np.array([1.0, 0.0, 0.0]))
+    if receptacle_path is not None:
+        for h, pid in enumerate(heads):
+            row = lastf.index(pid)
+            M = placement_matrix(lastf.pos[row], lastf.scale[row], lastf.up[row], lastf.right[row]) @ rec_local
+            q = copy.deepcopy(flat.placements[h * nf])
+            q.kind, q.id, q.pos, q.scale = "rba", OBSTACLE_ID, M[:3, 3].copy(), np.ones(3)
+            q.up, q.right = M[:3, 1] / np.linalg.norm(M[:3, 1]), M[:3, 0] / np.linalg.norm(M[:3, 0])
+            q.frame_start, q.frame_end, q.group = int(emerged[pid]), int(emerged[pid]) + 1, h + 1
+            q.emergence, q.type, q.petal, q.interpolation = float(emerged[pid]), "obstacle", None, None
+            obstacles.placements.append(q)
     poses = []
     for k, f in enumerate(seq):
         ids, pos, scale, up, right = [], [], [], [], []
@@ -185,6 +267,17 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
                 scale.append((s, s, s))
                 up.append(M[:3, 1] / s)
                 right.append(M[:3, 0] / s)
+        if receptacle_path is not None:
+            for h in range(len(heads)):
+                if poses[k][h] is None:
+                    continue
+                M = poses[k][h] @ rec_local
+                s = float(np.linalg.norm(M[:3, 1]))
+                ids.append(len(heads) * nf + h)
+                pos.append(M[:3, 3])
+                scale.append((s, s, s))
+                up.append(M[:3, 1] / s)
+                right.append(M[:3, 0] / s)
         write_rba(out / "corymb" / "rba" / f"{k:04d}.rba",
                   RbaFrame(ids, np.reshape(pos, (-1, 3)), np.reshape(scale, (-1, 3)), np.reshape(up, (-1, 3)),
                            np.reshape(right, (-1, 3))), fast=True)
@@ -193,6 +286,9 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
               header=f"{len(heads)} heads x {nflo} florets of {head_path.name}{inv_note}, head scale {head_scale:g}, "
                      f"on the canopy's clock ({n} frames; corymb_heads.py)")
     if receptacle_path is not None:
+        write_scn(out / "corymb" / "receptacles.scn", obstacles,
+                  header=f"the receptacles of the {len(heads)} heads as obstacles (id {OBSTACLE_ID}; corymb_heads.py): "
+                         "appended to the typed scene after dimorph")
         receptacle_frames(read_obj(receptacle_path), poses, len(heads), n, head_scale, out)
     first = sorted(emerged.values())
     print(f"corymb_heads.py: {len(heads)} heads x {nflo} florets{inv_note}; pattern frames {start}-{len(frames_in) - 1} "
@@ -201,9 +297,21 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
     return 0
 
 
+def append_obstacles(typed_path: Path, obstacles_path: Path, out: Path) -> int:
+    """``--obstacles TYPED.scn RECEPTACLES.scn OUT.scn``: the typed scene (dimorph's) with the
+    receptacles' obstacle placements after its florets and bracts (their RBA ids follow them)."""
+    typed, obst = read_scn(typed_path), read_scn(obstacles_path)
+    typed.placements.extend(obst.placements)
+    write_scn(out, typed, header=f"{typed_path.name} (dimorph) + the {len(obst)} receptacles of "
+                                 f"{obstacles_path.name} as obstacles (corymb_heads.py --obstacles)")
+    return 0
+
+
 def cli(argv: list) -> int:
     """Parse ``PATTERN_DIR HEAD.scn FRAMES HEAD_SCALE BUD OUT_DIR [INVOLUCRE.scn RECEPTACLE.obj]``
     (the usage line on a wrong count)."""
+    if argv[:1] == ["--obstacles"] and len(argv) == 4:
+        return append_obstacles(Path(argv[1]), Path(argv[2]), Path(argv[3]))
     try:
         if len(argv) not in (6, 8):
             raise ValueError
