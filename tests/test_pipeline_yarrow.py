@@ -42,6 +42,8 @@ YARROW = REPO / "pipelines" / "yarrow"
 BUILD = REPO / "build" / "yarrow"
 RAY_KEYS = [YARROW / f"ray_{k}.floret" for k in ("bud", "mid", "open")]
 DISK_KEYS = [YARROW / f"disk_{k}.floret" for k in ("bud", "open")]
+BRACT_KEYS = [YARROW / f"bract_{k}.floret" for k in ("bud", "open")]
+BRACTS, NF = 13, 34  # a head's bracts (involucre.toml, species.toml), its placements (21 florets + 13)
 FIB = {1, 2, 3, 5, 8, 13, 21, 34, 55}
 # polygonize resolution per quality (the Makefile's RAY_RES / DISK_RES), heads, canopy frames
 RES = {"draft": dict(ray=("0.2", "9"), disk=("0.25", "3"), heads=16, ray_tris=80, disk_tris=80, frames=32),
@@ -74,12 +76,15 @@ def corymb(tmp_path_factory):
     for name in ("corymb", "head"):
         r = run_cli("phyllotaxis", "-q", YARROW / "draft" / f"{name}.toml", "-o", out / ("growth" if name == "corymb" else "head"))
         assert r.returncode == 0, r.stderr
+    r = run_cli("phyllotaxis", "-q", YARROW / "involucre.toml", "-o", out / "involucre")
+    assert r.returncode == 0, r.stderr
     r = subprocess.run([sys.executable, str(YARROW / "corymb_heads.py"), str(out / "growth"), str(out / "head" / "scene.scn"),
-                        str(RES["draft"]["frames"]), str(HEAD_SCALE), str(BUD), str(out)],
+                        str(RES["draft"]["frames"]), str(HEAD_SCALE), str(BUD), str(out),
+                        str(out / "involucre" / "scene.scn"), str(out / "head" / "receptacle.obj")],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     r = run_cli("dimorph", "-q", out / "corymb" / "scene.scn", "--alpha", ALPHA, "--half-angle", "--threshold", TH_A,
-                "-o", out / "corymb" / "typed.scn")
+                "--marginal", 10, "--bracts", BRACTS, "--bract-id", 2, "-o", out / "corymb" / "typed.scn")
     assert r.returncode == 0, r.stderr
     return out
 
@@ -89,14 +94,14 @@ def test_inputs_are_what_make_keys_writes(tmp_path):
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     written = sorted(p.name for p in tmp_path.iterdir())
-    assert written == sorted(p.name for p in RAY_KEYS + DISK_KEYS)
+    assert written == sorted(p.name for p in RAY_KEYS + DISK_KEYS + BRACT_KEYS)
     for name in written:
         assert (tmp_path / name).read_text() == (YARROW / name).read_text(), \
             f"pipelines/yarrow/{name} differs from what make_keys.py writes: rerun it"
 
 
 def test_key_poses_ray_bilateral_disk_fused_five_fold():
-    for keys in (RAY_KEYS, DISK_KEYS):
+    for keys in (RAY_KEYS, DISK_KEYS, BRACT_KEYS):
         poses = [read_floret(p) for p in keys]
         for a, b, pa, pb in zip(poses, poses[1:], keys, keys[1:]):
             check_compatible(a, b, pa, pb)
@@ -159,7 +164,7 @@ def test_one_clock_heads_and_florets(corymb):
     heads = read_scn(corymb / "heads" / "scene.scn")
     flat = read_scn(corymb / "corymb" / "scene.scn")
     head = read_scn(corymb / "head" / "scene.scn")
-    assert len(flat) == len(heads) * len(head) == RES["draft"]["heads"] * 21
+    assert len(flat) == len(heads) * NF == RES["draft"]["heads"] * (len(head) + BRACTS)
     assert len(flat.groups) == len(heads) + 1
     end = int((corymb / "heads" / "pattern_end.txt").read_text())
     assert 0 < end < n - 10  # the pattern's growth, then the last heads opening on it
@@ -176,10 +181,10 @@ def test_one_clock_heads_and_florets(corymb):
     k = end // 2 + 1
     fl = read_rba(floret_rba[k])
     for h, pid in enumerate(sorted(first)):
-        rows = [i for i in range(len(fl)) if fl.ids[i] // 21 == h]
-        assert (len(rows) == 21) == (first[pid] <= k)
+        rows = [i for i in range(len(fl)) if fl.ids[i] // NF == h]
+        assert (len(rows) == NF) == (first[pid] <= k)
         for j in (0, 20):
-            p = flat.placements[h * 21 + j]
+            p = flat.placements[h * NF + j]
             assert p.group == h + 1 and p.frame_start == first[pid] + BUD + head.placements[j].frame_start
             assert p.frame_end - p.frame_start == head.placements[j].frame_end - head.placements[j].frame_start
         if rows:
@@ -187,9 +192,39 @@ def test_one_clock_heads_and_florets(corymb):
             H = placement_matrix(frames[k].pos[hr], frames[k].scale[hr], frames[k].up[hr], frames[k].right[hr])
             q = head.placements[20]
             expect = H @ np.append(q.pos * HEAD_SCALE, 1.0)
-            row = fl.index(h * 21 + 20)
+            row = fl.index(h * NF + 20)
             np.testing.assert_allclose(fl.pos[row], expect[:3], atol=2e-6)
             np.testing.assert_allclose(fl.scale[row, 0], frames[k].scale[hr, 0] * q.scale[0] * HEAD_SCALE, rtol=1e-5)
+
+
+def test_involucre_and_receptacles(corymb):
+    """Each head's 13 outermost placements are its bracts (on the sphere round the receptacle, below
+    its rim, dimorph --bracts), windows from the head's emergence; a receptacle under every head
+    on its pose in every frame, the same vertex count in every frame (issue 43)."""
+    typed = read_scn(corymb / "corymb" / "typed.scn")
+    heads = read_scn(corymb / "heads" / "scene.scn")
+    for h in range(len(heads)):
+        ps = typed.placements[h * NF:(h + 1) * NF]
+        assert [p.type == "bract" for p in ps] == [False] * 21 + [True] * BRACTS
+        centre = typed.groups[h + 1].centre
+        d = np.array([np.linalg.norm(p.pos - centre) for p in ps])
+        assert d[21:].min() > d[:21].max()  # the bracts lie outside every floret
+        assert all(p.pos[1] < centre[1] for p in ps[21:])  # under the rim: a cup round the head
+        assert all(p.frame_start == ps[21].emergence for p in ps[21:] if p.frame_start == min(q.frame_start for q in ps[21:]))
+    recs = list_obj_sequence(corymb / "receptacles")
+    assert len(recs) == RES["draft"]["frames"]
+    meshes = [read_obj(p) for p in recs]
+    assert len({m.n_vertices for m in meshes}) == 1 and meshes[0].n_faces == 0
+    last = meshes[-1]
+    assert len(set(last.face_group.tolist())) == len(heads)
+    # every floret's base on its head's receptacle (the receptacle's top is inset 0.004 head units
+    # below the florets' bases): within 0.05 floret sizes of the mesh's vertices or face centres
+    rba = read_rba(sorted((corymb / "corymb" / "rba").glob("*.rba"))[-1])
+    centres = last.vertices[last.faces].mean(axis=1)
+    tree = cKDTree(np.vstack([last.vertices, centres]))
+    rows = [rba.index(i) for i, p in enumerate(typed.placements) if p.type != "bract"]
+    d = tree.query(rba.pos[rows])[0] / rba.scale[rows, 0]
+    assert np.median(d) < 0.2
 
 
 def test_rays_per_head_vary_over_the_corymb(corymb):
@@ -198,7 +233,8 @@ def test_rays_per_head_vary_over_the_corymb(corymb):
     per = [rays.get(g, 0) for g in range(1, len(typed.groups))]
     assert 4.0 <= np.mean(per) <= 6.5  # real A. millefolium heads: about 5 rays
     assert len(set(per)) >= 5 and max(per) <= 10  # the count depends on the head's place
-    assert all(p.id == (1 if p.type == "ray" else 0) for p in typed.placements)
+    assert all(p.id == {"ray": 1, "disk": 0, "bract": 2}[p.type] for p in typed.placements)
+    typed.placements = [p for p in typed.placements if p.type != "bract"]
     r = _radius(typed)
     groups = np.array([p.group for p in typed.placements])
     is_ray = np.array([p.type == "ray" for p in typed.placements])
@@ -273,6 +309,38 @@ def test_built_yarrow_passes_its_checks(capsys, built):
     assert check.main(Path(BUILD)) == 0, capsys.readouterr().out
 
 
+def test_built_heads_have_a_body(built):
+    """Issue 43 on the draft build: the ray florets attached at the head's rim (median gap to the
+    nearest disk floret of the head within species.toml [check] ligule_gap of the ray's length;
+    0.33 before), the florets standing on their receptacles (median within floret_surface floret
+    sizes; 1.2 to the nearest branch before), 13 bracts a head, no pair with the receptacles."""
+    import tomllib
+
+    check = _load("check_yarrow")
+    facts = tomllib.loads((YARROW / "species.toml").read_text())["check"]
+    typed = read_scn(BUILD / "corymb" / "typed.scn")
+    # the receptacles are obstacles of the simulation: one placement a head after every floret and
+    # bract (id 3), fccompose's frames count them and do not write them
+    obst = [p for p in typed.placements if p.type == "obstacle"]
+    assert len(obst) == len(typed.groups) - 1 and {p.id for p in obst} == {3}
+    assert all(p.type == "obstacle" for p in typed.placements[-len(obst):])
+    typed.placements = typed.placements[:-len(obst)]
+    canopy = list_obj_sequence(BUILD / "canopy")
+    with open(canopy[-1]) as fh:
+        assert f"and {len(obst)} obstacles (not written)" in fh.readline()
+    recs = list_obj_sequence(BUILD / "receptacles")
+    assert len(recs) == len(canopy)
+    mesh, rec = read_obj(canopy[-1]), read_obj(recs[-1])
+    rba = read_rba(sorted((BUILD / "corymb" / "rba").glob("*.rba"))[-1])
+    gaps = check.ligule_gaps(mesh, typed, rba)
+    assert len(gaps) == sum(p.type == "ray" for p in typed.placements)
+    assert np.median(gaps) <= facts["ligule_gap"] == 0.05
+    dist = check.surface_distances(rec, typed, rba)
+    assert np.median(dist) <= facts["floret_surface"]
+    assert Counter(Counter(p.group for p in typed.placements if p.type == "bract").values()) == {BRACTS: len(typed.groups) - 1}
+    assert check.cross_pairs(mesh, rec) == 0
+
+
 def test_built_branches_grow_with_the_heads(built):
     frames = sorted((BUILD / "branches" / "frames").glob("branches_*.obj"))
     canopy = list_obj_sequence(BUILD / "canopy")
@@ -280,4 +348,5 @@ def test_built_branches_grow_with_the_heads(built):
     sizes = [len(read_obj(p).faces) for p in frames]
     assert sizes[0] == 0 and len({s for s in sizes if s}) >= 3  # the structure grows frame by frame
     heads = [len(read_obj(p).groups) for p in canopy]
-    assert heads[0] == 0 and heads[-1] == len(read_scn(BUILD / "corymb" / "typed.scn"))
+    typed = read_scn(BUILD / "corymb" / "typed.scn")
+    assert heads[0] == 0 and heads[-1] == sum(p.type != "obstacle" for p in typed.placements)

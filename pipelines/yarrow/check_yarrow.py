@@ -19,6 +19,14 @@ Prints, and exits 1 when any fails:
 - the rays per head (dimorph over the whole corymb, fig. 6.4a): printed as a distribution; on
   average 3-7 (real heads have about 5), every head with fewer rays than disk florets (a head
   enclosed by its neighbours may have none);
+- heads with a body (thresholds in species.toml [check]): the receptacles (``receptacles/``, one
+  frame per canopy frame; fccompose simulates them as obstacles, the ``#@ type: obstacle``
+  placements after every floret and bract of ``typed.scn``, left out here) cross no floret or
+  bract in any frame; each head
+  has its ``bracts`` involucral bracts; the median gap from a ray floret to the nearest disk floret
+  of its head, in the ray's lengths (its farthest point from its base), at most ``ligule_gap``; the
+  median distance from a floret's base to its head's receptacle, in floret sizes, at most
+  ``floret_surface``;
 - the heads develop in order: at the frame where half the florets have started opening, the heads
   that emerged first are further open (Spearman rank correlation of the heads' emergence frame
   with the share of their florets past their window's start < -0.5).
@@ -26,6 +34,7 @@ Prints, and exits 1 when any fails:
 from __future__ import annotations
 
 import sys
+import tomllib
 from collections import Counter
 from pathlib import Path
 
@@ -77,6 +86,51 @@ def canopy_groups(pos, diameter, slack: float = 1.05) -> int:
     return int(connected_components(link, directed=False)[0])
 
 
+W = np.array([(a, b, 1.0 - a - b) for a in np.linspace(0, 1, 6) for b in np.linspace(0, 1, 6) if a + b <= 1 + 1e-9])
+
+
+def floret_points(mesh, name: str) -> np.ndarray:
+    """Points of a canopy group (its triangles sampled at 21 barycentric points each)."""
+    gi = mesh.groups.index(name)
+    tri = mesh.vertices[mesh.faces[np.asarray(mesh.face_group) == gi]]
+    return np.einsum("kj,mjd->mkd", W, tri).reshape(-1, 3)
+
+
+def ligule_gaps(mesh, typed, rba) -> np.ndarray:
+    """Per ray floret: the gap from it to the nearest disk floret of its head over its length
+    (its farthest point from its base)."""
+    pts = {}
+    out = []
+    for i, p in enumerate(typed.placements):
+        if p.type != "ray":
+            continue
+        base = rba.pos[rba.index(i)]
+        ray = floret_points(mesh, f"floret_{i}")
+        disk = [j for j, q in enumerate(typed.placements) if q.group == p.group and q.type == "disk"]
+        for j in disk:
+            if j not in pts:
+                pts[j] = floret_points(mesh, f"floret_{j}")
+        d = cKDTree(np.vstack([pts[j] for j in disk])).query(ray)[0].min()
+        out.append(d / np.linalg.norm(ray - base, axis=1).max())
+    return np.array(out)
+
+
+def surface_distances(receptacles, typed, rba) -> np.ndarray:
+    """Per floret (not bract): its base's distance to its head's receptacle mesh (sampled) over
+    the floret's size."""
+    out = []
+    trees = {}
+    for i, p in enumerate(typed.placements):
+        if p.type == "bract":
+            continue
+        h = p.group - 1
+        if h not in trees:
+            trees[h] = cKDTree(floret_points(receptacles, f"receptacle_{h}"))
+        row = rba.index(i)
+        out.append(trees[h].query(rba.pos[row])[0] / rba.scale[row, 0])
+    return np.array(out)
+
+
 def rays_per_head(scene) -> list:
     rays = Counter(p.group for p in scene.placements if p.type == "ray")
     return [rays.get(g, 0) for g in sorted({p.group for p in scene.placements})]
@@ -84,25 +138,41 @@ def rays_per_head(scene) -> list:
 
 def main(build: Path) -> int:
     fail = []
+    with open(Path(__file__).resolve().parent / "species.toml", "rb") as fh:
+        facts = tomllib.load(fh)["check"]
     canopy = list_obj_sequence(build / "canopy")
     branches = sorted((build / "branches" / "frames").glob("branches_*.obj"))
     head_rba = list_rba_sequence(build / "heads" / "rba")
     typed = read_scn(build / "corymb" / "typed.scn")
+    # the receptacles' obstacle placements (after every floret and bract; fccompose does not write
+    # them): the florets are the others, their indices unchanged
+    n_obst = sum(p.type == "obstacle" for p in typed.placements)
+    typed.placements = [p for p in typed.placements if p.type != "obstacle"]
+    print(f"receptacles as obstacles of the canopy simulation: {n_obst}")
     print(f"one clock: {len(canopy)} canopy frames, {len(branches)} branch frames, {len(head_rba)} head RBA frames")
     if not len(canopy) == len(branches) == len(head_rba):
         fail.append("the canopy, branch and head sequences differ in length")
 
-    bad = cross = far = 0
-    mesh = None
+    recs = list_obj_sequence(build / "receptacles")
+    print(f"receptacles: {len(recs)} frames")
+    if len(recs) != len(canopy):
+        fail.append("the receptacle and canopy sequences differ in length")
+    bad = cross = far = rcross = 0
+    mesh = rec = None
     for i, path in enumerate(canopy):
         mesh = read_obj(path)
         n = count(mesh)
+        rec = read_obj(recs[min(i, len(recs) - 1)])
+        nr = cross_pairs(mesh, rec)
+        rcross += nr
         br = read_obj(branches[min(i, len(branches) - 1)])
         nb = cross_pairs(mesh, br)
         heads = read_rba(head_rba[min(i, len(head_rba) - 1)])
         d = cKDTree(br.vertices).query(heads.pos)[0] if len(heads) and len(br.vertices) else np.zeros(len(heads))
         nfar = int((d > 1e-5).sum()) if len(br.vertices) else len(heads)
         bad, cross, far = bad + n, cross + nb, far + nfar
+        if nr:
+            print(f"  frame {i:3d}: {nr} canopy-receptacle pairs")
         if i % 4 == 0 or i == len(canopy) - 1 or n or nb or nfar:
             print(f"  frame {i:3d}: {len(mesh.faces):6d} triangles, {len(mesh.groups):4d} florets, {len(heads):3d} heads, "
                   f"{len(br.faces):6d} branch triangles; {n} intersecting pairs, {nb} with the branches, "
@@ -115,6 +185,9 @@ def main(build: Path) -> int:
         fail.append(f"{cross} pairs between the canopy and the branches")
     if far:
         fail.append(f"{far} head-frames whose peduncle does not end at the head")
+    print(f"every frame: {rcross} pairs between the canopy (florets and bracts) and the receptacles")
+    if rcross:
+        fail.append(f"{rcross} pairs between the canopy and the receptacles")
 
     smooth = read_obj(build / "smooth" / "final.obj")
     n = count(smooth)
@@ -145,6 +218,25 @@ def main(build: Path) -> int:
           f"heads by ray count {{{hist}}}")
     if not 3 <= np.mean(per) <= 7 or any(r >= size[g] - r for g, r in zip(sorted(size), per)):
         fail.append("rays per head off 3-7 on average, or a head with as many rays as disk florets")
+
+    # heads with a body: the involucre, the rays attached at the rim, the florets on the receptacle
+    bracts = Counter(p.group for p in typed.placements if p.type == "bract")
+    nb = sorted(set(bracts.get(g, 0) for g in sorted(size)))
+    print(f"involucre: bracts per head {nb} (species.toml [check] bracts = {facts['bracts']})")
+    if nb != [int(facts["bracts"])]:
+        fail.append(f"bracts per head {nb}, not {facts['bracts']}")
+    last_rba = read_rba(list_rba_sequence(build / "corymb" / "rba")[-1])
+    gaps = ligule_gaps(mesh, typed, last_rba)
+    print(f"ligule gap (ray floret to the nearest disk floret of its head, in its lengths): median "
+          f"{np.median(gaps):.3f}, quartiles {np.percentile(gaps, 25):.3f}-{np.percentile(gaps, 75):.3f}, "
+          f"{(gaps > 0.1).mean():.0%} over 0.1 (at most {facts['ligule_gap']})")
+    if not np.median(gaps) <= facts["ligule_gap"]:
+        fail.append(f"median ligule gap {np.median(gaps):.3f} > {facts['ligule_gap']}")
+    dist = surface_distances(rec, typed, last_rba)
+    print(f"floret base to its receptacle, in floret sizes: median {np.median(dist):.4f}, max {dist.max():.4f} "
+          f"(median at most {facts['floret_surface']})")
+    if not np.median(dist) <= facts["floret_surface"]:
+        fail.append(f"median floret-receptacle distance {np.median(dist):.3f} > {facts['floret_surface']}")
 
     # the heads open in the order they emerged: at the frame where half the florets have started
     groups = np.array([p.group for p in typed.placements])

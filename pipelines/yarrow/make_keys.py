@@ -45,25 +45,41 @@ DISK = {
                  half=[36, 36, 36, 36, 28, 6]),
 }
 
-# ---- ray floret: the ligule's midrib (x outward, y up), half width per row, tip lobes -------------
-RAY_NU, RAY_NV = 5, 6
+# ---- ray floret: a short corolla tube rolled from the ligule's base, then the ligule ------------
+# Each row j of the half ligule: its midrib point (x outward, y up), half width, and how far it is
+# rolled round the floret axis (ROLL, degrees of the half arc: 150 = a tube of 300 degrees, open in
+# a slit on its inner side as a ray floret's corolla is; 0 = flat). A rolled row is an arc in the
+# horizontal plane through its midrib point, of radius half width / roll; a flat row lies across the
+# midrib, cupped toward its upper side. The first rows are the tube: it stands among the disk
+# florets to the height of their throats, so that the ligule leaves it at the head's rim, touching
+# the lobes of the disk florets beside it (issue 43: no ligule floating off the disk).
+RAY_NU, RAY_NV = 5, 8
 U_RAY = np.linspace(0.0, 1.0, RAY_NU)  # across the half ligule: midline .. edge
 # how far each column of the tip row falls short of the midline's tip, as a fraction of the tip
 # row's half width: the middle lobe (u = 0, 0.25), a notch (0.5), the lateral lobe (0.75), the edge
 TIP_RECESS = np.array([0.0, 0.06, 0.42, 0.10, 0.55])
-BASE_R = 0.12  # radius of the arc of the ligule's base row around the floret axis
+TUBE = 165.0  # the tube rows' half arc (degrees): a tube of 330 degrees
 RAY = {
+    # a closed bud: the tube and the ligule rolled round the axis, the lobes converging on top
     "bud": dict(time=0.0,
-                mid=[(0.10, 0.00), (0.14, 0.18), (0.17, 0.36), (0.17, 0.52), (0.14, 0.64), (0.09, 0.72)],
-                half=[0.06, 0.09, 0.12, 0.13, 0.12, 0.10],
-                cup=0.9),
+                mid=[(0.13, 0.00), (0.15, 0.13), (0.16, 0.26), (0.16, 0.38), (0.15, 0.49), (0.13, 0.58),
+                     (0.10, 0.65), (0.07, 0.70)],
+                roll=[TUBE, TUBE, TUBE, TUBE, TUBE, TUBE, TUBE, TUBE]),
+    # half open: the tube grown to the throat, the ligule unrolling and tilted out by about 45 degrees
     "mid": dict(time=0.5,
-                mid=[(0.10, 0.00), (0.17, 0.27), (0.32, 0.50), (0.60, 0.68), (0.90, 0.80), (1.15, 0.84)],
-                half=[0.07, 0.15, 0.30, 0.42, 0.48, 0.48],
+                mid=[(0.14, 0.00), (0.18, 0.18), (0.25, 0.36), (0.31, 0.50), (0.45, 0.68), (0.68, 0.86),
+                     (0.94, 0.98), (1.17, 1.04)],
+                half=[None, None, None, 0.36, 0.40, 0.46, 0.48, 0.48],
+                roll=[TUBE, TUBE, TUBE, 110.0, 45.0, 10.0, 0.0, 0.0],
                 cup=0.35),
+    # open: the tube flared to a throat a little wider than the disk florets' (0.46 at 0.55, theirs 0.36 at
+    # 0.6), whose rim meets the lobes of the disk florets beside it; the ligule spread almost level
+    # from the tube's mouth, short and broad, pointing away from the head centre
     "open": dict(time=1.0,
-                 mid=[(0.10, 0.00), (0.22, 0.24), (0.45, 0.44), (0.88, 0.56), (1.35, 0.55), (1.72, 0.46)],
-                 half=[0.08, 0.30, 0.52, 0.66, 0.72, 0.72],
+                 mid=[(0.14, 0.00), (0.24, 0.22), (0.42, 0.44), (0.50, 0.56), (0.70, 0.68), (1.02, 0.73),
+                      (1.40, 0.68), (1.78, 0.58)],
+                 half=[None, None, None, None, 0.62, 0.72, 0.72, 0.72],
+                 roll=[TUBE, TUBE, TUBE, TUBE, 80.0, 10.0, 0.0, 0.0],
                  cup=0.08),
 }
 
@@ -83,28 +99,69 @@ def disk_net(p):
 
 
 def ray_net(p):
-    """Half ligule: column i at u_i of the row's half width, bent up (cupped) toward the edge."""
+    """Half ligule: row j rolled round the floret axis by p["roll"][j] degrees (an arc in the
+    horizontal plane through its midrib point) or, unrolled, across the midrib, cupped toward its
+    upper side. A row's half width is given, or (None) that of its roll at its midrib point's
+    distance from the axis (a tube row: the arc centred on the axis)."""
     mid = np.array(p["mid"], float)
     pts = np.zeros((RAY_NV, RAY_NU, 3))
     for j in range(RAY_NV):
-        # the midrib's direction at row j and the in-plane normal (the ligule's upper side)
         a = mid[min(j + 1, RAY_NV - 1)] - mid[max(j - 1, 0)]
         t = a / np.linalg.norm(a)
         n = np.array([-t[1], t[0]])  # turned +90 degrees: toward the head centre / up
-        w = p["half"][j]
-        if j == 0:
-            # the base row wraps around the floret axis (an arc of radius BASE_R through the
-            # midrib's base), never a straight, collinear row of fixed vertices
-            th = U_RAY * w / BASE_R
-            pts[0, :, 0] = mid[0, 0] - BASE_R * (1.0 - np.cos(th))
-            pts[0, :, 1] = mid[0, 1]
-            pts[0, :, 2] = BASE_R * np.sin(th)
+        roll = np.radians(p["roll"][j])
+        half = p.get("half", [None] * RAY_NV)[j]
+        w = mid[j, 0] * roll if half is None else half
+        back = TIP_RECESS * w if j == RAY_NV - 1 else np.zeros(RAY_NU)
+        if roll > 1e-9:
+            r = w / roll
+            th = U_RAY * roll
+            pts[j, :, 0] = mid[j, 0] - r * (1.0 - np.cos(th)) - back * t[0]
+            pts[j, :, 1] = mid[j, 1] - back * t[1]
+            pts[j, :, 2] = r * np.sin(th)
             continue
         for i, u in enumerate(U_RAY):
-            back = TIP_RECESS[i] * w if j == RAY_NV - 1 else 0.0
             lift = p["cup"] * w * u * u * 0.5  # cupped: the edges curl to the upper side
-            xy = mid[j] - back * t + lift * n
+            xy = mid[j] - back[i] * t + lift * n
             pts[j, i] = (xy[0], xy[1], u * w)
+    return pts
+
+
+# ---- involucral bract (phyllary) ---------------------------------------------------------------
+# Achillea's phyllaries: small, ovate-oblong, greenish, imbricate in 3-4 rows forming a cup round
+# the head. A bract stands on the involucre (involucre.toml: a sphere round the head's receptacle,
+# its local +Y the sphere's outward normal, +X down the meridian), so its blade runs up the sphere
+# (-X) toward the head's rim, leaving it outward by a little (the bract below overlaps the base of
+# the bract above it from outside: imbricate) and following most of its curvature (the sphere's
+# radius is SPHERE bract units); concave inside (cupped toward -Y). Broad (0.9 bract units
+# across): the bracts of one row nearly touch.
+BRACT_NU, BRACT_NV = 4, 6
+U_BRACT = np.linspace(0.0, 1.0, BRACT_NU)
+BRACT_X = np.array([0.0, -0.2, -0.4, -0.6, -0.8, -1.0])
+SPHERE = 2.35  # the involucre's radius in bract units (involucre.toml: 1.06 / 0.451)
+
+
+def bract_mid(lift, bend):
+    """The midrib: up the sphere, ``lift`` per unit length outward, ``bend`` of its curvature."""
+    return [(x, lift * abs(x) - bend * x * x / (2.0 * SPHERE)) for x in BRACT_X]
+
+
+BRACT = {
+    # appressed round the young head, following the involucre closely
+    "bud": dict(time=0.0, mid=bract_mid(0.04, 1.0), half=[0.14, 0.32, 0.40, 0.39, 0.29, 0.08], cup=0.08),
+    # the head open: a little spreading, broad and obtuse (ovate-oblong)
+    "open": dict(time=1.0, mid=bract_mid(0.09, 0.8), half=[0.16, 0.36, 0.45, 0.44, 0.33, 0.10], cup=0.1),
+}
+
+
+def bract_net(p):
+    """Half bract: column i at u_i of the row's half width (+Z), cupped toward -Y (inside)."""
+    mid = np.array(p["mid"], float)
+    pts = np.zeros((BRACT_NV, BRACT_NU, 3))
+    for j in range(BRACT_NV):
+        w = p["half"][j]
+        for i, u in enumerate(U_BRACT):
+            pts[j, i] = (mid[j, 0], mid[j, 1] - p["cup"] * w * u * u * 0.5, u * w)
     return pts
 
 
@@ -126,9 +183,19 @@ def write_ray():
         (OUT / f"ray_{key}.floret").write_text(text)
 
 
+def write_bract():
+    for key, p in BRACT.items():
+        text = (f"# yarrow involucral bract (phyllary), key pose '{key}'; written by make_keys.py\n"
+                f"floret 1\nname: bract\ntime: {p['time']}\n\n"
+                f"organ: bract\nmaterial: 3\ndegree: 2 3\ngrid: {BRACT_NU} {BRACT_NV}\nsymmetry: 1 0\n"
+                f"bilateral: on\npoints:\n{fmt_rows(bract_net(p))}\n")
+        (OUT / f"bract_{key}.floret").write_text(text)
+
+
 if __name__ == "__main__":
     if len(sys.argv) > 1:
         OUT = Path(sys.argv[1])
         OUT.mkdir(parents=True, exist_ok=True)
     write_disk()
     write_ray()
+    write_bract()
