@@ -160,16 +160,8 @@ def arabidopsis(out_dir: Path, font) -> None:
                  "then higher orders, blind veins"),
                 ("arabidopsis_ltg", [10, 20, 40, 60, 70, 80, 90, 110],
                  "local-to-global growth (sec. 5.3.1, fig. 5.7): the loops form together, as the thesis reports")):
-            data = tomllib.loads((HERE / f"{name}.toml").read_text())
-            data.setdefault("output", {})["frame_step"] = 10
-            lines = [f"{k} = {_toml(v)}" for k, v in data.items() if not isinstance(v, dict)]
-            for section, table in data.items():
-                if isinstance(table, dict):
-                    lines.append(f"[{section}]")
-                    lines += [f"{k} = {_toml(v)}" for k, v in table.items()]
-            p = parse_params("\n".join(lines) + "\n", HERE / f"{name}.toml")
-            r = run_venation(p, load_inputs(p), work / name)
-            png = sheet(work / name, work / f"{name}.png", its)
+            r, _ = run(name, work, **{"output.frame_step": 10})
+            png = sheet(work / f"{name}_frame_step10", work / f"{name}.png", its)
             img = Image.open(png).convert("RGB")
             head = Image.new("RGB", (img.width, 48), "white")
             ImageDraw.Draw(head).multiline_text((8, 4), f"{title}\n{_figures(r)}", fill=(20, 20, 20), font=font)
