@@ -130,17 +130,9 @@ def main(build: Path, out: Path, cultivar: str = "mellow_yellow") -> int:
     pet = [read_obj(p) for p in petals]
     col = [read_obj(p) for p in column]
     for k, fl in enumerate(FLOWERS):
-        folder = out / f"flower_{k + 1}"
-        folder.mkdir(exist_ok=True)
-        o, b = frames[k]
-        cache = {}
-        for f in range(FRAMES):
-            t = P.age(f, fl["offset"], FRAMES)
-            if t not in cache:
-                cache[t] = P.merge([P.placed(pet[t], o, b), P.placed(col[t], o, b)], ["petals", "column"])
-            write_obj(folder / f"frame_{f:04d}.obj", cache[t],
-                      header=f"Eustoma plant flower {k + 1} ({cultivar}, age offset {fl['offset']}): "
-                             f"frame {t + 1} at plant frame {f + 1}")
+        P.write_flower_frames(out, k, [pet, col], ["petals", "column"], *frames[k], fl["offset"], FRAMES,
+                              lambda t, f, k=k, fl=fl: f"Eustoma plant flower {k + 1} ({cultivar}, age offset "
+                                                       f"{fl['offset']}): frame {t + 1} at plant frame {f + 1}")
     lines = ["# the Eustoma plant's layout (written by pipelines/eustoma/plant.py; read by inflo.tools.plant.check)",
              'title = "Eustoma plant"', f'cultivar = "{cultivar}"', f"frames = {FRAMES}",
              f"stem_height = {STEM_HEIGHT}", f"leaves = {len(leaves)}", f"body_triangles = {body.n_faces}",

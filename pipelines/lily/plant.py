@@ -172,16 +172,9 @@ def main(lily: Path, out: Path) -> int:
     tep = [read_obj(p) for p in canopy]
     col = [read_obj(p) for p in column]
     for k, fl in enumerate(FLOWERS):
-        folder = out / f"flower_{k + 1}"
-        folder.mkdir(exist_ok=True)
-        o, b = frames[k]
-        cache = {}
-        for f in range(FRAMES):
-            t = age(f, fl["offset"])
-            if t not in cache:
-                cache[t] = P.merge([P.placed(tep[t], o, b), P.placed(col[t], o, b)], ["tepals", "column"])
-            write_obj(folder / f"frame_{f:04d}.obj", cache[t],
-                      header=f"lily plant flower {k + 1} (age offset {fl['offset']}): lily frame {t + 1} at plant frame {f + 1}")
+        P.write_flower_frames(out, k, [tep, col], ["tepals", "column"], *frames[k], fl["offset"], FRAMES,
+                              lambda t, f, k=k, fl=fl: f"lily plant flower {k + 1} (age offset {fl['offset']}): "
+                                                       f"lily frame {t + 1} at plant frame {f + 1}")
 
     # the contact sheet's frames: smoothed, painted tepals and the columns of the same lily frames
     for sub in ("sheet_tepals", "sheet_columns"):

@@ -193,3 +193,23 @@ def placed(mesh: ObjMesh, origin, basis) -> ObjMesh:
     return ObjMesh(vertices=transform(mesh.vertices, basis, origin), faces=mesh.faces,
                    vertex_colors=mesh.vertex_colors, groups=mesh.groups, face_group=mesh.face_group,
                    materials=mesh.materials, face_material=mesh.face_material)
+
+
+def write_flower_frames(out, k: int, organs, names, origin, basis, offset: int, frames: int, header) -> None:
+    """Flower ``k`` (0-based) of a plant as ``out/flower_{k + 1}/frame_NNNN.obj``: at every plant
+    frame f the flower's organs (``organs``: per organ, its built frames' meshes) of frame
+    :func:`age` (f, ``offset``), placed at ``origin`` with ``basis`` and merged as groups ``names``;
+    ``header(t, f)`` is the header of the frame showing built frame t at plant frame f (0-based).
+    A built frame shown at several plant frames is placed once."""
+    from pathlib import Path
+
+    from inflo.formats.obj import write_obj
+
+    folder = Path(out) / f"flower_{k + 1}"
+    folder.mkdir(exist_ok=True)
+    cache: dict = {}
+    for f in range(frames):
+        t = age(f, offset, frames)
+        if t not in cache:
+            cache[t] = merge([placed(m[t], origin, basis) for m in organs], names)
+        write_obj(folder / f"frame_{f:04d}.obj", cache[t], header=header(t, f))
