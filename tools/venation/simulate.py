@@ -239,18 +239,24 @@ def throw_darts(cand, base, scale, prev_scale, bands, src, n_src, src_grid, bs2,
         if _first_within(x, y, bv2, nodes.pos, node_grid, -1) >= 0:
             continue
         s = n_src
-        src.pos[s, 0], src.pos[s, 1] = x, y
-        src.alive[s] = True
-        src.born[s] = it
-        src.died[s] = -1
-        src.tag_iter[s] = -1
-        src.ntag[s] = 0
-        src.near[s] = -1
-        src.near_d2[s] = np.inf
-        src.areole[s] = False
-        grid_insert(src_grid, src.pos, s, s + 1)
+        _init_source(src, src_grid, s, x, y, it)
         n_src += 1
     return n_src
+
+
+@njit(cache=True)
+def _init_source(src, src_grid, s, x, y, it):
+    """Source row ``s``: a live source at (x, y) placed in iteration ``it``, in ``src_grid``."""
+    src.pos[s, 0], src.pos[s, 1] = x, y
+    src.alive[s] = True
+    src.born[s] = it
+    src.died[s] = -1
+    src.tag_iter[s] = -1
+    src.ntag[s] = 0
+    src.near[s] = -1
+    src.near_d2[s] = np.inf
+    src.areole[s] = False
+    grid_insert(src_grid, src.pos, s, s + 1)
 
 
 @njit(cache=True)
@@ -528,16 +534,7 @@ def _add_sources(src, n_src, src_grid, pts, it):
     returns the new count."""
     for x, y in pts:
         s = n_src
-        src.pos[s, 0], src.pos[s, 1] = x, y
-        src.alive[s] = True
-        src.born[s] = it
-        src.died[s] = -1
-        src.tag_iter[s] = -1
-        src.ntag[s] = 0
-        src.near[s] = -1
-        src.near_d2[s] = np.inf
-        src.areole[s] = False
-        grid_insert(src_grid, src.pos, s, s + 1)
+        _init_source(src, src_grid, s, x, y, it)
         n_src += 1
     return n_src
 
