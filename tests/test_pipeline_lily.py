@@ -442,6 +442,14 @@ def test_built_growth_lily_column_clear_of_the_tepals(capsys):
     canopy, column = BUILD / "growth" / "canopy", BUILD / "growth" / "column_obj"
     if not canopy.is_dir() or not column.is_dir():
         pytest.skip("make lily METHOD=growth has not been run")
+    mod = _check_growth_module()
+    assert mod.main(canopy, column) == 0, capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "tepals against the column: 0 intersecting pairs" in out
+    assert "broad, untwisted tepals" in out
+
+
+def _check_growth_module():
     import importlib.util
 
     sys.path.insert(0, str(LILY))
@@ -451,8 +459,29 @@ def test_built_growth_lily_column_clear_of_the_tepals(capsys):
         spec.loader.exec_module(mod)
     finally:
         sys.path.remove(str(LILY))
-    assert mod.main(canopy, column) == 0, capsys.readouterr().out
-    assert "tepals against the column: 0 intersecting pairs" in capsys.readouterr().out
+    return mod
+
+
+def _tepal_grid(twist_deg, width=10.0, length=30.0, nu=11, nv=31):
+    """A flat strip along y, its rows turned linearly about the axis up to twist_deg at the tip."""
+    s, t = np.meshgrid(np.linspace(-0.5, 0.5, nu), np.linspace(0.0, 1.0, nv))
+    a = np.radians(twist_deg) * t
+    x = np.stack([width * s * np.cos(a), length * t, width * s * np.sin(a)], axis=-1).reshape(-1, 3)
+    return x, [("petal", np.arange(nu * nv).reshape(nv, nu))]
+
+
+def test_growth_check_measures_breadth_and_twist():
+    """check_growth.breadth: a flat strip 30 long and 10 wide is 3 times as long as wide and untwisted;
+    the same strip turned 60 degrees along its length twists 60 x 0.9 (rows up to 0.9 of it)
+    less the widest row's own turn, and fails the check's bound."""
+    mod = _check_growth_module()
+    x, tepals = _tepal_grid(0.0)
+    (slender, twist), = mod.breadth(x, tepals)
+    assert slender == pytest.approx(3.0, rel=1e-6) and twist == pytest.approx(0.0, abs=1e-6)
+    x, tepals = _tepal_grid(60.0)
+    (slender, twist), = mod.breadth(x, tepals)
+    assert slender == pytest.approx(3.0, rel=1e-6)
+    assert twist > mod.TWIST and twist == pytest.approx(54.0, abs=0.5)
 
 
 def test_makefile_chains_the_stages():

@@ -21,7 +21,7 @@ endif
 
 growth: growth-pictures growth-check
 growth-frames: $(GB)/canopy/frame_$(LAST).obj
-growth-pictures: $(GB)/lily_growth_sheet.png $(GB)/lily_growth_beside.png
+growth-pictures: $(GB)/lily_growth_sheet.png $(GB)/lily_growth_beside.png $(GB)/lily_growth_fig13.png
 growth-check: $(GB)/check.txt
 
 # 1. the bud: petal (680 triangles) and sepal (560) meshes with uv, placed by growth.toml
@@ -47,6 +47,10 @@ $(GB)/lily_growth_sheet.png: $(GB)/canopy/frame_$(LAST).obj $(GB)/column_obj/fra
 
 $(GB)/lily_growth_beside.png: $(GB)/canopy/frame_$(LAST).obj $(GB)/column_obj/frame_$(LAST).obj $(B)/painted/.done $(B)/column_keyframes/.done colors.toml growth_beside.py
 	$(PY) growth_beside.py $(B) -o $@
+
+# fig. 13: one petal at keyframe 75, from the side and from the top (the swelling about the midrib)
+$(GB)/lily_growth_fig13.png: $(GB)/canopy/frame_$(LAST).obj colors.toml growth_fig13.py growth_keys.py
+	$(PY) growth_fig13.py $(GB)/canopy --keyframe 75 -o $@
 
 # 4. exact static test of every keyframe (tepals, and tepals against the column), joint angles,
 #    the midrib's reflex and the flat lamina

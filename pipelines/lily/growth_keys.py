@@ -33,9 +33,9 @@ R_TIP = 1.8 * SCALE
 
 
 def width_fraction(t):
-    """Lanceolate: a narrow claw, widest at t = 0.45, a pointed tip."""
+    """Lanceolate: a narrow claw, widest at t = 0.45, broad shoulders, a pointed tip."""
     t = np.asarray(t, dtype=np.float64)
-    return np.where(t <= 0.45, 0.30 + 0.70 * np.sin(np.pi * t / 0.9), 0.22 + 0.78 * np.cos(0.5 * np.pi * (t - 0.45) / 0.55))
+    return np.where(t <= 0.45, 0.30 + 0.70 * np.sin(np.pi * t / 0.9), 0.12 + 0.88 * np.cos(0.5 * np.pi * (t - 0.45) / 0.55) ** 0.6)
 
 
 def bud_radius(t):
@@ -61,7 +61,11 @@ def tepal(kind: str) -> BudMesh:
 # the lamina); late (40-100) e_in = e everywhere (the warping stops; the shape still settles into
 # the rest angles gathered early, PBD converging over the following keyframes); blended over 30-40.
 # w-growth rises on the lamina and w_in more (0.6 early, 0.05 late): the bud's curl across unrolls
-# until the lamina's cross-section is flat. The midrib is harder (stretch and bend maps).
+# until the lamina's cross-section is flat. Once open (late) the whole tepal widens, the lamina
+# three times as fast as the midrib (w 1.0 + 2.0 lamina): the tepals open broad, as in fig. 1
+# (length over developed width 3.0 sepals, 3.3 petals at keyframe 100; with the early w kept they
+# stayed straps of 4.4 / 4.8 that twisted 37 degrees along their tips). The midrib is harder
+# (stretch and bend maps).
 MIDRIB = "(1 - smoothstep(0.1, 0.22, abs(u - 0.5)))"
 LAMINA = f"(1 - {MIDRIB})"
 BOTTOM = "smoothstep(0.04, 0.12, v)"
@@ -69,9 +73,9 @@ GROWTH = {
     "early": dict(e=f"1.0 * {BOTTOM}", w=f"(0.3 + 0.2 * {LAMINA}) * {BOTTOM}",
                   e_in=f"(1.0 + 0.4 * {MIDRIB} + 0.125 * {LAMINA}) * {BOTTOM}",
                   w_in=f"(0.3 + 0.2 * {LAMINA} + 0.6 * {LAMINA}) * {BOTTOM}"),
-    "late": dict(e=f"1.0 * {BOTTOM}", w=f"(0.3 + 0.2 * {LAMINA}) * {BOTTOM}",
+    "late": dict(e=f"1.0 * {BOTTOM}", w=f"(1.0 + 2.0 * {LAMINA}) * {BOTTOM}",
                  e_in=f"(1.0 + 0.0 * {LAMINA}) * {BOTTOM}",
-                 w_in=f"(0.3 + 0.2 * {LAMINA} + 0.05 * {LAMINA}) * {BOTTOM}"),
+                 w_in=f"(1.0 + 2.0 * {LAMINA} + 0.05 * {LAMINA}) * {BOTTOM}"),
 }
 STRETCH = f"0.7 + 0.3 * {MIDRIB}"
 BEND = f"0.9 + 0.6 * {MIDRIB}"
