@@ -25,12 +25,17 @@ PANELS = (("growth maps (petal-grow, Ijiri et al. 2008)", ("growth/canopy", "gro
           ("key poses (floret-animate + fccompose)", ("painted", "column_keyframes")))
 
 
-def panel(build: Path, inputs, out: Path) -> Image.Image:
+def still(inputs, options, out: Path) -> Image.Image:
+    """A canopy-render still of these inputs in the lily's colours (options: view, size, ...)."""
     render = Path(sys.executable).parent / "canopy-render"
-    subprocess.run([str(render), "-q", *(str(build / i) for i in inputs), "--frame", "-1",
-                    "--colors", str(HERE / "colors.toml"), "--azimuth", "0", "--elevation", "35",
-                    "--size", "640x560", "-o", str(out)], check=True)
+    subprocess.run([str(render), "-q", *map(str, inputs), "--colors", str(HERE / "colors.toml"), *options,
+                    "-o", str(out)], check=True)
     return Image.open(out).convert("RGB")
+
+
+def panel(build: Path, inputs, out: Path) -> Image.Image:
+    return still([build / i for i in inputs], ["--frame", "-1", "--azimuth", "0", "--elevation", "35",
+                                               "--size", "640x560"], out)
 
 
 def main() -> int:

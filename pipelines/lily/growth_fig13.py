@@ -15,19 +15,17 @@ from __future__ import annotations
 import argparse
 import io
 import math
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
+from growth_beside import still
 from growth_keys import TEPALS
 from PIL import Image, ImageDraw, ImageFont
 
 from inflo.formats.atomic import write_bytes_atomic
 from inflo.formats.obj import ObjMesh, list_obj_sequence, read_obj, write_obj
-
-HERE = Path(__file__).resolve().parent
 
 
 def petal(mesh: ObjMesh, organ: str) -> tuple[ObjMesh, np.ndarray]:
@@ -73,10 +71,7 @@ def cross_sections(x: np.ndarray, grid: np.ndarray, at=(0.3, 0.5, 0.7)) -> list[
 
 
 def render(obj: Path, view: str, out: Path) -> Image.Image:
-    exe = Path(sys.executable).parent / "canopy-render"
-    subprocess.run([str(exe), "-q", str(obj), "--view", view, "--ortho", "--colors", str(HERE / "colors.toml"),
-                    "--size", "560x420", "-o", str(out)], check=True)
-    return Image.open(out).convert("RGB")
+    return still([obj], ["--view", view, "--ortho", "--size", "560x420"], out)
 
 
 def main() -> int:
