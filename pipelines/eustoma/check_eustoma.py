@@ -15,7 +15,12 @@ The open corolla's slits are measured as background seen through it: lines along
 from above) through a 201 x 41 grid 0.5 apart, and horizontal lines (a view from the side) through
 201 x 30 points; in each row of the grid, the points between the first and the last covered one
 that no petal covers (the gaps between the petals, and between the lobes' tips, inside the
-flower's outline) are counted.
+flower's outline) are counted. These rows count the notches between the lobes' tips too, open to
+the outside; what is seen *through* the flower is measured apart (`see_through`): at keyframes 50,
+75 and the last, the corolla with the receptacle (which closes the corolla's foot) is rasterized
+orthographically from above, from below and every 30 degrees round at elevations 35, 0 and -35,
+and the background enclosed by its silhouette (slits between petals, holes) is counted as a share
+of the silhouette; the worst view is listed, and more than SEE_THROUGH fails the check.
 Exits 1 on any intersection, changed topology or missing organ.
 """
 from __future__ import annotations
@@ -28,11 +33,13 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from inflo.formats.obj import list_obj_sequence, read_obj
+from inflo.formats.obj import ObjMesh, list_obj_sequence, read_obj
 from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
 from inflo.tools.petal_grow.simulate import shape_match
+from inflo.tools.species.checks import worst_see_through
 
 CULTIVARS = ("mellow_yellow", "maite_lady", "pinocchio")
+SEE_THROUGH = 0.003  # the most background seen through the corolla, as a share of its silhouette
 BASE_ROWS = 2  # base particles: the first two rows of each petal (uv v <= 0.1)
 
 
@@ -96,6 +103,14 @@ def slits(mesh) -> tuple[int, int]:
     return see_through(mesh, top, (0, 2)), see_through(mesh, side, (0, 1))
 
 
+def with_receptacle(corolla, column) -> ObjMesh:
+    """The corolla with the column's receptacle and pistil (which close its throat) as one mesh."""
+    keep = [g for g, name in enumerate(column.groups) if name.startswith(("receptacle", "pistil"))]
+    faces = column.faces[np.isin(column.face_group, keep)]
+    return ObjMesh(vertices=np.vstack([corolla.vertices, column.vertices]),
+                   faces=np.vstack([corolla.faces, faces + len(corolla.vertices)]))
+
+
 def main(build: Path) -> int:
     numba.set_num_threads(1)  # small meshes: one thread is faster (tools/petal_grow/simulate.py, run)
     bad = 0
@@ -115,6 +130,7 @@ def main(build: Path) -> int:
         col_pairs = []
         min_mats = 99
         angles = {}
+        through = {}
         for i, p in enumerate(paths):
             m = read_obj(p)
             if not m.same_topology(first):
@@ -136,6 +152,8 @@ def main(build: Path) -> int:
                 min_mats = min(min_mats, mats)
             if i + 1 in (1, 50, len(paths)):
                 angles[i + 1] = np.mean([joint_angle(first.vertices, m.vertices, b, per_row) for b in blocks])
+            if i + 1 in (50, 75, len(paths)) and i < len(column):
+                through[i + 1] = worst_see_through(with_receptacle(m, col))
             last = m
         s = shape(last.vertices, blocks, per_row)
         s0 = shape(first.vertices, blocks, per_row)
@@ -148,9 +166,16 @@ def main(build: Path) -> int:
         print(f"  open: rim radius {s['rim']:.2f}, widest {s['widest']:.2f}, height {s['height']:.2f}, "
               f"radius at half height {s['mid']:.2f}, flare {s['rim'] / s['mid']:.2f}")
         top, side = slits(last)
-        print(f"  open: background seen through the corolla: {top} points from above, {side} from the side")
+        print(f"  open: background inside the outline (lobe notches included): {top} points from above, "
+              f"{side} from the side")
+        print("  seen through the corolla (enclosed background, worst of 38 views): " + ", ".join(
+            f"frame {k} {v:.4f} at ({az:.0f}, {el:.0f})" for k, (v, (az, el)) in through.items()))
+        slit = [k for k, (v, _) in through.items() if v > SEE_THROUGH]
+        if slit:
+            print(f"  {name}: background seen through the corolla over {SEE_THROUGH} of it at frames {slit}")
+            bad += 1
     if bad:
-        print(f"FAILED: {bad} intersecting pairs or changes")
+        print(f"FAILED: {bad} intersecting pairs, changes or slits")
         return 1
     print("OK: every keyframe intersection-free")
     return 0

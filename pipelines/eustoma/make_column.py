@@ -89,8 +89,9 @@ def sepal(frame):
     return ring_tube(pts, [0.15] * len(pts), SEPAL_HALF_WIDTH[:len(pts)])
 
 
-RECEPTACLE = ring_tube([(0, 0.35), (0, 0.2), (0, -0.3), (0, -0.9), (0, -1.6), (0, -3.0), (0, -7.0), (0, -8.0)],
-                       [0.9, 1.25, 1.8, 2.1, 1.3, 0.9, 0.8, 0.8], [0.9, 1.25, 1.8, 2.1, 1.3, 0.9, 0.8, 0.8])
+RECEPTACLE_ROWS = [(0, 0.35), (0, 0.2), (0, -0.3), (0, -0.9), (0, -1.3), (0, -1.9), (0, -3.0), (0, -7.0), (0, -8.0)]
+RECEPTACLE_RADII = [0.9, 1.25, 1.7, 2.3, 2.7, 1.5, 0.9, 0.8, 0.8]
+RECEPTACLE = ring_tube(RECEPTACLE_ROWS, RECEPTACLE_RADII, RECEPTACLE_RADII)
 
 
 def pose(frame):

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw
+from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError
 from scipy.stats import spearmanr
 
@@ -64,6 +65,48 @@ def view_coverage(mesh, axis: int, pixels: int = 800, region=None) -> float:
     if not area.any():
         return 0.0
     return float((cover & area).sum()) / float(area.sum())
+
+
+def view_axes(azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray]:
+    """Screen axes (right, up) of an orthographic view from this direction: azimuth in degrees
+    about +Y from +Z towards +X, elevation in degrees above the horizontal (canopy-render's)."""
+    a, e = math.radians(azimuth), math.radians(elevation)
+    d = np.array([math.cos(e) * math.sin(a), math.sin(e), math.cos(e) * math.cos(a)])
+    up = np.array([0.0, 1.0, 0.0]) if abs(d[1]) < 0.99 else np.array([0.0, 0.0, -1.0])
+    right = la.normalize(np.cross(up, d))
+    return right, np.cross(d, right)
+
+
+def see_through(mesh, azimuth: float, elevation: float, pixels: int = 400) -> tuple[int, int]:
+    """Background seen *through* a mesh from one direction (orthographic): (the pixels enclosed by
+    its silhouette that no triangle covers, the silhouette's pixels). A slit between two organs, or
+    a hole, counts; the notches of a lobed outline, open to the outside, do not (the silhouette's
+    holes: ``scipy.ndimage.binary_fill_holes``). Rasterized on ``pixels`` across the larger side."""
+    right, up = view_axes(azimuth, elevation)
+    q = np.stack([la.matmul(mesh.vertices, right), la.matmul(mesh.vertices, up)], axis=1)
+    used = np.unique(mesh.faces)
+    lo, hi = q[used].min(axis=0), q[used].max(axis=0)
+    s = (pixels - 1) / float(max((hi - lo).max(), 1e-300))
+    size = (int(math.ceil((hi - lo)[0] * s)) + 1, int(math.ceil((hi - lo)[1] * s)) + 1)
+    cover = _raster((q - lo) * s, mesh.faces, size)
+    holes = ndimage.binary_fill_holes(cover) & ~cover
+    return int(holes.sum()), int(cover.sum())
+
+
+ALL_VIEWS = ((0.0, 90.0), (0.0, -90.0)) + tuple((float(az), float(el)) for el in (35, 0, -35)
+                                                  for az in range(0, 360, 30))
+
+
+def worst_see_through(mesh, views=ALL_VIEWS, pixels: int = 400) -> tuple[float, tuple[float, float]]:
+    """The largest share of the silhouette seen through (``see_through``) over ``views``
+    ((azimuth, elevation) pairs; by default from above, below and every 30 degrees round at
+    elevations 35, 0 and -35), and that view."""
+    best = (0.0, views[0])
+    for az, el in views:
+        h, c = see_through(mesh, az, el, pixels)
+        if c and h / c > best[0]:
+            best = (h / c, (az, el))
+    return best
 
 
 def floret_faces(mesh) -> dict:
