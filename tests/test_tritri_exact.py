@@ -178,3 +178,23 @@ def test_serial_and_parallel_float_tests_find_the_same_pairs(below, monkeypatch)
     got = intersecting_pairs(x, tri)
     assert len(got) > 10
     np.testing.assert_array_equal(got, intersecting_pairs_brute(x, tri))
+
+
+def test_skip_parts_leaves_out_joined_parts_only():
+    """Three parts, each a triangle, all crossing each other's: with ``skip_parts`` marking parts 0
+    and 1 as joined, their pair is not reported; the others are, as without it."""
+    rng = np.random.default_rng(3)
+    x = np.array([[-1, 0, -1], [1, 0, -1], [0, 0, 1],      # part 0: in the plane y = 0
+                  [0, -1, -1], [0, 1, -1], [0, 0.2, 1],    # part 1: crossing it along x = 0
+                  [-1, -1, 0], [1, -1, 0], [0, 1, 0.1]],   # part 2: crossing both
+                 dtype=np.float64)
+    tri = np.arange(9, dtype=np.int32).reshape(3, 3)
+    part = np.array([0, 1, 2])
+    full = intersecting_pairs(x, tri, tri_part=part)
+    assert full.tolist() == [[0, 1], [0, 2], [1, 2]]
+    skip = np.zeros((3, 3), bool)
+    skip[0, 1] = skip[1, 0] = True
+    assert intersecting_pairs(x, tri, tri_part=part, skip_parts=skip).tolist() == [[0, 2], [1, 2]]
+    # the same with the triangles' vertices jittered and the parts in any order
+    xj = x + 1e-9 * rng.standard_normal(x.shape)
+    assert intersecting_pairs(xj, tri, tri_part=part[::-1].copy(), skip_parts=skip).tolist() == [[0, 1], [0, 2]]

@@ -68,7 +68,7 @@ def _exact_pairs(x, tri, pairs) -> np.ndarray:
 
 
 def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_size: float | None = None,
-                       tri_part: np.ndarray | None = None) -> np.ndarray:
+                       tri_part: np.ndarray | None = None, skip_parts: np.ndarray | None = None) -> np.ndarray:
     """All pairs of intersecting triangles that share no vertex (exact static test).
 
     Broad phase: :func:`inflo.tools.collide.broad.box_pairs` over the triangles' boxes; with
@@ -80,6 +80,10 @@ def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_si
     vertex_x : (n, 3) float64
     tri_indices : (m, 3) int32
     tri_part : (m,) int or None
+    skip_parts : (p, p) bool or None
+        With ``tri_part``: candidate pairs of triangles in parts a and b with ``skip_parts[a, b]``
+        are not tested (parts joined by construction, whose pairs a caller would discard: a plant's
+        stem and its leaves). The other pairs are found as without it.
 
     Returns
     -------
@@ -92,6 +96,11 @@ def intersecting_pairs(vertex_x: np.ndarray, tri_indices: np.ndarray, *, cell_si
     tri = np.ascontiguousarray(tri_indices, dtype=np.int32)
     if len(tri) < 2:
         return np.zeros((0, 2), np.int32)
+    if skip_parts is not None and tri_part is not None:
+        part = np.asarray(tri_part, np.int64)
+        pairs = box_pairs(triangle_boxes(x, x, tri, 0.0), None, cell_size=cell_size)
+        pairs = pairs[~np.asarray(skip_parts, bool)[part[pairs[:, 0]], part[pairs[:, 1]]]]
+        return _exact_pairs(x, tri, np.ascontiguousarray(pairs))
     if (tri_part is not None and len(tri_part) == len(tri) and parts_grouped(tri_part)
             and int(np.bincount(np.asarray(tri_part)).max()) <= PART_SWEEP_MAX_ELEMENTS):
         return intersecting_pairs_by_part(x, tri, tri_part)
