@@ -126,18 +126,25 @@ BASE_ROWS = 3
 # unit, so INSET is 0.003-0.008 scene units: 6-15 x fccompose's spacing
 INSET = 0.03
 # the tube's base ring is this many times wider sideways (+-Z) than along the head's radius, and
-# so, less and less, are its rows up to FOOT_REACH of its length
-FOOT = 1.6
+# so, less and less, are its rows up to FOOT_REACH of its length (the lower tube flattened: the ring
+# of tubes hides more of the receptacle between the rays' feet; FOOT 1.6 left 1 % less in view at
+# draft, but the final build then stopped at frame 37 with contacts fccompose could not resolve,
+# reaching 0.7 or 0.45 alike)
+FOOT = 1.4
 FOOT_REACH = 0.7
 # the tube's floor (the top of the ovary, closing the tube at its base): a flat ring of
 # FLOOR_ARC degrees each side of the bottom midline on the receptacle, from FLOOR_HOLE round the
 # centre line to FLOOR_INSET inside the tube's base ring; from above, the receptacle no longer
 # shows down the tube (through its slit where it bends outward). Like the base ring it is fixed on
-# the receptacle (it is at y = 0: tools/species/weights.py), and it never touches the tube: with
-# INSET (0.03) inside the base ring, the tube's lowest free row, pushed by its neighbours, came
-# within fccompose's spacing of it in the final build (collisions left, frame 37)
-FLOOR_ARC = 170.0
-FLOOR_HOLE = 0.02
+# the receptacle (it is at y = 0: tools/species/weights.py), and it never touches the tube
+# (FLOOR_INSET, twice the limb's INSET, leaves the tube's lowest free rows room to be pushed). The
+# floor's two halves (the bilateral mirror) are not welded: at its seam on the -X side they stay
+# 360 - 2 FLOOR_ARC degrees apart, at FLOOR_HOLE of the floor's radius from the centre line 0.031
+# floret units when open (with a
+# hole of 0.02 and 170 degrees, 0.007: the two fixed edges came within fccompose's contact
+# distance of each other, colliding pairs no step could resolve, and the final build stopped)
+FLOOR_ARC = 160.0
+FLOOR_HOLE = 0.35
 FLOOR_INSET = 0.06
 TUCK = 0.08
 # the mouth's three shallow lobes: how far each column of the limb's last row falls short of the
@@ -237,13 +244,14 @@ def ray_nets(s: float):
 
 
 def floor_net(s: float):
-    """The ray's floor at stage s: two rows (FLOOR_HOLE round the centre line, FLOOR_INSET inside
+    """The ray's floor at stage s: two rows (FLOOR_HOLE of its radius round the centre line, FLOOR_INSET inside
     the tube's base ring, widened sideways as the ring is) of a half ring of FLOOR_ARC degrees at
     y = 0."""
     r = ray_pose(s)["r_base"] - FLOOR_INSET
+    hole = FLOOR_HOLE * r
     theta = np.radians(np.linspace(0.0, FLOOR_ARC, RAY_NU))
     pts = np.zeros((2, RAY_NU, 3))
-    for j, (rx, rz) in enumerate(((FLOOR_HOLE, FLOOR_HOLE), (r, r * FOOT))):
+    for j, (rx, rz) in enumerate(((hole, hole), (r, r * FOOT))):
         pts[j, :, 0], pts[j, :, 2] = rx * np.cos(theta), rz * np.sin(theta)
     return pts
 
