@@ -18,8 +18,12 @@ points away from the head centre along the receptacle's meridian.
   either is an arc of 2 x ARC_HALF = 300 degrees round the tube's centre line: the half petal's
   columns go from the midline at the bottom of the tube (column 0) round the +Z side to the edge
   of the slit, and the bilateral mirror gives the -Z half. The tube's base row is a ring on the
-  receptacle (y = 0, the only vertices there: tools/species/weights.py fixes the lowest ones),
-  widened sideways (FOOT); the tube widens toward its mouth (a trumpet). The limb's base ring is
+  receptacle (y = 0: tools/species/weights.py fixes the lowest vertices), widened sideways
+  (FOOT, less and less up to FOOT_REACH of the tube's length: the ring of rays' tubes hides the
+  receptacle between their feet from above); a third organ, ``floor`` (orange-red too), closes
+  the tube at its base (the top of the ovary: a flat half ring at y = 0, INSET inside the base
+  ring, fixed with it), so the receptacle does not show down the tube through its slit; the tube
+  widens toward its mouth (a trumpet). The limb's base ring is
   tucked into the tube's mouth, INSET inside its wall and TUCK behind its rim, and flares beyond
   it: no gap shows between the colours from any side, yet the two organs never touch (fccompose's
   exact test counts touching as intersecting); the limb is not fixed: it moves with the tube's
@@ -33,7 +37,8 @@ points away from the head centre along the receptacle's meridian.
 - **Disk floret** (the sunflower's design, pipelines/sunflower/make_keys.py): organ ``corolla``
   (five-fold, bilateral half petal 3 columns x 7 rows, fused to the last row), ``anthers`` (the
   anther tube, a five-fold closed cylinder) and ``pistil``, plumper than the sunflower's so the
-  corollas close over the receptacle; ``bud`` (a closed barrel), ``open``
+  corollas close over the receptacle; ``bud`` (a closed barrel), ``hold`` (the bud held to a
+  quarter of the floret's window: the inner florets stay in bud longer, the phase effect), ``open``
   (a tube with five short spreading lobes, the anthers risen above them), ``late`` (the pistil
   risen above the anthers).
 - **Involucral bract** (phyllary; ch. 9: "specialized leaves that surround the head and protect
@@ -65,9 +70,11 @@ HERE = Path(__file__).resolve().parent
 # about as far apart as the columns
 RES = {
     "draft": {"corolla": ("0.34", "../lobe_eta.func"), "anthers": ("0.5", "3"), "pistil": ("1.0", "3"),
-              "tube": ("0.1", "9"), "limb": ("0.34", "9"), "bract": ("0.34", "../bract_eta_draft.func")},
+              "tube": ("0.1", "9"), "limb": ("0.34", "9"), "floor": ("1.0", "9"),
+              "bract": ("0.34", "../bract_eta_draft.func")},
     "final": {"corolla": ("0.34", "../lobe_eta.func"), "anthers": ("0.34", "3"), "pistil": ("0.5", "3"),
-              "tube": ("0.07", "9"), "limb": ("0.25", "9"), "bract": ("0.2", "../bract_eta_final.func")},
+              "tube": ("0.07", "9"), "limb": ("0.25", "9"), "floor": ("1.0", "9"),
+              "bract": ("0.2", "../bract_eta_final.func")},
 }
 
 # ---- disk floret (the sunflower's) ----------------------------------------------------------------
@@ -80,15 +87,24 @@ DISK = {
                 y=[0.00, 0.14, 0.30, 0.46, 0.60, 0.72, 0.78],
                 half=[36, 36, 36, 36, 36, 34, 12],
                 anthers=(0.115, 0.0, 0.40), pistil=(0.05, 0.0, 0.34)),
+    # the bud pose held to a quarter of the window: the inner florets stay in bud longer, so the phase
+    # effect shows as the disk crowds (check_gaillardia.py: rank correlation of height with radius)
+    "hold": dict(time=0.25,
+                r=[0.14, 0.26, 0.35, 0.39, 0.37, 0.26, 0.06],
+                y=[0.00, 0.14, 0.30, 0.46, 0.60, 0.72, 0.78],
+                half=[36, 36, 36, 36, 36, 34, 12],
+                anthers=(0.115, 0.0, 0.40), pistil=(0.05, 0.0, 0.34)),
+    # open and late: a wide funnel whose five broad lobes (half angle 26 degrees at the tips) spread
+    # over the neighbours' (a dense disk: the receptacle no longer shows between the corollas)
     "open": dict(time=0.55,
-                 r=[0.13, 0.22, 0.30, 0.38, 0.45, 0.51, 0.63],
+                 r=[0.13, 0.22, 0.30, 0.38, 0.45, 0.54, 0.68],
                  y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.86, 0.90],
-                 half=[36, 36, 36, 36, 36, 34, 12],
+                 half=[36, 36, 36, 36, 36, 34, 26],
                  anthers=(0.115, 0.0, 1.08), pistil=(0.05, 0.0, 0.96)),
     "late": dict(time=1.0,
-                 r=[0.13, 0.22, 0.30, 0.38, 0.45, 0.52, 0.65],
+                 r=[0.13, 0.22, 0.30, 0.38, 0.45, 0.55, 0.70],
                  y=[0.00, 0.20, 0.42, 0.62, 0.78, 0.85, 0.86],
-                 half=[36, 36, 36, 36, 36, 34, 12],
+                 half=[36, 36, 36, 36, 36, 34, 26],
                  anthers=(0.115, 0.0, 1.12), pistil=(0.05, 0.0, 1.32)),
 }
 
@@ -109,8 +125,27 @@ BASE_ROWS = 3
 # counts touching as intersecting); a ray floret of the head is 0.1-0.25 scene units per floret
 # unit, so INSET is 0.003-0.008 scene units: 6-15 x fccompose's spacing
 INSET = 0.03
-# the tube's base ring is this many times wider sideways (+-Z) than along the head's radius
+# the tube's base ring is this many times wider sideways (+-Z) than along the head's radius, and
+# so, less and less, are its rows up to FOOT_REACH of its length (the lower tube flattened: the ring
+# of tubes hides more of the receptacle between the rays' feet; FOOT 1.6 left 1 % less in view at
+# draft, but the final build then stopped at frame 37 with contacts fccompose could not resolve,
+# reaching 0.7 or 0.45 alike)
 FOOT = 1.4
+FOOT_REACH = 0.7
+# the tube's floor (the top of the ovary, closing the tube at its base): a flat ring of
+# FLOOR_ARC degrees each side of the bottom midline on the receptacle, from FLOOR_HOLE round the
+# centre line to FLOOR_INSET inside the tube's base ring; from above, the receptacle no longer
+# shows down the tube (through its slit where it bends outward). Like the base ring it is fixed on
+# the receptacle (it is at y = 0: tools/species/weights.py), and it never touches the tube
+# (FLOOR_INSET, twice the limb's INSET, leaves the tube's lowest free rows room to be pushed). The
+# floor's two halves (the bilateral mirror) are not welded: at its seam on the -X side they stay
+# 360 - 2 FLOOR_ARC degrees apart, at FLOOR_HOLE of the floor's radius from the centre line 0.031
+# floret units when open (with a
+# hole of 0.02 and 170 degrees, 0.007: the two fixed edges came within fccompose's contact
+# distance of each other, colliding pairs no step could resolve, and the final build stopped)
+FLOOR_ARC = 160.0
+FLOOR_HOLE = 0.35
+FLOOR_INSET = 0.06
 TUCK = 0.08
 # the mouth's three shallow lobes: how far each column of the limb's last row falls short of the
 # lobes' tips, as a fraction of the limb's length: the middle lobe at the bottom (0 degrees), a
@@ -140,7 +175,7 @@ def ray_pose(s: float) -> dict:
     grow = s  # lengths grow linearly with the stage
     bend = 64.0 * min(1.0, s / 0.9) ** 1.2  # the tube lies outward, rising 26 degrees, when open
     return dict(length=_lerp(0.45, 1.90, grow), bend=bend,
-                r_base=_lerp(0.10, 0.15, s), r_end=_lerp(0.12, 0.36, s),
+                r_base=_lerp(0.10, 0.19, s), r_end=_lerp(0.12, 0.36, s),
                 limb=_lerp(0.16, 0.60, grow), r_mouth=_lerp(0.13, 0.56, s ** 1.3),
                 lobe=_lerp(0.25, 1.0, s))
 
@@ -197,7 +232,7 @@ def ray_nets(s: float):
     c, h, lc, lh = centre_line(length, p["bend"], TUBE_NV, limb_sig)
     # the foot: the tube's lowest rows widened sideways (FOOT x at the base ring), so the ring of
     # rays hides the receptacle between them (the nearest ray is 0.47 floret units away)
-    foot = 1.0 + (FOOT - 1.0) * np.clip(1.0 - np.linspace(0.0, 1.0, TUBE_NV) / 0.4, 0.0, 1.0) ** 2
+    foot = 1.0 + (FOOT - 1.0) * np.clip(1.0 - np.linspace(0.0, 1.0, TUBE_NV) / FOOT_REACH, 0.0, 1.0)
     arc = ARC_HALF + (ARC_BASE - ARC_HALF) * np.clip(1.0 - np.arange(TUBE_NV) / BASE_ROWS, 0.0, 1.0)
     tube = ring_rows(c, h, tube_r(np.linspace(0.0, length, TUBE_NV)), zscale=foot, arc=arc)
     rl = np.array([tube_r(length - TUCK) - INSET, p["r_end"],
@@ -206,6 +241,19 @@ def ray_nets(s: float):
     back[-1] = LOBE_RECESS * p["lobe"] * p["limb"]
     limb = ring_rows(lc, lh, rl, back)
     return tube, limb
+
+
+def floor_net(s: float):
+    """The ray's floor at stage s: two rows (FLOOR_HOLE of its radius round the centre line, FLOOR_INSET inside
+    the tube's base ring, widened sideways as the ring is) of a half ring of FLOOR_ARC degrees at
+    y = 0."""
+    r = ray_pose(s)["r_base"] - FLOOR_INSET
+    hole = FLOOR_HOLE * r
+    theta = np.radians(np.linspace(0.0, FLOOR_ARC, RAY_NU))
+    pts = np.zeros((2, RAY_NU, 3))
+    for j, (rx, rz) in enumerate(((hole, hole), (r, r * FOOT))):
+        pts[j, :, 0], pts[j, :, 2] = rx * np.cos(theta), rz * np.sin(theta)
+    return pts
 
 
 # ---- involucral bract (the sunflower's) -------------------------------------------------------------
@@ -253,7 +301,8 @@ def write(out: Path, quality: str) -> None:
         tube, limb = ray_nets(s)
         text = head.format(what="tubular ray floret", key=key, q=quality, name="ray", t=ray_time(s))
         text += organ("tube", M_TUBE, "3 3", f"{RAY_NU} {TUBE_NV}", "1 0", 0, res["tube"], tube) + "\n"
-        text += organ("limb", M_LIMB, "3 3", f"{RAY_NU} {LIMB_NV}", "1 0", 0, res["limb"], limb)
+        text += organ("limb", M_LIMB, "3 3", f"{RAY_NU} {LIMB_NV}", "1 0", 0, res["limb"], limb) + "\n"
+        text += organ("floor", M_TUBE, "1 1", f"{RAY_NU} 2", "1 0", 0, res["floor"], floor_net(s))
         (out / f"ray_{key}.floret").write_text(text)
     for key, p in BRACT.items():
         text = head.format(what="involucral bract", key=key, q=quality, name="bract", t=p["time"])
