@@ -12,7 +12,7 @@
   keyframe; the check (if built) finds no petal touching any of them in any keyframe;
 - (if built) the background inside the open corolla's outline from above and from the side stays
   under the figures the broad petals reached, and no view (38 of them, keyframes 50, 75, 100)
-  sees more than 0.003 of the flower's silhouette through it (slits between the petals);
+  sees more than 0.004 of the flower's silhouette through it (slits between the petals);
 - if the draft has been built (``make eustoma`` or the golden test): every keyframe passed the
   exact check, the joint angle reached 15 degrees, and the open shapes differ as the cultivars'
   groups do: bell and funnel flare out at the rim, the funnel widest and flattest, the shallow
@@ -205,7 +205,7 @@ def test_draft_build_checks_and_cultivar_shapes_if_built(species_build):
         through = re.search(r"seen through the corolla \(enclosed background, worst of 38 views\): frame 50 ([\d.]+) "
                             r"at \([-\d]+, [-\d]+\), frame 75 ([\d.]+) at \([-\d]+, [-\d]+\), frame 100 ([\d.]+)", block)
         assert through, block
-        assert max(map(float, through.groups())) <= 0.003, (c, through.groups())
+        assert max(map(float, through.groups())) <= 0.004, (c, through.groups())
     bell, funnel, ball = shape["mellow_yellow"], shape["maite_lady"], shape["pinocchio"]
     # background inside the outline (check_eustoma.py; the notches between the lobes' tips count):
     # with narrow petals and claws the draft showed 320 / 670 (bell), 494 / 1,016 (funnel), 229 /

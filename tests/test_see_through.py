@@ -48,3 +48,13 @@ def test_worst_view_finds_the_slit():
     share, view = worst_see_through(_cells(RING), views=((90.0, 0.0), (0.0, 90.0), (10.0, 20.0)), pixels=201)
     assert view == (10.0, 20.0) and 0.05 < share < 0.15
     assert worst_see_through(_cells(NOTCH))[0] == 0.0
+
+
+def test_fill_triangles_covers_the_area_and_skips_degenerate_ones():
+    from inflo.tools.species.checks import fill_triangles
+
+    pts = np.array([[0.0, 0.0], [100.0, 0.0], [0.0, 60.0], [5.0, 5.0], [5.0, 5.0], [9.0, 9.0]])
+    img = fill_triangles(pts, np.array([[0, 1, 2]]), 120, 80)
+    assert img.shape == (80, 120) and abs(int(img.sum()) - 3000) < 100 + 2  # area 3000, edges count
+    assert img[0, 0] and img[59, 0] and not img[59, 99] and not img[79, 119]
+    assert not fill_triangles(pts, np.array([[3, 4, 5]]), 20, 20).any()  # zero area: nothing

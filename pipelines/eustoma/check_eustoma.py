@@ -39,7 +39,7 @@ from inflo.tools.petal_grow.simulate import shape_match
 from inflo.tools.species.checks import worst_see_through
 
 CULTIVARS = ("mellow_yellow", "maite_lady", "pinocchio")
-SEE_THROUGH = 0.003  # the most background seen through the corolla, as a share of its silhouette
+SEE_THROUGH = 0.004  # the most background seen through the corolla, as a share of its silhouette
 BASE_ROWS = 2  # base particles: the first two rows of each petal (uv v <= 0.1)
 
 

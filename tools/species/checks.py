@@ -14,6 +14,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 from PIL import Image, ImageDraw
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError
@@ -77,6 +78,32 @@ def view_axes(azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray]
     return right, np.cross(d, right)
 
 
+@njit(cache=True)
+def fill_triangles(points, faces, width, height):
+    """Boolean image (height, width): the pixels whose centres (integer coordinates of
+    ``points``' frame) lie in a triangle of ``faces`` (closed: on an edge counts)."""
+    img = np.zeros((height, width), np.bool_)
+    for f in range(faces.shape[0]):
+        ax, ay = points[faces[f, 0], 0], points[faces[f, 0], 1]
+        bx, by = points[faces[f, 1], 0], points[faces[f, 1], 1]
+        cx, cy = points[faces[f, 2], 0], points[faces[f, 2], 1]
+        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+        if area == 0.0:
+            continue
+        x0 = max(int(np.ceil(min(ax, bx, cx))), 0)
+        x1 = min(int(np.floor(max(ax, bx, cx))), width - 1)
+        y0 = max(int(np.ceil(min(ay, by, cy))), 0)
+        y1 = min(int(np.floor(max(ay, by, cy))), height - 1)
+        for y in range(y0, y1 + 1):
+            for x in range(x0, x1 + 1):
+                w0 = ((bx - x) * (cy - y) - (by - y) * (cx - x)) / area
+                w1 = ((cx - x) * (ay - y) - (cy - y) * (ax - x)) / area
+                w2 = 1.0 - w0 - w1
+                if w0 >= -1e-9 and w1 >= -1e-9 and w2 >= -1e-9:
+                    img[y, x] = True
+    return img
+
+
 def see_through(mesh, azimuth: float, elevation: float, pixels: int = 400) -> tuple[int, int]:
     """Background seen *through* a mesh from one direction (orthographic): (the pixels enclosed by
     its silhouette that no triangle covers, the silhouette's pixels). A slit between two organs, or
@@ -88,7 +115,7 @@ def see_through(mesh, azimuth: float, elevation: float, pixels: int = 400) -> tu
     lo, hi = q[used].min(axis=0), q[used].max(axis=0)
     s = (pixels - 1) / float(max((hi - lo).max(), 1e-300))
     size = (int(math.ceil((hi - lo)[0] * s)) + 1, int(math.ceil((hi - lo)[1] * s)) + 1)
-    cover = _raster((q - lo) * s, mesh.faces, size)
+    cover = fill_triangles((q - lo) * s, np.ascontiguousarray(mesh.faces, np.int64), size[0], size[1])
     holes = ndimage.binary_fill_holes(cover) & ~cover
     return int(holes.sum()), int(cover.sum())
 
