@@ -129,7 +129,7 @@ def test_equal_room_over_the_hull_makes_heads_alike_in_one_convex_cap():
     st = hierarchy_state(h, h.frames)
     p, d = st["pos"][:, [0, 2]], st["scale"][:, 0]
     birth = h.element_birth[h.florets[st["ids"]]]
-    cv = lambda x: x.std() / x.mean()  # noqa: E731
+    cv = lambda x: x.std() / x.mean()
     q0, w0 = fill_room(p, d, birth=birth)  # by size, over the discs: the oldest stay largest
     q, w = fill_room(p, d, birth=birth, weight="equal", outline="hull", iterations=60, margin=0.5,
                      scale_range=(0.2, 5.0))
