@@ -108,6 +108,46 @@ def test_a_corymb_grows_into_one_canopy():
     np.testing.assert_array_equal(w, w2)
 
 
+def hull_cover(pos, d, n=400):
+    """Share of the convex hull of the discs (pos, d) that they cover."""
+    from scipy.spatial import ConvexHull, Delaunay
+    a = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    pts = (pos[:, None] + 0.5 * d[:, None, None] * np.c_[np.cos(a), np.sin(a)][None]).reshape(-1, 2)
+    hull = pts[ConvexHull(pts).vertices]
+    lo, hi = pts.min(0), pts.max(0)
+    X, Z = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n))
+    P = np.column_stack([X.ravel(), Z.ravel()])
+    inside = Delaunay(hull).find_simplex(P) >= 0
+    cov = (np.linalg.norm(P[:, None] - pos[None], axis=2) < 0.5 * d).any(1)
+    return cov[inside].mean()
+
+
+def test_equal_room_over_the_hull_makes_heads_alike_in_one_convex_cap():
+    # the final yarrow corymb (pipelines/yarrow/final/corymb.toml): the pattern's heads range 5.6x
+    h = grow_hierarchy(levels=3, frames=95, growth_rate=0.06, initial_area=1.0, element_area=[1.0],
+                       production_threshold=[1.6, 1.6, 1.5], meristem_threshold=[2.0, 8.0])
+    st = hierarchy_state(h, h.frames)
+    p, d = st["pos"][:, [0, 2]], st["scale"][:, 0]
+    birth = h.element_birth[h.florets[st["ids"]]]
+    cv = lambda x: x.std() / x.mean()
+    q0, w0 = fill_room(p, d, birth=birth)  # by size, over the discs: the oldest stay largest
+    q, w = fill_room(p, d, birth=birth, weight="equal", outline="hull", iterations=60, margin=0.5,
+                     scale_range=(0.2, 5.0))
+    assert cv(d) > 0.4 and cv(w0) > 0.4
+    assert cv(w) < 0.15  # heads alike (issue 43: CV <= 0.15)
+    assert hull_cover(q, w) > 0.78 > hull_cover(q0, w0) + 0.05
+    # still no two heads of different ages overlap more than in the pattern
+    dq = np.linalg.norm(q[:, None] - q[None], axis=2)
+    dp = np.linalg.norm(p[:, None] - p[None], axis=2)
+    diff = birth[:, None] != birth[None]
+    allow = dq * np.maximum(1.0, 0.5 * (d[:, None] + d[None]) / np.where(dp > 0, dp, 1))
+    assert (0.5 * (w[:, None] + w[None]) <= allow * (1 + 1e-6) + 1e-9)[diff].all()
+    # the default options are unchanged by the new keys
+    q1, w1 = fill_room(p, d, birth=birth, weight="size", outline="discs")
+    np.testing.assert_array_equal(q0, q1)
+    np.testing.assert_array_equal(w0, w1)
+
+
 def test_apply_room_keeps_the_factor_and_scales_the_shift_with_growth():
     h = grow_hierarchy(levels=2, frames=60, growth_rate=0.06, initial_area=1.0, element_area=[1.0],
                        production_threshold=[1.6], meristem_threshold=[3.0])
@@ -156,7 +196,9 @@ def test_cli_fill_room_on_a_dynamic_corymb(tmp_path):
 
 @pytest.mark.parametrize("line, found", [("room_scale = [2.0, 1.0]", "room_scale"),
                                          ("room_margin = -1", "room_margin"),
-                                         ("room_iterations = 0", "room_iterations")])
+                                         ("room_iterations = 0", "room_iterations"),
+                                         ('room_weight = "age"', "room_weight"),
+                                         ('room_outline = "box"', "room_outline")])
 def test_cli_bad_room_keys_exit_2(tmp_path, line, found):
     (tmp_path / "p.toml").write_text(CORYMB.format(frames=40, extra="fill_room = true\n" + line))
     res = run_cli("phyllotaxis", tmp_path / "p.toml", "-o", tmp_path / "o")

@@ -27,6 +27,14 @@ Prints, and exits 1 when any fails:
   of its head, in the ray's lengths (its farthest point from its base), at most ``ligule_gap``; the
   median distance from a floret's base to its head's receptacle, in floret sizes, at most
   ``floret_surface``;
+- one closed corymb (issue 43, thresholds in species.toml [check]): the top view of the last
+  canopy frame (the canopy alone, axis Y, ``view_coverage``) covers at least ``coverage`` of its
+  convex hull; the heads' diameters in the last head RBA frame vary with a coefficient of variation
+  of at most ``head_cv``; the stem's base (the largest branch diameter, the pipe model) is at least
+  ``stem_base`` of the mean head diameter (the heads' discs);
+- the stem leaves (fig. 9.9, ``leaves/``, one frame per canopy frame): ``stem_leaves`` leaves in the
+  last frame, textured (``vt`` coordinates into the vein texture), crossing no branch, floret,
+  bract or other leaf in any frame;
 - the heads develop in order: at the frame where half the florets have started opening, the heads
   that emerged first are further open (Spearman rank correlation of the heads' emergence frame
   with the share of their florets past their window's start < -0.5).
@@ -46,7 +54,7 @@ from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.rba import list_rba_sequence, read_rba
 from inflo.formats.scn import read_scn
 from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
-from inflo.tools.species.checks import BOUNDS
+from inflo.tools.species.checks import BOUNDS, view_coverage
 
 
 def count(mesh) -> int:
@@ -237,6 +245,55 @@ def main(build: Path) -> int:
           f"(median at most {facts['floret_surface']})")
     if not np.median(dist) <= facts["floret_surface"]:
         fail.append(f"median floret-receptacle distance {np.median(dist):.3f} > {facts['floret_surface']}")
+
+    # one closed corymb: the top view's cover, heads alike in size, a stem that carries them
+    cov = view_coverage(mesh, 1)
+    print(f"top view (the last canopy frame, axis Y): covers {cov:.3f} of its convex hull (at least {facts['coverage']})")
+    if not cov >= facts["coverage"]:
+        fail.append(f"top view covers {cov:.3f} of its hull < {facts['coverage']}")
+    sizes = last.scale[:, 0]
+    cv = float(sizes.std() / sizes.mean())
+    print(f"head diameters (the heads' discs, last frame): {sizes.min():.2f}-{sizes.max():.2f}, mean {sizes.mean():.2f}, "
+          f"CV {cv:.3f} (at most {facts['head_cv']})")
+    if not cv <= facts["head_cv"]:
+        fail.append(f"head-diameter CV {cv:.3f} > {facts['head_cv']}")
+    radii = [float(t.split()[0]) for t in (build / "branches" / "skeleton.radii").read_text().splitlines()
+             if t.strip() and not t.startswith("#")]
+    ratio = 2.0 * max(radii) / float(sizes.mean())
+    print(f"stem base: diameter {2.0 * max(radii):.3f}, {ratio:.3f} of the mean head diameter (at least {facts['stem_base']})")
+    if not ratio >= facts["stem_base"]:
+        fail.append(f"stem base {ratio:.3f} of a head diameter < {facts['stem_base']}")
+
+    # the stem leaves: present, textured, crossing nothing in any frame
+    leaves = list_obj_sequence(build / "leaves")
+    lb = lc = ll = 0
+    for i, path in enumerate(leaves):
+        lf = read_obj(path)
+        if len(lf.faces) == 0:
+            continue
+        lb += cross_pairs(lf, read_obj(branches[min(i, len(branches) - 1)]))
+        lc += cross_pairs(lf, read_obj(canopy[min(i, len(canopy) - 1)]))
+        fg = np.asarray(lf.face_group)
+        for a in np.unique(fg):
+            for b in np.unique(fg):
+                if a < b:
+                    fa, fb = lf.faces[fg == a], lf.faces[fg == b]
+                    ll += len(intersecting_pairs_between(lf.vertices, fa, lf.vertices, fb))
+    n_leaves = 0
+    textured = False
+    if leaves:
+        text = Path(leaves[-1]).read_text()
+        n_leaves = sum(1 for t in text.splitlines() if t.startswith("g leaf_"))
+        textured = "\nvt " in text and "map_Kd" in (build / "leaves" / "leaves.mtl").read_text()
+    print(f"stem leaves: {len(leaves)} frames, {n_leaves} leaves in the last (species.toml [check] stem_leaves = "
+          f"{facts['stem_leaves']}), textured {textured}; every frame: {lb} leaf-branch, {lc} leaf-canopy, "
+          f"{ll} leaf-leaf pairs")
+    if len(leaves) != len(canopy):
+        fail.append("the leaf and canopy sequences differ in length")
+    if n_leaves != int(facts["stem_leaves"]) or not textured:
+        fail.append(f"{n_leaves} stem leaves (textured {textured}), not {facts['stem_leaves']}")
+    if lb or lc or ll:
+        fail.append(f"stem leaves cross: {lb} branch, {lc} canopy, {ll} leaf pairs")
 
     # the heads open in the order they emerged: at the frame where half the florets have started
     groups = np.array([p.group for p in typed.placements])

@@ -233,7 +233,8 @@ def _room(final: dict, h_p, birth: np.ndarray) -> tuple:
     pos = final["pos"][:, [0, 2]]
     d = final["scale"][:, 0]
     q, w = fill_room(pos, d, margin=h_p.room_margin, iterations=h_p.room_iterations,
-                     scale_range=tuple(h_p.room_scale), birth=birth)
+                     scale_range=tuple(h_p.room_scale), birth=birth, weight=h_p.room_weight,
+                     outline=h_p.room_outline)
     shift = np.zeros_like(final["pos"])
     shift[:, [0, 2]] = q - pos
     return shift, w / d

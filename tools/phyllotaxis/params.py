@@ -135,6 +135,8 @@ class Hierarchy:
     room_margin: float = _key("float", 1.0)
     room_iterations: int = _key("int", 1)
     room_scale: list = _key("floats", [0.9, 1.5])
+    room_weight: str = _key(("choice", ("size", "equal")), "size")
+    room_outline: str = _key(("choice", ("discs", "hull")), "discs")
 
 
 @dataclass(frozen=True)

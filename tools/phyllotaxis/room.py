@@ -38,7 +38,8 @@ MAX_CELLS = 2_000_000
 
 def fill_room(pos: np.ndarray, diameter: np.ndarray, *, margin: float = 1.0, iterations: int = 1,
               scale_range: tuple = (0.9, 1.5), neighbours: int = 12,
-              birth: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+              birth: np.ndarray | None = None, weight: str = "size",
+              outline: str = "discs") -> tuple[np.ndarray, np.ndarray]:
     """Positions (n, 2) and diameters (n,) of elements grown into their room (see module doc).
 
     Parameters
@@ -51,6 +52,13 @@ def fill_room(pos: np.ndarray, diameter: np.ndarray, *, margin: float = 1.0, ite
     neighbours : how many nearest elements a raster point's owner is chosen among
     birth : (n,) formation times, optional: the overlap bound then holds only between elements of
         different ages (without it, between every two)
+    weight : ``"size"`` (the cells of the weighted distance ``|x - p| / d``: a big element claims
+        proportionally more room) or ``"equal"`` (the plain distance: Lloyd's steps even the cells
+        out, so elements of any age end alike in size, as the heads of a real corymb, whose size is
+        the head's own and not its age's; widen ``scale_range`` for it)
+    outline : ``"discs"`` (the union of the grown discs: the pattern's own irregular outline) or
+        ``"hull"`` (their convex hull: one convex cap, the room between the lobes of the pattern
+        given to the elements beside it)
 
     Returns ``(pos, diameter)``, new arrays; deterministic (no randomness, no threads).
     """
@@ -71,11 +79,15 @@ def fill_room(pos: np.ndarray, diameter: np.ndarray, *, margin: float = 1.0, ite
     P = np.column_stack([X.ravel(), Z.ravel()])
     k = min(neighbours, n)
     dist, idx = cKDTree(p).query(P, k)
-    P = P[(dist < reach[idx]).any(axis=1)]
+    inside = (dist < reach[idx]).any(axis=1)
+    if outline == "hull":
+        inside = _in_hull(p, reach, P)
+    P = P[inside]
     q, w = p.copy(), d0.copy()
     for _ in range(iterations):
         dist, idx = cKDTree(q).query(P, k)
-        own = idx[np.arange(len(P)), np.argmin(dist / w[idx], axis=1)]
+        scale = w[idx] if weight == "size" else 1.0
+        own = idx[np.arange(len(P)), np.argmin(dist / scale, axis=1)]
         count = np.bincount(own, minlength=n).astype(float)
         has = count > 0
         cx = np.bincount(own, P[:, 0], n)
@@ -84,6 +96,18 @@ def fill_room(pos: np.ndarray, diameter: np.ndarray, *, margin: float = 1.0, ite
         room = 2.0 * np.sqrt(count * h * h / np.pi)
         w = np.where(has, np.clip(room, scale_range[0] * d0, scale_range[1] * d0), w)
     return q, _no_new_overlap(p, d0, q, w, scale_range[0] * d0, birth)
+
+
+def _in_hull(p: np.ndarray, reach: np.ndarray, P: np.ndarray, sides: int = 64) -> np.ndarray:
+    """Which raster points ``P`` lie in the convex hull of the discs (centres ``p``, radii
+    ``reach``), the hull of ``sides`` points on each disc's circle."""
+    from scipy.spatial import ConvexHull, Delaunay
+
+    a = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
+    ring = np.column_stack([np.cos(a), np.sin(a)])
+    pts = (p[:, None, :] + reach[:, None, None] * ring[None]).reshape(-1, 2)
+    hull = pts[ConvexHull(pts).vertices]
+    return Delaunay(hull).find_simplex(P) >= 0
 
 
 def _no_new_overlap(p, d0, q, w, floor, birth=None, sweeps: int = 100):
