@@ -18,6 +18,15 @@ checks every 50 frames, an OBJ every 25 frames):
 
 Each reports seconds, and ``triangles x steps / s`` so the trend with size is visible; the peak
 memory of the process is in the note.
+
+Issue 51, the ``solver scheme`` (formats/fcc.md, "Solver scheme"): ``schemes_100k`` and
+``schemes_350k`` run the same canopy with ``--scheme default`` and ``--scheme fast`` one after the
+other in one run (the machine is shared and noisy: compare only within a run), each with the exact
+test at every written frame (``sanity check per frames: 25``), and put the quality figures side by
+side: intersecting pairs at the written frames, the edge stretch range, florets present, and the
+RMS edge and dihedral errors against the templates (mean over the frames; the fast scheme's must
+be at most 1.2 x the default's). ``cold_start`` times a small scene's first run with an empty
+kernel cache and a second (warm) one, process start included.
 """
 from __future__ import annotations
 
@@ -47,22 +56,24 @@ def _cli() -> str:
 NO_CROWDING = "relax iterations: 0\nedge stretch bounds: 0.01 100\n"
 
 
-def _setup(folder: Path, n_florets: int, n_frames: int, run_frames: int, extra: str = "") -> Path:
+def _setup(folder: Path, n_florets: int, n_frames: int, run_frames: int, extra: str = "",
+           sanity_every: int = 50) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     frames, faces, fixed = opening_floret(n_frames, nu=12, nv=4)
     write_floret_animation(folder / "anim", frames, faces, fixed, folder / "petal_base.txt")
     write_scene(folder / "scene.scn", grid_canopy_scene(n_florets, n_frames))
     write_fcc_text(folder / "canopy.fcc", solver_iterations=50, collision_iterations=10, retries=20,
-                   spacing=0.005, frames=run_frames, sanity_every=50,
+                   spacing=0.005, frames=run_frames, sanity_every=sanity_every,
                    extra="output animation frames number: 25\n" + extra)
     return folder / "canopy.fcc"
 
 
-def _run(ctx: BenchContext, name: str, n_florets: int, n_frames: int, run_frames: int, extra: str = ""):
+def _run(ctx: BenchContext, name: str, n_florets: int, n_frames: int, run_frames: int, extra: str = "",
+         args=()):
     fcc = _setup(ctx.workdir / name, n_florets, n_frames, run_frames, extra)
     out = ctx.workdir / name / "out"
     t0 = time.perf_counter()
-    res = subprocess.run([_cli(), str(fcc), "-o", str(out), "-q"], capture_output=True, text=True)
+    res = subprocess.run([_cli(), str(fcc), "-o", str(out), "-q", *args], capture_output=True, text=True)
     seconds = time.perf_counter() - t0
     if res.returncode != 0:
         raise RuntimeError(f"fccompose failed ({res.returncode}): {res.stderr.strip()}")
@@ -157,4 +168,96 @@ def dense_head(ctx: BenchContext) -> list[Result]:
     return [Result("fccompose_dense_head", seconds / 60, "min", "", None, note)]
 
 
-BENCHMARKS = [growth, dense_head]
+def _quality(log: Path, n_florets: int) -> dict:
+    """The quality figures of a run's ``log.csv`` (issue 51): intersecting pairs at the checked
+    frames, edge stretch range, florets present at the end, mean RMS edge / dihedral errors, and
+    the s/frame phase sums."""
+    with open(log, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    body = rows[1:]
+    col = lambda k: [float(r[k]) for r in body]
+    inter = [int(r["intersecting_pairs"]) for r in rows if int(r["intersecting_pairs"]) >= 0]
+    return dict(
+        inter=max(inter) if inter else -1, checks=len(inter),
+        lo=min(col("min_edge_stretch")), hi=max(col("max_edge_stretch")),
+        present=int(rows[-1]["florets_present"]), n=n_florets,
+        rms_edge=sum(col("rms_edge_error")) / len(body), rms_dih=sum(col("rms_dihedral_error_deg")) / len(body),
+        internal=sum(col("t_internal_s")), collide=sum(col("t_collide_s")), rest=sum(col("t_rest_s")),
+        relax=int(sum(col("relax_sweeps"))), rounds=int(sum(col("collision_rounds"))),
+    )
+
+
+def _schemes(ctx: BenchContext, name: str, n_florets: int) -> list[Result]:
+    """Today's scheme and ``--scheme fast`` on one canopy, one after the other (same run)."""
+    frames = 10 if ctx.quick else 100
+    q, sec = {}, {}
+    for scheme in ("default", "fast"):
+        fcc = _setup(ctx.workdir / name, n_florets, 100, frames, sanity_every=25)
+        out = ctx.workdir / name / f"out_{scheme}"
+        t0 = time.perf_counter()
+        res = subprocess.run([_cli(), str(fcc), "-o", str(out), "-q", "--scheme", scheme],
+                             capture_output=True, text=True)
+        sec[scheme] = time.perf_counter() - t0
+        if res.returncode != 0:
+            raise RuntimeError(f"fccompose --scheme {scheme} failed ({res.returncode}): {res.stderr.strip()}")
+        q[scheme] = _quality(out / "log.csv", n_florets)
+    d, f = q["default"], q["fast"]
+    ok = (f["inter"] == 0 and 0.5 <= f["lo"] and f["hi"] <= 1.5 and f["present"] == f["n"]
+          and f["rms_edge"] <= 1.2 * d["rms_edge"] and f["rms_dih"] <= 1.2 * d["rms_dih"])
+
+    def text(k):
+        v = q[k]
+        return (f"{k}: {sec[k]:.1f} s (internal {v['internal']:.1f}, collide {v['collide']:.1f}, rest "
+                f"{v['rest']:.1f} s; relax sweeps {v['relax']}, rounds {v['rounds']}), intersecting pairs "
+                f"{v['inter']} at {v['checks']} checks, stretch {v['lo']:.3f}-{v['hi']:.3f}, florets "
+                f"{v['present']}/{v['n']}, RMS edge {v['rms_edge']:.4e}, RMS dihedral {v['rms_dih']:.3f} deg")
+    note = (f"{n_florets * 330:,} triangles, {frames} frames; {text('default')}; {text('fast')}; "
+            f"fast/default RMS edge {f['rms_edge'] / d['rms_edge']:.2f}, RMS dihedral "
+            f"{f['rms_dih'] / d['rms_dih']:.2f}; quality held: {'yes' if ok else 'NO'}")
+    return [Result(f"{name}_fast", sec["fast"], "s", "--scheme default, same canopy, same run", sec["default"], note),
+            Result(f"{name}_default", sec["default"], "s", "", None, "see the _fast row")]
+
+
+def schemes_100k(ctx: BenchContext) -> list[Result]:
+    """``--scheme default`` beside ``--scheme fast`` on the 100k canopy (issue 51 goal: under 20 s)."""
+    return _schemes(ctx, "fccompose_scheme_100k", 20 if ctx.quick else 300)
+
+
+def schemes_350k(ctx: BenchContext) -> list[Result]:
+    """``--scheme default`` beside ``--scheme fast`` on the 350k canopy (issue 51 goal: under 60 s)."""
+    if ctx.quick:
+        return []
+    return _schemes(ctx, "fccompose_scheme_350k", 1060)
+
+
+def cold_start(ctx: BenchContext) -> list[Result]:
+    """A small scene (20 florets, 10 frames) in a fresh process with an empty kernel cache
+    (``NUMBA_CACHE_DIR`` a new folder), then again with that cache warm (issue 51 goals: 20 s of
+    compiling at most; warm under 1.5 s, process start included)."""
+    import os
+    import shutil
+
+    fcc = _setup(ctx.workdir / "cold", 20, 10, 10)
+    cache = ctx.workdir / "cold" / "numba_cache"
+    shutil.rmtree(cache, ignore_errors=True)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    out = []
+    for label in ("cold", "warm"):
+        t0 = time.perf_counter()
+        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        res = subprocess.run([_cli(), str(fcc), "-o", str(ctx.workdir / "cold" / f"out_{label}"), "-q",
+                              "--scheme", "fast"], capture_output=True, text=True, env=env)
+        seconds = time.perf_counter() - t0
+        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+        if res.returncode != 0:
+            raise RuntimeError(f"fccompose failed ({res.returncode}): {res.stderr.strip()}")
+        goal = 20.0 if label == "cold" else 1.5
+        out.append(Result(f"fccompose_small_{label}_cache", seconds, "s", f"issue 51 goal {goal:g} s", goal,
+                          f"6,600 triangles, 10 frames, --scheme fast, fresh process; {cpu:.1f} s CPU (the "
+                          "figure to compare on a loaded machine)"
+                          + (", empty NUMBA_CACHE_DIR" if label == "cold" else ", the cache the cold run filled")))
+    return out
+
+
+BENCHMARKS = [growth, dense_head, schemes_100k, schemes_350k, cold_start]

@@ -79,7 +79,11 @@ _SYNTAX = {
     "weight": "`id path`",
     "id stiffness": "`id stiffness`",
     "variation": "`id field value …`",
+    "scheme": "`default` or `fast`",
 }
+
+#: The values of ``solver scheme`` (formats/fcc.md, "Solver scheme").
+SCHEMES = ("default", "fast")
 
 _COUNT0, _COUNT1 = KeySpec("int", low=0), KeySpec("int", low=1)
 #: Upper bounds of the counts: iterations per step, steps per frame, frames (a count of
@@ -104,6 +108,7 @@ KEYS: Mapping[str, KeySpec] = MappingProxyType({
     "edge stretch bounds": KeySpec("float", 2, low=0, strict=True, check="lo ≤ 1 ≤ hi",
                                    field="stretch_bounds"),
     "relax iterations": replace(_COUNT0, high=_ITERS, field="relax_iterations"),
+    "solver scheme": KeySpec("scheme", field="solver_scheme"),
     "collisions": KeySpec("bool", field="collisions"),
     "emergence scales": KeySpec("scales", field="emergence_scales"),
     "emergence growth frames": KeySpec("float", low=0, high=1e7, strict=True, field="emergence_growth_frames"),

@@ -219,6 +219,10 @@ class CanopyParams:
     relax_iterations : int
         ``relax iterations``: internal-constraint sweeps of the florets a collision round moved,
         between the rounds (0: none). 5.
+    solver_scheme : str
+        ``solver scheme``: ``"default"`` (the iteration scheme whose outputs the goldens hold) or
+        ``"fast"`` (formats/fcc.md, "Solver scheme": fewer projections for the same quality
+        figures; results differ). ``"default"``.
     collisions : bool
         ``collisions``: off runs the florets' growth without collision detection or response
         (florets emerge without testing for room; intersections are only counted, at the sanity
@@ -288,6 +292,7 @@ class CanopyParams:
     max_substeps: int = 3
     stretch_bounds: tuple = (0.5, 1.5)
     relax_iterations: int = 5
+    solver_scheme: str = "default"
     collisions: bool = True
     emergence_scales: tuple = (1.0, 0.75, 0.5, 0.35, 0.25)
     emergence_growth_frames: float = 10.0

@@ -6,7 +6,7 @@ import os
 import re
 from pathlib import Path
 
-from ._fcckeys import _LOOKUP, KEYS, REPEATABLE, _norm, _suggest
+from ._fcckeys import _LOOKUP, KEYS, REPEATABLE, SCHEMES, _norm, _suggest
 from ._fccparams import AnimationEntry, CameraParams, CanopyParams, FilePath, LatticeParams, RigidBodyAnimationEntry
 from .errors import FormatError, parse_float, parse_int, read_lines, shorten
 from .variation import Variation, parse_variation
@@ -185,6 +185,12 @@ class _Reader:
     def read_bool(self, key, spec, value, n):
         return self.boolean(key, value, n)
 
+    def read_scheme(self, key, spec, value, n):
+        word = " ".join(value.split()).lower()
+        if word not in SCHEMES:
+            raise self.err(n, f"one of {', '.join(SCHEMES)} for '{key}'", shorten(value.strip()) or "nothing")
+        return word
+
     def read_path(self, key, spec, value, n):
         return self.filepath(key, value, n)
 
@@ -353,6 +359,7 @@ _READ = {
     "weight": _Reader.read_weight,
     "id stiffness": _Reader.read_id_stiffness,
     "variation": _Reader.read_variation,
+    "scheme": _Reader.read_scheme,
 }
 
 

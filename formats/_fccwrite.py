@@ -69,6 +69,7 @@ def format_fcc(params: CanopyParams) -> str:
     add(f"max substeps: {int(p.max_substeps)}")
     add(f"edge stretch bounds: {_num(p.stretch_bounds[0])} {_num(p.stretch_bounds[1])}")
     add(f"relax iterations: {int(p.relax_iterations)}")
+    add(f"solver scheme: {p.solver_scheme}")
     add(f"collisions: {_bool(p.collisions)}")
     add("emergence scales: " + " ".join(_num(x) for x in p.emergence_scales))
     add(f"emergence growth frames: {_num(p.emergence_growth_frames)}")

@@ -22,6 +22,7 @@ from __future__ import annotations
 from ._fcckeys import ALIASES as ALIASES
 from ._fcckeys import KEYS, KNOWN_KEYS, KeySpec
 from ._fcckeys import REPEATABLE as REPEATABLE
+from ._fcckeys import SCHEMES as SCHEMES
 from ._fccparams import (
     AnimationEntry,
     CameraParams,

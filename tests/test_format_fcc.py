@@ -137,6 +137,7 @@ camera fov: 30
 light position: 4, 5, 6
 shadow frustrum: -2, 2, -3, 3, -4, 4
 collisions: off
+solver scheme: fast
 """
 
 
@@ -183,6 +184,7 @@ def test_every_key_of_the_list(write, tmp_path):
         sanity_check_every=10,
         max_substeps=2,
         stretch_bounds=(0.6, 1.4),
+        solver_scheme="fast",
         relax_iterations=3,
         collisions=False,
         emergence_scales=(1, 0.5, 0.2),

@@ -7,7 +7,7 @@ import os
 import click
 
 from inflo.formats.atomic import output_lock
-from inflo.formats.fcc import read_fcc
+from inflo.formats.fcc import SCHEMES, read_fcc
 from inflo.tools.common.cli import inflo_command, progress
 
 from .compose import compose_canopy
@@ -28,8 +28,13 @@ from .compose import compose_canopy
                    "draft and final builds share one .fcc).")
 @click.option("--updates", "updates", type=click.IntRange(min=1, max=1000), default=None, metavar="N",
               help="Simulation steps per frame; overrides the file's 'updates per frame'.")
-def main(params, output, resume, strict, allow_initial_intersections, frames, updates, quiet, debug):
+@click.option("--scheme", "scheme", type=click.Choice(SCHEMES), default=None,
+              help="Iteration scheme; overrides the file's 'solver scheme' (default: as the goldens were made; "
+                   "fast: fewer projections for the same quality figures, results not identical).")
+def main(params, output, resume, strict, allow_initial_intersections, frames, updates, scheme, quiet, debug):
     p = read_fcc(params)
+    if scheme is not None:
+        p = dataclasses.replace(p, solver_scheme=scheme)
     if frames is not None:
         p = dataclasses.replace(p, run_frames=int(frames))
     if updates is not None:

@@ -51,6 +51,8 @@ def _fingerprint(params: CanopyParams, model: Model, inputs: dict | None = None)
     h.update(model.tri_indices.tobytes())
     for raw, digest in sorted((inputs or {}).items()):
         h.update(raw.encode("utf-8") + b"\0" + digest.encode("ascii"))
+    if params.solver_scheme != "default":  # --scheme: a resumed run must go on with the same
+        h.update(b"solver scheme\0" + params.solver_scheme.encode("ascii"))
     return h.hexdigest()
 
 
