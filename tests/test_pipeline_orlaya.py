@@ -71,7 +71,7 @@ def umbel(request, tmp_path_factory):
     assert r.returncode == 0, r.stderr
     args = ["--alpha", _make_var("ALPHA"), "--half-angle", "--threshold", _make_var("TH_A", q),
             "--threshold", _make_var("TH_B", q), "--ray-id", "1", "--small-ray-id", "2", "--disk-id", "0",
-            "--ray-scale", _make_var("RAY_SCALE"), "--small-ray-scale", _make_var("SMALL_RAY_SCALE"),
+            "--ray-scale", _make_var("RAY_SCALE"), "--small-ray-scale", _make_var("SMALL_RAY_SCALE", q),
             "--petal-size", "--orient-rays", "top"]
     r = run_cli("dimorph", "-q", out / "scene.scn", *args, "-o", out / "typed.scn")
     assert r.returncode == 0, r.stderr
@@ -88,7 +88,7 @@ def test_three_forms_with_petal_factors_where_fig_6_4c_puts_them(umbel):
     for t, id_ in (("disk", 0), ("ray", 1), ("small_ray", 2)):
         assert (types == t).sum() > 0
         assert all(p.id == id_ for p in sc.placements if p.type == t)
-    big, small = float(_make_var("RAY_SCALE")), float(_make_var("SMALL_RAY_SCALE"))
+    big, small = float(_make_var("RAY_SCALE")), float(_make_var("SMALL_RAY_SCALE", q))
     centre = sc.groups[0].centre
     for a, b in zip(plain.placements, sc.placements):
         np.testing.assert_array_equal(a.scale, b.scale)  # only the petals carry the factor
