@@ -38,8 +38,10 @@ HERE = Path(__file__).resolve().parent
 
 # polygonization per quality: (lambda, eta) of each organ
 RES = {
-    "draft": {"petal": ("0.25", "3"), "stylopodium": ("0.5", "2")},
-    "final": {"petal": ("0.125", "../petal_eta_final.func"), "stylopodium": ("0.34", "3")},
+    "draft": {"petal": ("0.25", "3"), "stylopodium": ("0.5", "2"), "stamen": ("0.34", "3"),
+              "large": ("0.1", "7"), "bract": ("0.25", "3")},
+    "final": {"petal": ("0.125", "../petal_eta_final.func"), "stylopodium": ("0.34", "3"), "stamen": ("0.25", "3"),
+              "large": ("0.0625", "9"), "bract": ("0.2", "5")},
 }
 
 PETAL_NU, PETAL_NV = 4, 6
@@ -59,15 +61,63 @@ PETAL = {
                 half=[0.03, 0.065, 0.095, 0.11, 0.11, 0.09],
                 cup=0.5),
     "open": dict(time=1.0,
-                 mid=[(0.11, 0.00), (0.17, 0.03), (0.25, 0.05), (0.33, 0.06), (0.41, 0.06), (0.48, 0.05)],
-                 half=[0.03, 0.07, 0.11, 0.13, 0.13, 0.11],
+                 mid=[(0.11, 0.00), (0.17, 0.03), (0.26, 0.05), (0.36, 0.06), (0.46, 0.06), (0.55, 0.05)],
+                 half=[0.03, 0.08, 0.14, 0.18, 0.18, 0.15],
                  cup=0.15),
+}
+# the large ray florets' petals (own key poses, floret_large_*.floret): the same blade, its tip cleft
+# into two lobes by a deep notch along the midrib (Orlaya's outer petals are deeply two-lobed, fig.
+# 9.11): each column of the half blade ends at (1 - LOBE_CUT[i]) of its length, rows spread evenly
+# along it, so the notch runs down the petal's axis without slivers (the rows near the midrib are
+# only closer together). Column 0 is the midrib (the notch's bottom, half the blade's length back),
+# the outer columns round the lobes' shoulders
+LOBE_CUT = np.array([0.5, 0.12, 0.0, 0.1])
+# five stamens alternating with the petals (symmetry 5, phase 36): a filament rising from between the
+# stylopodium and the claws (radius 0.105) and curving outward over the petals' bases, ending in an
+# oblong anther (the last rows, wider), low over the petals (anthers about 0.1 above the base: higher,
+# they held up the large petals lying over them); bud inflexed inside the incurved petals. Row 0 on y = 0 (fixed)
+STAMEN_NU, STAMEN_NV = 2, 6
+U_STAMEN = np.linspace(0.0, 1.0, STAMEN_NU)
+STAMEN = {
+    "bud": dict(mid=[(0.105, 0.00), (0.11, 0.04), (0.115, 0.08), (0.11, 0.11), (0.10, 0.13), (0.09, 0.145)],
+                half=[0.008, 0.007, 0.007, 0.012, 0.02, 0.014], cup=0.0),
+    "mid": dict(mid=[(0.105, 0.00), (0.12, 0.05), (0.14, 0.09), (0.155, 0.12), (0.165, 0.14), (0.17, 0.16)],
+                half=[0.008, 0.007, 0.007, 0.012, 0.022, 0.015], cup=0.0),
+    "open": dict(mid=[(0.105, 0.00), (0.125, 0.04), (0.155, 0.07), (0.185, 0.09), (0.21, 0.10), (0.235, 0.105)],
+                 half=[0.008, 0.007, 0.007, 0.016, 0.032, 0.022], cup=0.0),
 }
 # stylopodium: radius, height per row (half angle 36 = the symmetry plane: a closed ring)
 STYLO = dict(r=[0.09, 0.085, 0.06, 0.03], y=[0.00, 0.04, 0.08, 0.10], half=[36, 36, 36, 36])
 
+# an involucral bract (bract_*.floret; involucres.py places them where the rays meet): a
+# linear-lanceolate green blade of unit length along +X, rising a little (below the rays leaving
+# upward), its base row on y = 0 (fixed); bud shorter, open full length
+BRACT_NU, BRACT_NV = 3, 5
+U_BRACT = np.linspace(0.0, 1.0, BRACT_NU)
+BRACT = {
+    "bud": dict(time=0.0, mid=[(0.0, 0.0), (0.18, 0.04), (0.36, 0.07), (0.54, 0.09), (0.7, 0.10)],
+                half=[0.05, 0.08, 0.07, 0.045, 0.012], cup=0.3),
+    "open": dict(time=1.0, mid=[(0.0, 0.0), (0.25, 0.05), (0.5, 0.09), (0.75, 0.11), (1.0, 0.12)],
+                 half=[0.05, 0.09, 0.08, 0.05, 0.015], cup=0.2),
+}
+
 # material ids (colors.toml)
-M_PETAL, M_STYLO = 0, 1
+M_PETAL, M_STYLO, M_STAMEN, M_BRACT = 0, 1, 2, 3
+
+
+def cleft(net, cut):
+    """The half blade ``net`` with column i ending at (1 - cut[i]) of its own length (arc length along
+    the column's control polygon), its rows spread evenly along what is left: a notch of depth cut[0]
+    along the midrib."""
+    out = net.copy()
+    for i in range(net.shape[1]):
+        col = net[:, i]
+        seg = np.sqrt(((col[1:] - col[:-1]) ** 2).sum(axis=1))
+        s = np.concatenate([[0.0], np.cumsum(seg)])
+        want = np.linspace(0.0, s[-1] * (1.0 - cut[i]), len(col))
+        for k in range(3):
+            out[:, i, k] = np.interp(want, s, col[:, k])
+    return out
 
 
 def write(out: Path, quality: str) -> None:
@@ -77,11 +127,23 @@ def write(out: Path, quality: str) -> None:
     stylo = organ("stylopodium", M_STYLO, "2 2", "3 4", "5 0", 4, res["stylopodium"],
                   ring_net(STYLO["r"], STYLO["y"], STYLO["half"], 3))
     for key, p in PETAL.items():
-        text = head.format(key=key, q=quality, t=p["time"])
-        net = blade_net(p, PETAL_NU, PETAL_NV, U_PETAL, TIP_RECESS)
-        net[0, :, 1] = 0.0  # the claw's row flat on y = 0: all of it fixed (weights.py base)
-        text += organ("petal", M_PETAL, "2 3", f"{PETAL_NU} {PETAL_NV}", "5 0", 0, res["petal"], net) + "\n" + stylo
-        (out / f"floret_{key}.floret").write_text(text)
+        snet = blade_net(STAMEN[key], STAMEN_NU, STAMEN_NV, U_STAMEN)
+        snet[0, :, 1] = 0.0
+        stamen = organ("stamen", M_STAMEN, "1 3", f"{STAMEN_NU} {STAMEN_NV}", "5 36", 0, res["stamen"], snet)
+        for name, net, r in (("floret", blade_net(p, PETAL_NU, PETAL_NV, U_PETAL, TIP_RECESS), res["petal"]),
+                             ("floret_large", cleft(blade_net(p, PETAL_NU, PETAL_NV, U_PETAL), LOBE_CUT), res["large"])):
+            text = head.format(key=key, q=quality, t=p["time"])
+            net[0, :, 1] = 0.0  # the claw's row flat on y = 0: all of it fixed (weights.py base)
+            text += (organ("petal", M_PETAL, "2 3", f"{PETAL_NU} {PETAL_NV}", "5 0", 0, r, net) + "\n" + stylo
+                     + "\n" + stamen)
+            (out / f"{name}_{key}.floret").write_text(text)
+    for key, p in BRACT.items():
+        net = blade_net(p, BRACT_NU, BRACT_NV, U_BRACT)
+        net[0, :, 1] = 0.0
+        text = ("# orlaya involucral bract, key pose '{key}' ({q}); written by make_keys.py\nfloret 1\nname: bract\n"
+                "time: {t}\n\n").format(key=key, q=quality, t=p["time"])
+        text += organ("bract", M_BRACT, "2 3", f"{BRACT_NU} {BRACT_NV}", "1 0", 0, res["bract"], net)
+        (out / f"bract_{key}.floret").write_text(text)
 
 
 if __name__ == "__main__":
