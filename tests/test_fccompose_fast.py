@@ -63,7 +63,7 @@ def test_projections_stop_on_the_residual_tolerance():
 
 def test_over_relaxed_sweeps_converge_in_fewer_sweeps():
     """Stiffness scaled by an over-relaxation factor (successive over-relaxation of the
-    Gauss-Seidel sweeps; ``FAST_OMEGA``) reaches the same tolerance in fewer sweeps on a chain
+    Gauss-Seidel sweeps, tried for the fast scheme) reaches the same tolerance in fewer sweeps on a chain
     of 30 vertices pinned at one end (a petal's row, stretched and bent), and ends at rest."""
     n = 30
     x = np.zeros((n, 3))

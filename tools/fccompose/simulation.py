@@ -42,11 +42,8 @@ RELAX_ROUNDS = 3
 #: edge length (the default scheme: 1e-9 of the scene's size, i.e. in practice all ``solver
 #: iterations`` for every floret in contact)
 FAST_TOLERANCE = 1e-1
-#: ``solver scheme: fast``: the over-relaxation factor of the internal projections (successive
-#: over-relaxation of the Gauss-Seidel sweeps: the stiffness ``kStretch``/``kBend`` of the distance
-#: (eq. 3.11) and bending (eq. 3.13) projections scaled by it; 1: none). Measured on the 100k
-#: benchmark canopy (with the tolerance at 1e-2): 1.2 ran 2 % more sweeps, not fewer; kept off
-FAST_OMEGA = 1.0
+# (over-relaxation of the internal sweeps was measured for the fast scheme and not kept: on the
+# 100k benchmark canopy a factor 1.2 ran 2 % more sweeps, not fewer; formats/fcc.md)
 #: ``solver scheme: fast``: at most this many internal sweeps a step (None: ``solver iterations``);
 #: a floret the collision response deformed is drawn back to its template over the next steps
 #: (the prediction carries the deformation) rather than within one
@@ -155,11 +152,6 @@ class Simulation:
         self.solve_tolerance = None
         """the internal solve's stopping tolerance (:data:`FAST_TOLERANCE`; default scheme:
         :attr:`converged_below`)"""
-        self.edge_k = model.edge_stiffness
-        self.hinge_k = model.hinge_stiffness
-        if self.fast and FAST_OMEGA != 1.0:
-            self.edge_k = np.minimum(model.edge_stiffness * FAST_OMEGA, 1.95)
-            self.hinge_k = np.minimum(model.hinge_stiffness * FAST_OMEGA, 1.95)
         if coloured:
             self.edge_colours = colour_constraints(model.edge_indices, model.n_vertices)
             self.hinge_colours = colour_constraints(model.hinge_indices, model.n_vertices)
@@ -415,8 +407,8 @@ class Simulation:
             # florets in contact need all the sweeps, the others one: hand out florets a few at a
             # time (dynamic schedule) rather than half the canopy to each thread
             with numba.parallel_chunksize(4):
-                n = solve_parts(xp, w, m.edge_indices, self.edge_rest_length, self.edge_k, self.edge_parts,
-                                m.hinge_indices, self.hinge_rest_angle, self.hinge_k, self.hinge_parts,
+                n = solve_parts(xp, w, m.edge_indices, self.edge_rest_length, m.edge_stiffness, self.edge_parts,
+                                m.hinge_indices, self.hinge_rest_angle, m.hinge_stiffness, self.hinge_parts,
                                 self._iterations(), float(self.solve_tolerance), self.sweeps)
             timing["sweeps"] = timing.get("sweeps", 0) + n
             if not self.one_part:
@@ -567,8 +559,8 @@ class Simulation:
             verts = (np.arange(len(xg)) if self.one_part
                      else np.concatenate([np.arange(off[f], off[f + 1]) for f in fl]))
             before = xg[verts]
-            n = solve_parts(xg, w, m.edge_indices, self.edge_rest_length, self.edge_k, self.edge_parts,
-                            m.hinge_indices, self.hinge_rest_angle, self.hinge_k, self.hinge_parts,
+            n = solve_parts(xg, w, m.edge_indices, self.edge_rest_length, m.edge_stiffness, self.edge_parts,
+                            m.hinge_indices, self.hinge_rest_angle, m.hinge_stiffness, self.hinge_parts,
                             iterations, float(self.solve_tolerance), None, parts=parts)
             timing["relax_sweeps"] = timing.get("relax_sweeps", 0) + n
             _undo_runaway(xg, verts, before, m.vertex_floret[verts])

@@ -78,11 +78,11 @@ def fill_room(pos: np.ndarray, diameter: np.ndarray, *, margin: float = 1.0, ite
     X, Z = np.meshgrid(xs, zs)
     P = np.column_stack([X.ravel(), Z.ravel()])
     k = min(neighbours, n)
-    dist, idx = cKDTree(p).query(P, k)
-    inside = (dist < reach[idx]).any(axis=1)
     if outline == "hull":
-        inside = _in_hull(p, reach, P)
-    P = P[inside]
+        P = P[_in_hull(p, reach, P)]
+    else:
+        dist, idx = cKDTree(p).query(P, k)
+        P = P[(dist < reach[idx]).any(axis=1)]
     q, w = p.copy(), d0.copy()
     for _ in range(iterations):
         dist, idx = cKDTree(q).query(P, k)
