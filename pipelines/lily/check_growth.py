@@ -52,19 +52,23 @@ def measures(bud, x, tepals):
         mid = grid[:, grid.shape[1] // 2]
         d = x[mid[-1]] - x[mid[-4]]
         tip.append(math.degrees(math.asin(np.clip(d[1] / np.linalg.norm(d), -1, 1))))
-        j = int(0.45 * (grid.shape[0] - 1))
-        row = x[grid[j]]
-        chord = row[-1] - row[0]
-        c = chord / np.linalg.norm(chord)
-        off = (row - row[0]) - np.outer((row - row[0]) @ c, c)
-        # the inner side: the midrib's direction along the tepal crossed with the chord (u right, v up,
-        # counter-clockwise seen from inside), so that a curl towards the inner side counts positive
-        along = x[grid[j + 1, grid.shape[1] // 2]] - x[grid[j - 1, grid.shape[1] // 2]]
-        inner = np.cross(c, along)
-        inner /= np.linalg.norm(inner)
-        k = np.argmax(np.abs(off @ inner))
-        sag.append(float(off[k] @ inner) / np.linalg.norm(chord))
+        sag.append(row_sagitta(x, grid, int(0.45 * (grid.shape[0] - 1))))
     return np.array(joint), np.array(tip), np.array(sag)
+
+
+def row_sagitta(x, grid, j) -> float:
+    """Signed sagitta over chord of the tepal's row j (0 flat, > 0 curled towards the inner side)."""
+    row = x[grid[j]]
+    chord = row[-1] - row[0]
+    c = chord / np.linalg.norm(chord)
+    off = (row - row[0]) - np.outer((row - row[0]) @ c, c)
+    # the inner side: the midrib's direction along the tepal crossed with the chord (u right, v up,
+    # counter-clockwise seen from inside), so that a curl towards the inner side counts positive
+    along = x[grid[j + 1, grid.shape[1] // 2]] - x[grid[j - 1, grid.shape[1] // 2]]
+    inner = np.cross(c, along)
+    inner /= np.linalg.norm(inner)
+    k = np.argmax(np.abs(off @ inner))
+    return float(off[k] @ inner) / float(np.linalg.norm(chord))
 
 
 def _chord_across(x, grid, mid, j):

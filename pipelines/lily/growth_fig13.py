@@ -20,6 +20,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from check_growth import row_sagitta
 from growth_beside import still
 from growth_keys import TEPALS
 from PIL import Image, ImageDraw, ImageFont
@@ -54,20 +55,7 @@ def petal(mesh: ObjMesh, organ: str) -> tuple[ObjMesh, np.ndarray]:
 
 def cross_sections(x: np.ndarray, grid: np.ndarray, at=(0.3, 0.5, 0.7)) -> list[float]:
     """Signed sagitta / chord of the rows at these fractions of the length (inner side > 0)."""
-    nv, nu = grid.shape
-    out = []
-    for f in at:
-        j = int(round(f * (nv - 1)))
-        row = x[grid[j]]
-        chord = row[-1] - row[0]
-        c = chord / math.sqrt(float(chord @ chord))
-        off = (row - row[0]) - np.outer((row - row[0]) @ c, c)
-        along = x[grid[j + 1, nu // 2]] - x[grid[j - 1, nu // 2]]
-        inner = np.cross(c, along)
-        inner /= math.sqrt(float(inner @ inner))
-        k = int(np.argmax(np.abs(off @ inner)))
-        out.append(float(off[k] @ inner) / math.sqrt(float(chord @ chord)))
-    return out
+    return [row_sagitta(x, grid, int(round(f * (grid.shape[0] - 1)))) for f in at]
 
 
 def render(obj: Path, view: str, out: Path) -> Image.Image:
