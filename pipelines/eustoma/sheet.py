@@ -34,15 +34,22 @@ def main() -> int:
     a = ap.parse_args()
     render = Path(sys.executable).parent / "canopy-render"
     rows = []
+    frames = a.frames.split(",")
     with tempfile.TemporaryDirectory() as tmp:
-        for name, title in CULTIVARS.items():
+        # the three cultivars' renders run side by side (each a process of its own; the rows are
+        # assembled in the cultivars' order, so the sheet does not depend on which ends first)
+        jobs = []
+        for name in CULTIVARS:
             out = Path(tmp) / f"{name}.png"
-            frames = a.frames.split(",")
             cmd = [str(render), "-q", str(a.build / name), str(a.build / "column_obj"),
                    "--colors", str(HERE / "colors.toml"), "--elevation", a.elevation,
                    "--size", a.tile, "--fit-all", "-o", str(out), "--label", "" if len(frames) == 1 else "frame {n}"]
             cmd += ["--frame", frames[0]] if len(frames) == 1 else ["--sheet", a.frames, "--columns", str(len(frames))]
-            subprocess.run(cmd, check=True)
+            jobs.append((out, subprocess.Popen(cmd)))
+        failed = [p.args for _, p in jobs if p.wait() != 0]
+        if failed:
+            raise subprocess.CalledProcessError(1, failed[0])
+        for (out, _), title in zip(jobs, CULTIVARS.values()):
             im = Image.open(out).convert("RGB")
             band = Image.new("RGB", (im.width, im.height + 40), "white")
             band.paste(im, (0, 40))

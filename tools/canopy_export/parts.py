@@ -206,13 +206,17 @@ def iter_frames(parts: Sequence[Part], n_frames: int, *, constant_topology: bool
     prev_key: list[tuple] = [()] * len(parts)  # _face_materials(prev[i])
     for k in range(n_frames):
         meshes, changed = [], []
+        read: dict[Path, ObjMesh] = {}  # parts drawn from one file (a column placed beside three flowers) read it once
         for i, part in enumerate(parts):
             if part.is_static and k > 0:
                 meshes.append(None)
                 changed.append(False)
                 continue
-            mesh = read_obj(part.path(k))
-            check_coordinates(part.path(k), mesh)
+            path = part.path(k)
+            if path not in read:
+                read[path] = read_obj(path)
+                check_coordinates(path, read[path])
+            mesh = read[path]
             key = _face_materials(mesh)
             if prev[i] is None:
                 first[i] = mesh

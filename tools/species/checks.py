@@ -18,7 +18,6 @@ from numba import njit
 from PIL import Image, ImageDraw
 from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError
-from scipy.stats import spearmanr
 
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.rba import read_rba
@@ -272,6 +271,8 @@ def check_phase(head: Head, *, bud: float, failures: list) -> None:
     heights = floret_heights(read_obj(head.canopy[k]), head.rba_frame(k), head.scene)
     disk = [p for p in heights if head.types[p] == "disk"]
     h = np.array([heights[p] for p in disk])
+    from scipy.stats import spearmanr  # here: scipy.stats takes 0.3 s to import, most checks need none of it
+
     rho = float(spearmanr(head.radius[disk], h).statistic) if len(disk) > 2 else float("nan")
     buds = int((h < bud).sum())
     print(f"phase effect at frame {k}: {len(disk)} disk florets, height {h.min():.2f}-{h.max():.2f} floret units, "
