@@ -90,7 +90,7 @@ def sepal(frame):
 
 
 RECEPTACLE_ROWS = [(0, 0.35), (0, 0.2), (0, -0.3), (0, -0.9), (0, -1.3), (0, -1.9), (0, -3.0), (0, -7.0), (0, -8.0)]
-RECEPTACLE_RADII = [0.9, 1.25, 1.7, 2.3, 2.7, 1.5, 0.9, 0.8, 0.8]
+RECEPTACLE_RADII = [0.9, 1.25, 1.7, 2.3, 3.3, 1.5, 0.9, 0.8, 0.8]
 RECEPTACLE = ring_tube(RECEPTACLE_ROWS, RECEPTACLE_RADII, RECEPTACLE_RADII)
 
 

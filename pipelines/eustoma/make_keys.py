@@ -86,9 +86,9 @@ CULTIVARS = {
         "early": dict(direction="0, 1", e="1.0", w="1.3",
                       e_in="1.0 + 0.037 * (1 - smoothstep(0.25, 0.45, v)) - 0.042 * smoothstep(0.5, 0.9, v)",
                       w_in="1.3 + 0.025"),
-        "late": dict(direction="0, 1", e="1.0", w="1.3",
-                     e_in="1.0 + 0.008 * (1 - smoothstep(0.25, 0.45, v)) - 0.010 * smoothstep(0.5, 0.9, v)",
-                     w_in="1.3 + 0.008"),
+        "late": dict(direction="0, 1", e="1.0", w="1.25",
+                     e_in="1.0 + 0.008 * (1 - smoothstep(0.25, 0.45, v))",
+                     w_in="1.25 + 0.008"),
     },
 }
 
