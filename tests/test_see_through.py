@@ -58,3 +58,48 @@ def test_fill_triangles_covers_the_area_and_skips_degenerate_ones():
     assert img.shape == (80, 120) and abs(int(img.sum()) - 3000) < 100 + 2  # area 3000, edges count
     assert img[0, 0] and img[59, 0] and not img[59, 99] and not img[79, 119]
     assert not fill_triangles(pts, np.array([[3, 4, 5]]), 20, 20).any()  # zero area: nothing
+
+
+def test_enclosed_background_is_what_scipy_fills():
+    """The flood fill counts exactly the holes scipy.ndimage.binary_fill_holes fills (4-neighbours):
+    a one-pixel hole, a hole touching only diagonally the outside, a notch, random images."""
+    from scipy import ndimage
+
+    from inflo.tools.species.checks import enclosed_background
+
+    ring = np.ones((3, 3), bool)
+    ring[1, 1] = False
+    assert enclosed_background(ring) == 1
+    notch = ring.copy()
+    notch[2, 1] = False  # open to the border
+    assert enclosed_background(notch) == 0
+    diag = np.ones((4, 4), bool)
+    diag[1, 1] = diag[2, 2] = False  # two holes meeting at a corner only: both enclosed
+    assert enclosed_background(diag) == 2
+    assert enclosed_background(np.zeros((1, 1), bool)) == 0
+    rng = np.random.default_rng(5)
+    for _ in range(100):
+        img = rng.random(tuple(rng.integers(1, 30, 2))) < rng.random()
+        assert enclosed_background(img) == int((ndimage.binary_fill_holes(img) & ~img).sum())
+
+
+def test_fill_triangles_covers_the_centres_inside():
+    """Pixel centres inside or on a triangle are covered, the others not (against the barycentric
+    test of every pixel of the image)."""
+    from inflo.tools.species.checks import fill_triangles
+
+    rng = np.random.default_rng(3)
+    pts = rng.random((30, 2)) * 40.0
+    faces = rng.integers(0, 30, (20, 3)).astype(np.int64)
+    img = fill_triangles(pts, faces, 41, 41)
+    want = np.zeros((41, 41), bool)
+    for a, b, c in faces:
+        (ax, ay), (bx, by), (cx, cy) = pts[a], pts[b], pts[c]
+        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+        if area == 0.0:
+            continue
+        y, x = np.mgrid[0:41, 0:41].astype(float)
+        w0 = ((bx - x) * (cy - y) - (by - y) * (cx - x)) / area
+        w1 = ((cx - x) * (ay - y) - (cy - y) * (ax - x)) / area
+        want |= (w0 >= -1e-9) & (w1 >= -1e-9) & (1.0 - w0 - w1 >= -1e-9)
+    assert img.any() and (img == want).all()

@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 from PIL import Image, ImageDraw
-from scipy import ndimage
 from scipy.spatial import ConvexHull, QhullError
 
 from inflo.formats.obj import list_obj_sequence, read_obj
@@ -94,7 +93,21 @@ def fill_triangles(points, faces, width, height):
         y0 = max(int(np.ceil(min(ay, by, cy))), 0)
         y1 = min(int(np.floor(max(ay, by, cy))), height - 1)
         for y in range(y0, y1 + 1):
-            for x in range(x0, x1 + 1):
+            # the row's crossing with the triangle, widened by a pixel each way: only the pixels
+            # there are tested (the same exact test as over the whole bounding box)
+            lo, hi = np.inf, -np.inf
+            for px, py, qx, qy in ((ax, ay, bx, by), (bx, by, cx, cy), (cx, cy, ax, ay)):
+                if min(py, qy) <= y <= max(py, qy):
+                    if py == qy:
+                        lo, hi = min(lo, px, qx), max(hi, px, qx)
+                    else:
+                        xc = px + (y - py) * (qx - px) / (qy - py)
+                        lo, hi = min(lo, xc), max(hi, xc)
+            if lo > hi:  # rounding: the row only grazes a vertex
+                lo, hi = x0, x1
+            for x in range(max(x0, int(np.floor(lo)) - 1), min(x1, int(np.ceil(hi)) + 1) + 1):
+                if img[y, x]:  # covered by an earlier triangle
+                    continue
                 w0 = ((bx - x) * (cy - y) - (by - y) * (cx - x)) / area
                 w1 = ((cx - x) * (ay - y) - (cy - y) * (ax - x)) / area
                 w2 = 1.0 - w0 - w1
@@ -103,20 +116,75 @@ def fill_triangles(points, faces, width, height):
     return img
 
 
-def see_through(mesh, azimuth: float, elevation: float, pixels: int = 400) -> tuple[int, int]:
+@njit(cache=True)
+def enclosed_background(cover):
+    """The pixels of a boolean image that are not covered and not joined to its border by
+    uncovered pixels (4-neighbours): the holes ``scipy.ndimage.binary_fill_holes`` fills (its
+    default structure), counted by a flood fill from the border in one pass over the image."""
+    h, w = cover.shape
+    seen = np.zeros((h, w), np.bool_)
+    stack = np.empty(h * w, np.int64)
+    top = 0
+    for y in range(h):
+        for x in range(w):
+            if (y == 0 or x == 0 or y == h - 1 or x == w - 1) and not cover[y, x] and not seen[y, x]:
+                seen[y, x] = True
+                stack[top] = y * w + x
+                top += 1
+    while top > 0:
+        top -= 1
+        y, x = stack[top] // w, stack[top] % w
+        for dy, dx in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+            yy, xx = y + dy, x + dx
+            if 0 <= yy < h and 0 <= xx < w and not cover[yy, xx] and not seen[yy, xx]:
+                seen[yy, xx] = True
+                stack[top] = yy * w + xx
+                top += 1
+    n = 0
+    for y in range(h):
+        for x in range(w):
+            if not cover[y, x] and not seen[y, x]:
+                n += 1
+    return n
+
+
+@njit(cache=True)
+def _see_through_view(vertices, faces, used, right, up, pixels):
+    """:func:`see_through`'s work for one view: the vertices projected on (right, up) (the sums in
+    ``la.matmul``'s order), the used ones' bounds scaled to ``pixels``, the triangles filled, the
+    enclosed background counted. Returns (enclosed, covered) pixels."""
+    n = vertices.shape[0]
+    q = np.empty((n, 2))
+    for i in range(n):
+        q[i, 0] = vertices[i, 0] * right[0] + vertices[i, 1] * right[1] + vertices[i, 2] * right[2]
+        q[i, 1] = vertices[i, 0] * up[0] + vertices[i, 1] * up[1] + vertices[i, 2] * up[2]
+    lo = np.array([np.inf, np.inf])
+    hi = np.array([-np.inf, -np.inf])
+    for i in used:
+        for d in range(2):
+            lo[d] = min(lo[d], q[i, d])
+            hi[d] = max(hi[d], q[i, d])
+    s = (pixels - 1) / max(max(hi[0] - lo[0], hi[1] - lo[1]), 1e-300)
+    width = int(math.ceil((hi[0] - lo[0]) * s)) + 1
+    height = int(math.ceil((hi[1] - lo[1]) * s)) + 1
+    for i in range(n):
+        q[i, 0] = (q[i, 0] - lo[0]) * s
+        q[i, 1] = (q[i, 1] - lo[1]) * s
+    cover = fill_triangles(q, faces, width, height)
+    return enclosed_background(cover), int(cover.sum())
+
+
+def see_through(mesh, azimuth: float, elevation: float, pixels: int = 400, *, used=None) -> tuple[int, int]:
     """Background seen *through* a mesh from one direction (orthographic): (the pixels enclosed by
     its silhouette that no triangle covers, the silhouette's pixels). A slit between two organs, or
     a hole, counts; the notches of a lobed outline, open to the outside, do not (the silhouette's
-    holes: ``scipy.ndimage.binary_fill_holes``). Rasterized on ``pixels`` across the larger side."""
+    holes, :func:`enclosed_background`). Rasterized on ``pixels`` across the larger side.
+    ``used``: the vertices the faces use (``np.unique(mesh.faces)``), where the caller has them."""
     right, up = view_axes(azimuth, elevation)
-    q = np.stack([la.matmul(mesh.vertices, right), la.matmul(mesh.vertices, up)], axis=1)
-    used = np.unique(mesh.faces)
-    lo, hi = q[used].min(axis=0), q[used].max(axis=0)
-    s = (pixels - 1) / float(max((hi - lo).max(), 1e-300))
-    size = (int(math.ceil((hi - lo)[0] * s)) + 1, int(math.ceil((hi - lo)[1] * s)) + 1)
-    cover = fill_triangles((q - lo) * s, np.ascontiguousarray(mesh.faces, np.int64), size[0], size[1])
-    holes = ndimage.binary_fill_holes(cover) & ~cover
-    return int(holes.sum()), int(cover.sum())
+    used = np.unique(mesh.faces) if used is None else used
+    h, c = _see_through_view(np.ascontiguousarray(mesh.vertices, np.float64),
+                             np.ascontiguousarray(mesh.faces, np.int64), used, right, up, int(pixels))
+    return int(h), int(c)
 
 
 ALL_VIEWS = ((0.0, 90.0), (0.0, -90.0)) + tuple((float(az), float(el)) for el in (35, 0, -35)
@@ -128,8 +196,9 @@ def worst_see_through(mesh, views=ALL_VIEWS, pixels: int = 400) -> tuple[float, 
     ((azimuth, elevation) pairs; by default from above, below and every 30 degrees round at
     elevations 35, 0 and -35), and that view."""
     best = (0.0, views[0])
+    used = np.unique(mesh.faces)
     for az, el in views:
-        h, c = see_through(mesh, az, el, pixels)
+        h, c = see_through(mesh, az, el, pixels, used=used)
         if c and h / c > best[0]:
             best = (h / c, (az, el))
     return best
