@@ -204,7 +204,7 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
             p.frame_start, p.frame_end = emerged[pid], n - 1
             p.emergence = float(max((p.emergence or 0.0) - start, 0.0))
         hs.placements.append(p)
-    write_scn(out / "heads" / "scene.scn", hs, header=f"the heads of {pattern / 'scene.scn'} on the canopy's "
+    write_scn(out / "heads" / "scene.scn", hs, header=f"the heads of {pattern.name}/scene.scn on the canopy's "
               f"clock: pattern frame {start} = canopy frame 0, {n} frames (corymb_heads.py)")
     for k, f in enumerate(seq):
         write_rba(out / "heads" / "rba" / f"{k:04d}.rba", f)
