@@ -27,6 +27,7 @@ import numpy as np
 
 from inflo.formats.obj import ObjMesh, read_obj, write_obj
 from inflo.formats.scn import Group, Placement, Scene, read_scn, write_scn
+from inflo.tools.common import linalg as la
 
 HEADS = 6
 # the receptacle's id in dyssodia.fcc (an `obj:` entry)
@@ -34,7 +35,7 @@ OBSTACLE_ID = 2
 
 
 def _rot(axis, angle):
-    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    axis = np.asarray(axis, float) / la.norm(axis)
     x, y, z = axis
     c, s = np.cos(angle), np.sin(angle)
     return np.array([[c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
@@ -52,7 +53,7 @@ def heads(ring: float, tilt: float, drop: float):
         spin = _rot([0, 1, 0], phi)  # the pattern faces the same way relative to the centre
         lean = _rot(tangent, np.radians(tilt))
         centre = ring * radial - np.array([0.0, drop, 0.0])
-        out.append((centre, lean @ spin))
+        out.append((centre, la.matmul(lean, spin)))
     return out
 
 
@@ -70,13 +71,13 @@ def main(src: Path, receptacle: Path, ring: float, tilt: float, drop: float, dst
         scene.groups[k + 1] = Group(k + 1, centre.copy(), 0)
         for p in head.placements:
             q = copy.deepcopy(p)
-            q.pos = rot @ p.pos + centre
-            q.up = rot @ p.up
-            q.right = rot @ p.right
+            q.pos = la.matmul(rot, p.pos) + centre
+            q.up = la.matmul(rot, p.up)
+            q.right = la.matmul(rot, p.right)
             q.group = k + 1
             scene.placements.append(q)
         faces.append(rec.faces + k * len(rec.vertices))
-        verts.append(rec.vertices @ rot.T + centre)
+        verts.append(la.matmul(rec.vertices, rot.T) + centre)
     what = f"compose_heads.py, ring {ring:g}, tilt {tilt:g}, drop {drop:g}"
     write_scn(dst, scene, header=f"{HEADS} copies of {src.name} ({what})")
     write_scn(dst_obstacles, obstacles, header=f"the {HEADS} receptacles as obstacles ({what})")

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from inflo.formats.scn import read_scn, write_scn
+from inflo.tools.common import linalg as la
 
 UP = np.array([0.0, 1.0, 0.0])
 
@@ -40,11 +41,11 @@ def spread(scene, droop: float, length: float, width: float, lift: float) -> int
         out = np.zeros(3)
         for c in (centre, scene.groups[p.group].centre if p.group in scene.groups else centre):
             d_ = (p.pos - c) * np.array([1.0, 0.0, 1.0])
-            out += d_ / max(np.linalg.norm(d_), 1e-12)
-        if np.linalg.norm(out) < 1e-9:
+            out += d_ / max(la.norm(d_), 1e-12)
+        if la.norm(out) < 1e-9:
             continue
-        out /= np.linalg.norm(out)
-        old_up = p.up / np.linalg.norm(p.up)
+        out /= la.norm(out)
+        old_up = p.up / la.norm(p.up)
         p.pos = p.pos + lift * old_up
         p.up = np.cos(d) * UP + np.sin(d) * out
         p.right = np.cos(d) * out - np.sin(d) * UP

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
+
 OUT = Path(__file__).resolve().parent
 RING = np.linspace(0.0, 2.0 * math.pi, 9)
 
@@ -52,7 +54,7 @@ def ring_tube(centres, a, b, *, base_cap=True, tip_cap=True, axis=None):
     c = np.asarray(centres, float)
     a, b = list(a), list(b)
     t = np.gradient(c, axis=0) if axis is None else np.tile(np.asarray(axis, float), (len(c), 1))
-    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    t /= la.norm(t, axis=1, keepdims=True)
     n = np.stack([t[:, 1], -t[:, 0]], axis=1)  # in-plane normal
     rows = []
     for (cx, cy), (nx, ny), ai, bi in zip(c, n, a, b):
@@ -74,7 +76,7 @@ def capsule(centre, axis, length, ra, rb):
     """(6, 9, 3) a closed capsule in the xy-plane: poles at centre +- length/2 along ``axis``,
     half-axes ``ra`` (in the plane) and ``rb`` (along z) of its widest rings."""
     c, ax = np.asarray(centre, float), np.asarray(axis, float)
-    ax = ax / np.linalg.norm(ax)
+    ax = ax / la.norm(ax)
     prof = [(-0.5, 0.0), (-0.5, 0.8), (-0.25, 1.0), (0.25, 1.0), (0.5, 0.8), (0.5, 0.0)]
     cen = [c + s * length * ax for s, _ in prof]
     return ring_tube(cen, [ra * w for _, w in prof], [rb * w for _, w in prof], base_cap=False, tip_cap=False,
@@ -110,7 +112,7 @@ def pose(frame):
     stamens = ring_tube([(0.6, 0.0), (0.9, 0.3), (1.6, 6.0), (2.2, 11.0), fil_top],
                         [0.2, 0.2, 0.18, 0.16, 0.16], [0.2, 0.2, 0.18, 0.16, 0.16])
     d = np.array([fil_top[0] - 2.2, fil_top[1] - 11.0])
-    d /= np.linalg.norm(d)
+    d /= la.norm(d)
     anther_len = 2.6 + 0.6 * f
     anthers = capsule((fil_top[0] + d[0] * 0.45 * anther_len, fil_top[1] + d[1] * 0.45 * anther_len), d,
                       anther_len, 0.5, 0.45)

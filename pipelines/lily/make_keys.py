@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
+
 HERE = Path(__file__).resolve().parent
 OUT = HERE  # where the files are written (python make_keys.py [OUT_DIR])
 NV, NU = 9, 4
@@ -57,8 +59,8 @@ def open_net(bud, angles_deg, length_scale, width_scale, channel):
     """
     pts = bud.copy()
     mid = bud[:, 0, :2]
-    seg = np.linalg.norm(np.diff(mid, axis=0), axis=1)
-    half_w = np.linalg.norm(bud[:, -1] - bud[:, 0], axis=1)  # chord of the half cross-section
+    seg = la.norm(np.diff(mid, axis=0), axis=1)
+    half_w = la.norm(bud[:, -1] - bud[:, 0], axis=1)  # chord of the half cross-section
     p = mid[KEEP - 1].copy()
     for j in range(KEEP - 1, NV - 1):
         a = j - (KEEP - 1)
@@ -158,9 +160,9 @@ def capsule(centre, axis, length, radius, across=(1.0, 0.0, 0.0)):
     interpolate as a capsule turning (shortened at most by cos 45 deg half-way for a quarter
     turn), not as rings twisting flat."""
     c, a = np.asarray(centre, float), np.asarray(axis, float)
-    a = a / np.linalg.norm(a)
-    e1 = np.asarray(across, float) - np.dot(across, a) * a
-    e1 /= np.linalg.norm(e1)
+    a = a / la.norm(a)
+    e1 = np.asarray(across, float) - la.dot(across, a) * a
+    e1 /= la.norm(e1)
     e2 = np.cross(a, e1)
     rows = [(-0.5, 0.0), (-0.5, 0.8), (-0.25, 1.0), (0.25, 1.0), (0.5, 0.8), (0.5, 0.0)]
     pts = np.zeros((len(rows), len(RING), 3))
@@ -200,7 +202,7 @@ def filament_tip(stamens):
     c = stamens[:, :-1, :2].mean(axis=1)  # ring centres (a ring's last point repeats its first)
     tip, prev = c[-1], c[-3]
     d = tip - prev
-    return tip, d / np.linalg.norm(d)
+    return tip, d / la.norm(d)
 
 
 def anther(stamens, turn_deg, length, radius):
@@ -213,7 +215,7 @@ def anther(stamens, turn_deg, length, radius):
     # the centre lies off the tip along the anther's normal in the radial plane, on the side the
     # filament points to, so the tip sits 0.4 radius inside the anther's back, near its middle
     n = np.array([-a[1], a[0], 0.0])
-    if np.dot(n[:2], d) < 0:
+    if la.dot(n[:2], d) < 0:
         n = -n
     centre = np.array([tip[0], tip[1], 0.0]) + 0.4 * radius * n
     return capsule(centre, a, length, radius, across=(0.0, 0.0, 1.0))

@@ -25,6 +25,7 @@ import numpy as np
 
 from inflo.formats.obj import read_obj
 from inflo.formats.scn import Placement, read_scn, write_scn
+from inflo.tools.common import linalg as la
 
 BRACT_ID = 3
 UMBEL_LENGTH, UMBELLET_LENGTH = 0.22, 0.55
@@ -48,13 +49,13 @@ def add_involucres(typed, lowered, branch_v: np.ndarray, umbel_bracts: int = 7, 
     out = typed
     for gid, g in sorted(lowered.groups.items()):
         if g.parent == -1:
-            radius = float(np.linalg.norm(pos[:, [0, 2]] - g.centre[[0, 2]], axis=1).max())
+            radius = float(la.norm(pos[:, [0, 2]] - g.centre[[0, 2]], axis=1).max())
             length, count = UMBEL_LENGTH * radius, umbel_bracts
         else:
             members = pos[group == gid]
             if not len(members):
                 continue
-            radius = float(np.linalg.norm(members[:, [0, 2]] - g.centre[[0, 2]], axis=1).max())
+            radius = float(la.norm(members[:, [0, 2]] - g.centre[[0, 2]], axis=1).max())
             length, count = UMBELLET_LENGTH * radius, umbellet_bracts
         c = g.centre
         y = c[1] - BASE_DROP * length

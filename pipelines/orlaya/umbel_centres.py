@@ -18,6 +18,7 @@ import sys
 import numpy as np
 
 from inflo.formats.scn import read_scn, write_scn
+from inflo.tools.common import linalg as la
 
 
 def lower_centres(scene, umbellet_depth: float, umbel_depth: float):
@@ -25,11 +26,11 @@ def lower_centres(scene, umbellet_depth: float, umbel_depth: float):
     pos, group = a["pos"], a["group"]
     for g in scene.groups.values():
         if g.parent == -1:
-            radius = float(np.linalg.norm((pos - g.centre)[:, [0, 2]], axis=1).max())
+            radius = float(la.norm((pos - g.centre)[:, [0, 2]], axis=1).max())
             depth = umbel_depth
         else:
             members = pos[group == g.id]
-            radius = float(np.linalg.norm((members - g.centre)[:, [0, 2]], axis=1).max()) if len(members) else 0.0
+            radius = float(la.norm((members - g.centre)[:, [0, 2]], axis=1).max()) if len(members) else 0.0
             depth = umbellet_depth
         g.centre = g.centre - np.array([0.0, depth * radius, 0.0])
     return scene

@@ -63,6 +63,7 @@ from inflo.formats.obj import ObjMesh, read_obj, write_obj
 from inflo.formats.placement import placement_matrix
 from inflo.formats.rba import RbaFrame, list_rba_sequence, read_rba, write_rba
 from inflo.formats.scn import Group, Scene, read_scn, write_scn
+from inflo.tools.common import linalg as la
 
 #: the animation id of the receptacles' obstacle placements (yarrow.fcc)
 OBSTACLE_ID = 3
@@ -109,7 +110,7 @@ def drop_engulfed(scene: Scene, seq: list, reach: float) -> tuple[Scene, list, l
                 continue
             for q in kept:
                 rq = f.index(q)
-                if rq is not None and np.linalg.norm(f.pos[r] - f.pos[rq]) < reach * (f.scale[r, 0] + f.scale[rq, 0]):
+                if rq is not None and la.norm(f.pos[r] - f.pos[rq]) < reach * (f.scale[r, 0] + f.scale[rq, 0]):
                     bad = True
                     break
             if bad:
@@ -135,9 +136,12 @@ def sphere_centre(inv: Scene) -> np.ndarray:
     far from all of them."""
     pos = inv.arrays()["pos"]
     r2 = pos[:, 0] ** 2 + pos[:, 2] ** 2
-    # |p - (0, c, 0)|^2 = R^2 for every p: r2 + y^2 - 2 c y = R^2 - c^2, linear in (c, R^2 - c^2)
-    A = np.column_stack([2.0 * pos[:, 1], np.ones(len(pos))])
-    c, _ = np.linalg.lstsq(A, r2 + pos[:, 1] ** 2, rcond=None)[0]
+    # |p - (0, c, 0)|^2 = R^2 for every p: r2 + y^2 = c (2 y) + (R^2 - c^2), a straight line in 2 y;
+    # its least-squares slope c from the centred sums (fixed-order sums: no LAPACK lstsq)
+    x = 2.0 * pos[:, 1]
+    b = r2 + pos[:, 1] ** 2
+    dx = x - np.add.reduce(x) / len(x)
+    c = la.dot(dx, b - np.add.reduce(b) / len(b)) / la.dot(dx, dx)
     return np.array([0.0, c, 0.0])
 
 
@@ -151,7 +155,7 @@ def receptacle_frames(mesh: ObjMesh, poses: list, n_heads: int, n: int, head_sca
         verts, faces, group = [], [], []
         for h in range(n_heads):
             H = poses[k][h]
-            verts.append((hv @ (first[h] if H is None else H).T)[:, :3])
+            verts.append(la.matmul(hv, (first[h] if H is None else H).T)[:, :3])
             if H is not None:
                 faces.append(mesh.faces + h * nv)
                 group.append(np.full(nf, h, np.int32))
@@ -200,7 +204,7 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
             p.frame_start, p.frame_end = emerged[pid], n - 1
             p.emergence = float(max((p.emergence or 0.0) - start, 0.0))
         hs.placements.append(p)
-    write_scn(out / "heads" / "scene.scn", hs, header=f"the heads of {pattern / 'scene.scn'} on the canopy's "
+    write_scn(out / "heads" / "scene.scn", hs, header=f"the heads of {pattern.name}/scene.scn on the canopy's "
               f"clock: pattern frame {start} = canopy frame 0, {n} frames (corymb_heads.py)")
     for k, f in enumerate(seq):
         write_rba(out / "heads" / "rba" / f"{k:04d}.rba", f)
@@ -209,16 +213,17 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
 
     # every floret of every head, then its bracts: one flat scene
     members = list(head.placements) + bracts
-    local = [placement_matrix(p.pos * head_scale, p.scale * head_scale, p.up, p.right) for p in members]
+    local = np.array([placement_matrix(p.pos * head_scale, p.scale * head_scale, p.up, p.right) for p in members])
     nflo = len(head)
     flat = Scene()
     flat.groups[0] = Group(0, np.zeros(3), -1)
     for h, pid in enumerate(heads):
         row = lastf.index(pid)
         flat.groups[h + 1] = Group(h + 1, lastf.pos[row].copy(), 0)
+        head_m = la.matmul(placement_matrix(lastf.pos[row], lastf.scale[row], lastf.up[row], lastf.right[row]), local)
         for j, q in enumerate(members):
-            M = placement_matrix(lastf.pos[row], lastf.scale[row], lastf.up[row], lastf.right[row]) @ local[j]
-            s = float(np.linalg.norm(M[:3, 1]))
+            M = head_m[j]
+            s = la.norm(M[:3, 1])
             delay = bud if j < nflo else 0  # a head's bracts enclose it from its emergence
             fs = emerged[pid] + delay + int(q.frame_start)
             fe = emerged[pid] + delay + int(q.frame_end)
@@ -242,10 +247,10 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
     if receptacle_path is not None:
         for h, pid in enumerate(heads):
             row = lastf.index(pid)
-            M = placement_matrix(lastf.pos[row], lastf.scale[row], lastf.up[row], lastf.right[row]) @ rec_local
+            M = la.matmul(placement_matrix(lastf.pos[row], lastf.scale[row], lastf.up[row], lastf.right[row]), rec_local)
             q = copy.deepcopy(flat.placements[h * nf])
             q.kind, q.id, q.pos, q.scale = "rba", OBSTACLE_ID, M[:3, 3].copy(), np.ones(3)
-            q.up, q.right = M[:3, 1] / np.linalg.norm(M[:3, 1]), M[:3, 0] / np.linalg.norm(M[:3, 0])
+            q.up, q.right = M[:3, 1] / la.norm(M[:3, 1]), M[:3, 0] / la.norm(M[:3, 0])
             q.frame_start, q.frame_end, q.group = int(emerged[pid]), int(emerged[pid]) + 1, h + 1
             q.emergence, q.type, q.petal, q.interpolation = float(emerged[pid]), "obstacle", None, None
             obstacles.placements.append(q)
@@ -259,28 +264,27 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
                 continue
             H = placement_matrix(f.pos[row], f.scale[row], f.up[row], f.right[row])
             poses[k][h] = H
-            for j in range(nf):
-                M = H @ local[j]
-                s = float(np.linalg.norm(M[:3, 1]))
-                ids.append(h * nf + j)
-                pos.append(M[:3, 3])
-                scale.append((s, s, s))
-                up.append(M[:3, 1] / s)
-                right.append(M[:3, 0] / s)
+            m = la.matmul(H, local)  # every floret and bract of the head at once
+            s = la.norm(m[:, :3, 1], axis=1)[:, None]
+            ids.extend(range(h * nf, h * nf + nf))
+            pos.append(m[:, :3, 3])
+            scale.append(np.repeat(s, 3, axis=1))
+            up.append(m[:, :3, 1] / s)
+            right.append(m[:, :3, 0] / s)
         if receptacle_path is not None:
             for h in range(len(heads)):
                 if poses[k][h] is None:
                     continue
-                M = poses[k][h] @ rec_local
-                s = float(np.linalg.norm(M[:3, 1]))
+                M = la.matmul(poses[k][h], rec_local)
+                s = la.norm(M[:3, 1])
                 ids.append(len(heads) * nf + h)
-                pos.append(M[:3, 3])
-                scale.append((s, s, s))
-                up.append(M[:3, 1] / s)
-                right.append(M[:3, 0] / s)
+                pos.append(M[None, :3, 3])
+                scale.append(np.full((1, 3), s))
+                up.append(M[None, :3, 1] / s)
+                right.append(M[None, :3, 0] / s)
         write_rba(out / "corymb" / "rba" / f"{k:04d}.rba",
-                  RbaFrame(ids, np.reshape(pos, (-1, 3)), np.reshape(scale, (-1, 3)), np.reshape(up, (-1, 3)),
-                           np.reshape(right, (-1, 3))), fast=True)
+                  RbaFrame(ids, *(np.concatenate(x) if x else np.zeros((0, 3)) for x in (pos, scale, up, right))),
+                  fast=True)
     inv_note = f" + {len(bracts)} bracts of {involucre_path.name}" if bracts else ""
     write_scn(out / "corymb" / "scene.scn", flat,
               header=f"{len(heads)} heads x {nflo} florets of {head_path.name}{inv_note}, head scale {head_scale:g}, "

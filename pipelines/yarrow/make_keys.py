@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from inflo.tools.common import linalg as la
+
 HERE = Path(__file__).resolve().parent
 OUT = HERE
 
@@ -107,7 +109,7 @@ def ray_net(p):
     pts = np.zeros((RAY_NV, RAY_NU, 3))
     for j in range(RAY_NV):
         a = mid[min(j + 1, RAY_NV - 1)] - mid[max(j - 1, 0)]
-        t = a / np.linalg.norm(a)
+        t = a / la.norm(a)
         n = np.array([-t[1], t[0]])  # turned +90 degrees: toward the head centre / up
         roll = np.radians(p["roll"][j])
         half = p.get("half", [None] * RAY_NV)[j]

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from inflo.formats.contour import Contour, write_con
+from inflo.tools.common import linalg as la
 from inflo.tools.venation.blade import polygon_area, self_intersections
 
 HERE = Path(__file__).resolve().parent
@@ -48,11 +49,11 @@ def sunflower(teeth: int = 14, depth: float = 0.03) -> Contour:
     mult[0], mult[len(right) - 1] = 2, 3
     smooth = Contour.from_points(pts, mult, type="cr", name="sunflower_smooth")
     dense = smooth.sample(4000)[:, :2]
-    dense = np.roll(dense, -int(np.argmin(np.linalg.norm(dense, axis=1))), axis=0)  # start at the notch
+    dense = np.roll(dense, -int(np.argmin(la.norm(dense, axis=1))), axis=0)  # start at the notch
     if polygon_area(dense) < 0:
         dense = np.vstack([dense[:1], dense[:0:-1]])  # counter-clockwise: up the right side first
     # arc length of the dense outline, the half from the notch to the apex
-    seg = np.linalg.norm(np.diff(np.vstack([dense, dense[:1]]), axis=0), axis=1)
+    seg = la.norm(np.diff(np.vstack([dense, dense[:1]]), axis=0), axis=1)
     s = np.r_[0.0, np.cumsum(seg)][:-1]
     total = s[-1] + seg[-1]
     apex = int(np.argmax(dense[:, 1]))
@@ -63,7 +64,7 @@ def sunflower(teeth: int = 14, depth: float = 0.03) -> Contour:
         i = int(np.searchsorted(s, arc % total)) % len(dense)
         p = dense[i]
         q = dense[(i + 1) % len(dense)]
-        t = (q - p) / max(np.linalg.norm(q - p), 1e-12)
+        t = (q - p) / max(la.norm(q - p), 1e-12)
         return p, t
 
     teeth_at = []
@@ -114,7 +115,7 @@ def lobe_outline(p0, d, length, w0, w1, children, out):
     ``children``: (t, side, spec) with t in (0, 1) along the lobe, side -1 right / +1 left, spec a
     dict of lobe_outline's keywords for the side lobe (its direction turned ``angle`` off ``d``
     toward its side)."""
-    d = np.asarray(d, float) / np.linalg.norm(d)
+    d = np.asarray(d, float) / la.norm(d)
     r = np.array([d[1], -d[0]])
     width = lambda t: w0 + (w1 - w0) * t
 
@@ -126,7 +127,7 @@ def lobe_outline(p0, d, length, w0, w1, children, out):
     out.append(edge(0.0, -1))
     for t, _side, spec in right:
         cd = _rot(d, -spec["angle"])
-        half = spec["w0"] / max(abs(np.dot(_rot(cd, math.pi / 2), d)), 0.3)
+        half = spec["w0"] / max(abs(la.dot(_rot(cd, math.pi / 2), d)), 0.3)
         out.append(edge(t - half / length, -1))
         base = edge(t, -1) - spec["w0"] * 0.0 * r
         lobe_outline(base - cd * width(t) * 0.5, cd, spec["length"], spec["w0"], spec["w1"], spec.get("children", []),
@@ -137,7 +138,7 @@ def lobe_outline(p0, d, length, w0, w1, children, out):
     out.append(edge(1.0, 1))
     for t, _side, spec in left:
         cd = _rot(d, spec["angle"])
-        half = spec["w0"] / max(abs(np.dot(_rot(cd, math.pi / 2), d)), 0.3)
+        half = spec["w0"] / max(abs(la.dot(_rot(cd, math.pi / 2), d)), 0.3)
         out.append(edge(t + half / length, 1))
         lobe_outline(edge(t, 1) - cd * width(t) * 0.5, cd, spec["length"], spec["w0"], spec["w1"],
                      spec.get("children", []), out)
@@ -168,7 +169,7 @@ def yarrow(pairs: int = 16) -> Contour:
     # the petiole's attachment: a point of multiplicity 3 (the curve passes through it) below the
     # rachis's two base corners
     pts = np.vstack([[0.0, -0.006], pts])
-    keep = np.r_[True, np.linalg.norm(np.diff(pts, axis=0), axis=1) > 1e-6]
+    keep = np.r_[True, la.norm(np.diff(pts, axis=0), axis=1) > 1e-6]
     pts = pts[keep]
     m = np.ones(len(pts), np.int64)
     m[0] = 3
