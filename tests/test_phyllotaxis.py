@@ -202,6 +202,28 @@ def test_close_apex_leaves_no_naked_top():
     assert grown.inner[-1] == 0.0
 
 
+def test_terminal_primordium_stands_on_the_apex_and_the_apex_tapers():
+    disk = builtin_curve("disk")
+    kw = dict(mode="centripetal", frames=200, interval=0.5, primordium_area=0.004, profiles=[disk])
+    closed = simulate(inner_area=0.5025, close_apex=True, **kw)
+    assert closed.terminal
+    st = frame_state(closed, 199)
+    assert _radius(st)[-1] == pytest.approx(0.0, abs=1e-12)  # on the apex itself, its up the axis
+    np.testing.assert_allclose(st["up"][-1], [0.0, 1.0, 0.0], atol=1e-9)
+    assert not simulate(inner_area=0.5015, close_apex=True, **kw).terminal  # no terminal primordium
+    # the apex tapers: once less than 1 / 0.4 primordia are left, each takes 0.4 of what is left
+    taper = simulate(inner_area=0.5025, close_apex=True, apex_taper=0.4, apex_smallest=0.15, **kw)
+    born = taper.born
+    assert np.all(born[:120] == 0.004) and len(taper) > len(closed)
+    tail = born[born < 0.004]
+    assert np.all(np.diff(tail[:-1]) < 0) and tail[-2] >= 0.15 * 0.004  # smaller toward the apex
+    assert born.sum() == pytest.approx(0.5025, rel=1e-9)  # the terminal one takes what is left
+    st = frame_state(taper, 199)
+    assert st["profile"].total_area == pytest.approx(0.5025, rel=1e-9)
+    assert _radius(st)[-1] == pytest.approx(0.0, abs=1e-12)
+    assert np.all(np.diff(st["scale"][len(taper) - len(tail) - 1:, 0][:-1]) < 0)  # smaller florets
+
+
 def test_divergent_fractionation_has_two_fronts():
     disk = builtin_curve("disk")
     pat = simulate(mode="divergent", frames=40, interval=1.0, primordium_area=0.004, inner_area=0.2,

@@ -9,7 +9,11 @@ sizes along the ball, the collisions-off run, and the draft build's check.
 - the head at both qualities (phyllotaxis + dimorph as the Makefile runs them): florets round a
   spherical cap well beyond the equator (a ball), bracts the lowest, every other floret a ray
   floret, developing from the base to the top;
+- the top: smaller primordia toward the apex and the terminal one on the apex itself (a ray
+  floret: dimorph's cone has no direction there, size_along.py retypes it);
 - size_along.py: the later florets larger by 1 + gain f^power, the bracts untouched;
+- whorl.py: the top's florets lean in over the apex, all the same way round it, as they open,
+  turning about the edge of their foot (never below the receptacle);
 - the ray floret's rounded, blunt tip (its rows' arcs drawn back to TIP_END, no point);
 - if the draft build exists (the golden test builds it): check_dahlia.py's report says OK, and
   its figures of the look (coverage from above, the receptacle in view, the florets' largest
@@ -116,7 +120,15 @@ def test_head_is_a_ball_of_ray_florets_bracts_lowest_developing_base_to_top(head
     scene = read_scn(out / "types.scn")
     types = [p.type for p in scene.placements]
     assert types.count("bract") == bracts
-    assert set(types) == {"ray", "bract"}
+    # every floret a ray floret but the terminal one on the apex: dimorph's cone has no direction
+    # at the head's centre (a disk floret there; size_along.py makes it a ray floret)
+    assert set(types) == {"ray", "bract", "disk"} and types.index("disk") == len(types) - 1
+    assert np.hypot(*scene.placements[-1].pos[[0, 2]]) < 1e-9
+    # smaller primordia toward the apex (apex_taper): the RBA rows' sizes of the last frame
+    last = sorted((out / "rba").glob("*.rba"))[-1]
+    size = np.array([float(line.split()[4]) for line in last.read_text().splitlines()
+                     if line.strip() and not line.startswith("#")])
+    assert size[-2] < size[-3] < size[-4] < 0.9 * size[-20]
     pos = scene.arrays()["pos"]
     # the apex at the origin, the sphere's centre below: florets reach well below the equator
     angle = float(re.search(r"^angle = (\S+)", (DAH / q / "head.toml").read_text(), re.M).group(1))
@@ -138,7 +150,8 @@ def test_size_along_the_ball(head, tmp_path):
                         "0.5", "2"], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     a, b = read_scn(out / "types.scn"), read_scn(tmp_path / "s.scn")
-    rays = [k for k, p in enumerate(a.placements) if p.type == "ray"]
+    rays = [k for k, p in enumerate(a.placements) if p.type != "bract"]
+    assert {p.type for p in b.placements} == {"ray", "bract"}  # the terminal floret a ray floret too
     for k, p in enumerate(a.placements):
         gain = b.placements[k].scale / p.scale
         if p.type == "bract":
@@ -146,6 +159,32 @@ def test_size_along_the_ball(head, tmp_path):
         else:
             f = rays.index(k) / (len(rays) - 1)
             np.testing.assert_allclose(gain, 1.0 + 0.5 * f ** 2, rtol=1e-5)
+
+
+def test_whorl_leans_the_top_in_round_the_apex(head, tmp_path):
+    _, out, _ = head
+    n = len(read_scn(out / "types.scn").placements)
+    r = subprocess.run([sys.executable, str(DAH / "whorl.py"), str(out / "rba"), str(out / "types.scn"),
+                        str(tmp_path / "w"), "10", "55", "60"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    from inflo.formats.rba import read_rba
+    last = sorted((out / "rba").glob("*.rba"))[-1].name
+    a, b = read_rba(out / "rba" / last), read_rba(tmp_path / "w" / last)
+    top = a.ids >= n - 10
+    np.testing.assert_array_equal(a.pos[~top], b.pos[~top])  # the others unchanged
+    np.testing.assert_array_equal(a.up[~top], b.up[~top])
+    ua = a.up[top] / np.linalg.norm(a.up[top], axis=1)[:, None]
+    ub = b.up[top] / np.linalg.norm(b.up[top], axis=1)[:, None]
+    ra = a.right[top] / np.linalg.norm(a.right[top], axis=1)[:, None]
+    tilt = np.degrees(np.arccos(np.clip(np.sum(ua * ub, axis=1), -1, 1)))
+    inward = np.sum((ub - ua) * -ra, axis=1)
+    side = np.sum((ub - ua) * np.cross(ra, ua), axis=1)
+    grown = tilt > 1.0  # those far enough in their window to lean
+    assert grown.any() and np.all(tilt <= 55.0 + 1e-6)
+    assert np.all(inward[grown] > 0) and np.all(side[grown] > 0)  # in, and all the same way round
+    # turned about the foot's edge on the side it leans to: the foot's centre rises, never sinks
+    rise = np.sum((b.pos[top] - a.pos[top]) * ua, axis=1)
+    assert np.all(rise >= -1e-12)
 
 
 def test_draft_build_check_says_ok(species_build):

@@ -19,6 +19,11 @@ from inflo.formats.scn import read_scn, write_scn
 
 def main(src: Path, dst: Path, gain: float, power: float) -> int:
     scene = read_scn(src)
+    # the terminal floret on the apex itself is a ray floret too: dimorph's cone has no direction
+    # at the head's centre (it reads as a disk floret there); a ball dahlia has no disk florets
+    for p in scene.placements:
+        if p.type == "disk":
+            p.type = "ray"
     rays = [p for p in scene.placements if p.type == "ray"]
     n = len(rays)
     for k, p in enumerate(rays):

@@ -45,7 +45,8 @@ MODE_CODES = {"centripetal": 0, "divergent": 1, "segregation": 2}
 
 @njit(cache=True)
 def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, outer0,
-                     inner_rate, outer_rate, threshold, max_count, close_apex=False):
+                     inner_rate, outer_rate, threshold, max_count, close_apex=False, apex_taper=0.0,
+                     apex_smallest=0.25):
     """The region bookkeeping of sec. 5.3 (a pure kernel).
 
     Parameters
@@ -63,17 +64,29 @@ def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, 
         next primordium of the inner front takes what is left if that is at least half a
         primordium, and the inner region is used up either way (zero from then on: relative
         growth keeps it zero), so no naked apex remains (the terminal primordium of a head)
+    apex_taper : float  fractionation, 0 (off) or in (0, 1): once the inner region holds less than
+        ``1 / apex_taper`` primordia, a primordium of the inner front takes ``apex_taper`` of what is
+        left, not a whole primordium (smaller and smaller primordia toward the apex), while that is
+        at least ``apex_smallest`` primordia; then the inner front stops, or closes the apex
+    apex_smallest : float  the smallest tapered primordium, a fraction of ``primordium_area``
 
     Returns
     -------
     emergence : (k,) float64  emergence time of each primordium (frames), in order of formation
     side : (k,) int8  -1 formed at the inner front, +1 at the outer front
+    born : (k,) float64  each primordium's area at its formation (``primordium_area`` but where the
+        apex tapers; the terminal primordium's: what it took of the apex, at least half of the
+        smallest primordium of the front)
+    terminal : bool  True when the last primordium is the terminal one (``close_apex``: on the apex)
     inner, outer : (frames,) float64  region areas at each frame's time (after its events)
     overflow : bool  True when ``max_count`` stopped the simulation
     """
     cap = max_count + 2
     emergence = np.empty(cap, np.float64)
     side = np.empty(cap, np.int8)
+    born = np.empty(cap, np.float64)
+    terminal = False
+    smallest = primordium_area
     inner = np.empty(frames, np.float64)
     outer = np.empty(frames, np.float64)
     a_in = inner0
@@ -92,27 +105,37 @@ def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, 
                         break
                     emergence[k] = t
                     side[k] = -1
+                    born[k] = primordium_area
                     k += 1
                     a_in -= primordium_area
             else:
                 while next_emit <= t + 1e-12 and not overflow:
                     made = False
-                    if a_in >= primordium_area:
+                    take = primordium_area
+                    if apex_taper > 0.0 and apex_taper * a_in < primordium_area:
+                        take = apex_taper * a_in  # smaller primordia toward the apex
+                        if take < apex_smallest * primordium_area:
+                            take = 2.0 * a_in + 1.0  # too small: the inner front is done
+                    if a_in >= take:
                         if k >= max_count:
                             overflow = True
                             break
                         emergence[k] = next_emit
                         side[k] = -1
+                        born[k] = take
+                        smallest = min(smallest, take)
                         k += 1
-                        a_in -= primordium_area
+                        a_in -= take
                         made = True
                     elif close_apex and a_in > 0.0:
-                        if a_in >= 0.5 * primordium_area:
+                        if a_in >= 0.5 * smallest:
                             if k >= max_count:
                                 overflow = True
                                 break
                             emergence[k] = next_emit
                             side[k] = -1
+                            born[k] = a_in if apex_taper > 0.0 else primordium_area
+                            terminal = True
                             k += 1
                             made = True
                         a_in = 0.0
@@ -122,6 +145,7 @@ def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, 
                             break
                         emergence[k] = next_emit
                         side[k] = 1
+                        born[k] = primordium_area
                         k += 1
                         a_out -= primordium_area
                         made = True
@@ -134,7 +158,7 @@ def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, 
             j = f * substeps + sub
             a_in *= math.exp(inner_rate[j] * dt)
             a_out *= math.exp(outer_rate[j] * dt)
-    return emergence[:k], side[:k], inner, outer, overflow
+    return emergence[:k], side[:k], born[:k], terminal, inner, outer, overflow
 
 
 @dataclass
@@ -148,7 +172,10 @@ class DynamicPattern:
     theta : (k,) float64  angle about the axis (radians)
     order : (k,) int64  primordium indices sorted from the apex outward
     inner, outer : (F,) float64  region areas per frame
-    age_grid, age_area : (m,) float64  primordium area as a function of age (table)
+    age_grid, age_area : (m,) float64  primordium area as a function of age (table), for a
+        primordium born at ``primordium_area``; one born smaller (``born``) in proportion
+    born : (k,) float64  each primordium's area at its formation
+    terminal : bool  the last primordium is the terminal one, centred on the apex (``close_apex``)
     profiles, curve_times : the generating curves and their times (fractions of the run)
     """
 
@@ -163,6 +190,8 @@ class DynamicPattern:
     profiles: list
     curve_times: list
     frames: int
+    born: np.ndarray | None = None
+    terminal: bool = False
 
     def __len__(self) -> int:
         return len(self.emergence)
@@ -179,7 +208,7 @@ def simulate(*, mode: str, frames: int, interval: float, primordium_area: float,
              outer_area: float = 0.0, inner_growth=0.0, outer_growth=0.0, primordium_growth=0.0,
              threshold: float = 0.0, divergence: float = 137.50776405003785, profiles: list,
              curve_times: list | None = None, substeps: int = 0, max_count: int = 1_000_000,
-             close_apex: bool = False) -> DynamicPattern:
+             close_apex: bool = False, apex_taper: float = 0.0, apex_smallest: float = 0.25) -> DynamicPattern:
     """Run the region model (:func:`simulate_regions`) and assign angles and spatial order.
 
     Parameters are those of ``[dynamics]`` (``formats/phyllotaxis.md``); growth arguments are
@@ -206,12 +235,14 @@ def simulate(*, mode: str, frames: int, interval: float, primordium_area: float,
         if not total <= MAX_LOG_GROWTH:
             raise InputError(f"expected dynamics.{key} whose integral over the run is within +-{MAX_LOG_GROWTH:.4g} "
                              f"(an area grows or shrinks at most {MAX_GROWTH:g}-fold), found {total:.4g}")
-    emergence, side, inner, outer, overflow = simulate_regions(
+    emergence, side, born, terminal, inner, outer, overflow = simulate_regions(
         MODE_CODES[mode], int(frames), int(substeps), float(interval), float(primordium_area),
         float(inner_area), float(outer_area), rin, rout, float(threshold), int(max_count),
-        bool(close_apex) and mode != "segregation")
+        bool(close_apex) and mode != "segregation", float(apex_taper) if mode != "segregation" else 0.0,
+        float(apex_smallest))
     keep = emergence <= frames - 1 + 1e-9  # the last frame's substeps run past the end
-    emergence, side = emergence[keep], side[keep]
+    terminal = bool(terminal) and bool(keep.all())
+    emergence, side, born = emergence[keep], side[keep], born[keep]
     if overflow:
         raise InputError(f"more than dynamics.max_count = {max_count} primordia would form; "
                          "raise max_count or slow the growth")
@@ -228,12 +259,13 @@ def simulate(*, mode: str, frames: int, interval: float, primordium_area: float,
     logs = np.concatenate([[0.0], np.cumsum(0.5 * (grow[1:] + grow[:-1]) * np.diff(age_grid))])
     age_area = primordium_area * np.exp(logs)
     return DynamicPattern(emergence, side, theta, order, inner, outer, age_grid, age_area,
-                          list(profiles), list(curve_times or [0.0] * len(profiles)), int(frames))
+                          list(profiles), list(curve_times or [0.0] * len(profiles)), int(frames),
+                          born, terminal)
 
 
 @njit(cache=True)
 def place_primordia(order, areas, theta, a_in, prof_area, prof_s, prof_r, prof_y, prof_tr, prof_ty,
-                    size_factor, pos, up, right, scale):
+                    size_factor, pos, up, right, scale, pole=False):
     """Place primordia along a surface of revolution by their area coordinate (eq. 5.1).
 
     Parameters
@@ -245,6 +277,8 @@ def place_primordia(order, areas, theta, a_in, prof_area, prof_s, prof_r, prof_y
     prof_* : (m,) float64  the scaled generating curve: cumulative area, arc length, r, y, tangent
     size_factor : float  scale = size_factor * 2 sqrt(A / pi)
     pos, up, right, scale : (k, 3) float64  outputs, row = primordium index
+    pole : bool  ``order[0]`` is the terminal primordium: it holds the apex's disc ``[0, areas[0]]``
+        and stands on the apex itself (u = 0), its up the axis
 
     Primordium ``order[j]`` sits at area coordinate ``u = a_in + sum_{i<j} areas[i] + areas[j] / 2``;
     u increases along ``order``, so one forward walk over the curve's samples finds every segment.
@@ -255,6 +289,8 @@ def place_primordia(order, areas, theta, a_in, prof_area, prof_s, prof_r, prof_y
     for j in range(order.shape[0]):
         a = areas[j]
         uj = u + 0.5 * a
+        if pole and j == 0:
+            uj = 0.0
         u += a
         while seg < m - 2 and prof_area[seg + 1] < uj:
             seg += 1
@@ -300,13 +336,16 @@ def frame_state(pattern: DynamicPattern, frame: int, *, size_factor: float = 1.0
     order = pattern.order[pattern.order < k]
     ages = frame - pattern.emergence[order]
     areas = np.interp(ages, pattern.age_grid, pattern.age_area)
+    if pattern.born is not None:
+        areas = areas * (pattern.born[order] / pattern.age_area[0])
+    pole = bool(pattern.terminal) and k == len(pattern) and k > 0 and int(order[0]) == k - 1
     a_in, a_out = pattern.inner[frame], pattern.outer[frame]
     total = a_in + areas.sum() + a_out
     unit = blend_profiles(pattern.profiles, pattern.curve_times, frame / max(pattern.frames - 1, 1))
     prof: Profile = unit.scaled(math.sqrt(total / unit.total_area))
     pos, up, right, scale = (np.empty((k, 3)) for _ in range(4))
     place_primordia(order, areas, pattern.theta, float(a_in), prof.area, prof.s, prof.r, prof.y, prof.tr,
-                    prof.ty, float(size_factor), pos, up, right, scale)
+                    prof.ty, float(size_factor), pos, up, right, scale, pole)
     area_rows = np.empty(k)
     area_rows[order] = areas
     return {"ids": np.arange(k, dtype=np.int64), "pos": pos, "up": up, "right": right, "scale": scale,

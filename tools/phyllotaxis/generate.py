@@ -87,7 +87,8 @@ def generate(params: Params, out_dir, *, progress=None, header: str | None = Non
                        outer_growth=_func_or_number(d.outer_growth),
                        primordium_growth=_func_or_number(d.primordium_growth), threshold=d.threshold,
                        divergence=pr.divergence, profiles=profiles, curve_times=d.curve_times,
-                       substeps=d.substeps, max_count=d.max_count, close_apex=d.close_apex)
+                       substeps=d.substeps, max_count=d.max_count, close_apex=d.close_apex,
+                       apex_taper=d.apex_taper, apex_smallest=d.apex_smallest)
         _check_frames_work("dynamics", d.frames, pat.emergence, params.receptacle)
         ctx = progress(d.frames, "phyllotaxis frames") if progress else _NoBar()
         rec = (params.receptacle, out / "receptacle") if params.receptacle is not None else None

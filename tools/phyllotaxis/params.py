@@ -103,6 +103,8 @@ class Dynamics:
     development_frames: int | None = _key("int", None)
     max_count: int = _key("int", 1_000_000)
     close_apex: bool = _key("bool", False)
+    apex_taper: float = _key("float", 0.0)
+    apex_smallest: float = _key("float", 0.25)
 
 
 @dataclass(frozen=True)
@@ -358,6 +360,12 @@ def _check_ranges(p: dict, w: ParamText) -> None:
             if isinstance(d[key], float) and not abs(d[key] * d["frames"]) <= MAX_LOG_GROWTH:
                 fail("dynamics", key, f"x frames within +-{MAX_LOG_GROWTH:.4g} (an area grows or shrinks at most "
                                       f"{MAX_GROWTH:g}-fold over the run)")
+        if not (d["apex_taper"] == 0.0 or 0.0 < d["apex_taper"] < 1.0):
+            fail("dynamics", "apex_taper", "0 (off) or in (0, 1)")
+        if not 0.0 < d["apex_smallest"] <= 1.0:
+            fail("dynamics", "apex_smallest", "in (0, 1]")
+        if d["apex_taper"] and d["mode"] == "segregation":
+            fail("dynamics", "apex_taper", "0 in segregation (fractionation only)")
         if d["close_apex"] and d["mode"] == "segregation":
             fail("dynamics", "close_apex", "false in segregation (its inner region keeps growing: no apex to close)")
     if "receptacle" in p:
