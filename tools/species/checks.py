@@ -79,7 +79,9 @@ def view_axes(azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray]
 @njit(cache=True)
 def fill_triangles(points, faces, width, height):
     """Boolean image (height, width): the pixels whose centres (integer coordinates of
-    ``points``' frame) lie in a triangle of ``faces`` (closed: on an edge counts)."""
+    ``points``' frame) lie in a triangle of ``faces`` (closed: on an edge counts). Row by row: the
+    pixels more than 1e-6 inside the row's crossing with the triangle are filled, those within a
+    pixel of its ends decided by the barycentric test (weights >= -1e-9)."""
     img = np.zeros((height, width), np.bool_)
     for f in range(faces.shape[0]):
         ax, ay = points[faces[f, 0], 0], points[faces[f, 0], 1]
@@ -93,8 +95,8 @@ def fill_triangles(points, faces, width, height):
         y0 = max(int(np.ceil(min(ay, by, cy))), 0)
         y1 = min(int(np.floor(max(ay, by, cy))), height - 1)
         for y in range(y0, y1 + 1):
-            # the row's crossing with the triangle, widened by a pixel each way: only the pixels
-            # there are tested (the same exact test as over the whole bounding box)
+            # the row's crossing with the triangle: only the pixels within a pixel of its ends are
+            # tested (the barycentric test below, as over the whole bounding box)
             lo, hi = np.inf, -np.inf
             for px, py, qx, qy in ((ax, ay, bx, by), (bx, by, cx, cy), (cx, cy, ax, ay)):
                 if min(py, qy) <= y <= max(py, qy):
@@ -103,10 +105,18 @@ def fill_triangles(points, faces, width, height):
                     else:
                         xc = px + (y - py) * (qx - px) / (qy - py)
                         lo, hi = min(lo, xc), max(hi, xc)
-            if lo > hi:  # rounding: the row only grazes a vertex
+            grazes = lo > hi  # rounding: the row only grazes a vertex: every pixel tested
+            if grazes:
                 lo, hi = x0, x1
+            # pixels more than 1e-6 inside the crossing (whose rounding is ~1e-11) are inside:
+            # filled without the test (for any but a needle of a triangle its weights there are
+            # far above its tolerance, so the image is the per-pixel test's); the ends are tested
+            xa = max(x0, int(np.ceil(lo + 1e-6))) if not grazes else x1 + 1
+            xb = min(x1, int(np.floor(hi - 1e-6))) if not grazes else x0 - 1
+            for x in range(xa, xb + 1):
+                img[y, x] = True
             for x in range(max(x0, int(np.floor(lo)) - 1), min(x1, int(np.ceil(hi)) + 1) + 1):
-                if img[y, x]:  # covered by an earlier triangle
+                if img[y, x] or xa <= x <= xb:
                     continue
                 w0 = ((bx - x) * (cy - y) - (by - y) * (cx - x)) / area
                 w1 = ((cx - x) * (ay - y) - (cy - y) * (ax - x)) / area
