@@ -29,17 +29,14 @@ import numpy as np
 
 from inflo.formats.rba import RbaFrame, list_rba_sequence, read_rba, write_rba
 from inflo.formats.scn import read_scn
+from inflo.tools.common import linalg as la
 
 
 def turn(v: np.ndarray, axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Rows of ``v`` turned about the unit rows of ``axis`` by ``angle`` (radians; Rodrigues)."""
     c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
-    k_dot_v = np.sum(axis * v, axis=1)[:, None]
+    k_dot_v = la.rowdot(axis, v)[:, None]
     return v * c + np.cross(axis, v) * s + axis * k_dot_v * (1.0 - c)
-
-
-def unit(v: np.ndarray) -> np.ndarray:
-    return v / np.sqrt(np.sum(v * v, axis=1))[:, None]
 
 
 def main(src: Path, scene_path: Path, dst: Path, count: int, angle: float, direction: float,
@@ -60,11 +57,11 @@ def main(src: Path, scene_path: Path, dst: Path, count: int, angle: float, direc
             i, k = np.nonzero(top)[0], ids[top]
             w = np.clip((int(path.stem) - emergence[k]) / window[k], 0.0, 1.0)
             a = math.radians(angle) * w * w * (3.0 - 2.0 * w)
-            u, r = unit(up[i]), unit(right[i])  # right: away from the apex
+            u, r = la.normalize(up[i], axis=1), la.normalize(right[i], axis=1)  # right: away from the apex
             # the side each floret leans to: in (-r) and round the apex (r x u), the same way for all
             phi = math.radians(direction)
             d = -r * math.cos(phi) + np.cross(r, u) * math.sin(phi)
-            axis = unit(np.cross(u, d))  # turning about it by a turns up toward d
+            axis = la.normalize(np.cross(u, d), axis=1)  # turning about it by a turns up toward d
             pivot = pos[i] + d * (foot * frame.scale[i, 0] * size[k])[:, None]  # the foot's edge on d
             pos[i] = pivot + turn(pos[i] - pivot, axis, a)
             up[i] = turn(u, axis, a)
