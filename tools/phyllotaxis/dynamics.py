@@ -115,7 +115,7 @@ def simulate_regions(mode, frames, substeps, interval, primordium_area, inner0, 
                     if apex_taper > 0.0 and apex_taper * a_in < primordium_area:
                         take = apex_taper * a_in  # smaller primordia toward the apex
                         if take < apex_smallest * primordium_area:
-                            take = 2.0 * a_in + 1.0  # too small: the inner front is done
+                            take = math.inf  # too small: the inner front makes no more (but the terminal one)
                     if a_in >= take:
                         if k >= max_count:
                             overflow = True
