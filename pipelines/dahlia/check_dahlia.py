@@ -17,7 +17,9 @@ and, of the species (thesis ch. 9, figs. 9.1, 9.2):
 - **almost only ray florets**: every placement but the involucral bracts a ray floret;
 - **closed from above**: the last frame seen from above (Y) covers at least TOP_COVER of its
   silhouette's convex hull (inflo.tools.species.checks.view_coverage) and leaves at most APEX of
-  the receptacle's silhouette in view;
+  the receptacle's silhouette in view; seen from the side (X and Z, the mean) at most SIDE of the
+  receptacle's silhouette in view (a guard: the florets on the flank point at the eye, and their
+  narrow feet leave the receptacle showing between them, README "Noticed and left");
 - **smooth florets**: the median over the last frame's florets of each floret's largest angle
   between two adjacent faces (degrees) at most SMOOTH (the old faceted cones: about 130);
 - **a ball**: the open head at least BALL (0.75) times as high (from the lowest bract's base to
@@ -53,6 +55,7 @@ LAG = CHECK["lag"]
 PRESS = CHECK["press"]
 TOP_COVER = CHECK["top_cover"]
 APEX = CHECK["apex"]
+SIDE = CHECK["side"]
 SMOOTH = CHECK["smooth"]
 
 
@@ -106,9 +109,13 @@ def main(build: Path) -> int:
     receptacle = read_obj(head.receptacle[-1])
     cover = view_coverage(last, 1)
     apex = 1.0 - view_coverage(last, 1, region=receptacle)
+    side = 0.5 * (2.0 - view_coverage(last, 0, region=receptacle) - view_coverage(last, 2, region=receptacle))
     smooth = crease(last)
     print(f"from above: {cover:.3f} of the silhouette's hull covered, {apex:.3f} of the receptacle in view; "
+          f"from the side (X, Z): {side:.3f} of the receptacle in view; "
           f"florets' largest angle between adjacent faces, median {smooth:.1f} degrees")
+    if side > SIDE:
+        failures.append(f"the receptacle shows from the side: {side:.3f} in view (expected <= {SIDE})")
     if cover < TOP_COVER:
         failures.append(f"the ball is open from above: {cover:.3f} covered (expected >= {TOP_COVER})")
     if apex > APEX:
