@@ -20,7 +20,7 @@ class KeySpec:
     kind : str
         ``"int"``, ``"float"``, ``"stiffness"`` (a float in [0, 1]), ``"bool"``, ``"path"``, or a
         line with its own syntax (:data:`_SYNTAX`): ``"scales"``, ``"divisions"``, ``"entry"``
-        (``animation``/``obj``), ``"rba"``, ``"weight"``, ``"id stiffness"``.
+        (``animation``/``obj``), ``"rba"``, ``"weight"``, ``"id stiffness"``, ``"ramp"``.
     n : int
         How many numbers (``"float"``; 1 for ``"int"``).
     low : float or None
@@ -78,6 +78,7 @@ _SYNTAX = {
     "rba": "`id x y z rba-folder scene-file`",
     "weight": "`id path`",
     "id stiffness": "`id stiffness`",
+    "ramp": "`id from to`, 0 ≤ from < to ≤ 1",
     "variation": "`id field value …`",
     "scheme": "`default` or `fast`",
 }
@@ -129,6 +130,7 @@ KEYS: Mapping[str, KeySpec] = MappingProxyType({
     "rigid body animation": KeySpec("rba", repeatable=True),
     "weight": KeySpec("weight", repeatable=True),
     "petal weight": KeySpec("weight", repeatable=True),
+    "petal ramp": KeySpec("ramp", repeatable=True),
     "bending stiffness": KeySpec("id stiffness", repeatable=True),
     "distance stiffness": KeySpec("id stiffness", repeatable=True),
     "variation": KeySpec("variation", repeatable=True),

@@ -260,6 +260,12 @@ class CanopyParams:
         in [0, 1] (formats/weights.md): a placement's ``#@ petal: f`` scales vertex v of that
         template by ``1 + w_v (f - 1)`` about the floret's origin (the petals grow, not the whole
         floret; thesis fig. 6.4c). Empty.
+    petal_ramps : mapping of int to (float, float)
+        ``petal ramp`` lines: id of an entry with a ``petal weight`` line -> (from, to), the
+        developmental fractions of its template's frames between which a placement's petal factor
+        takes effect: frame s of F is scaled by ``1 + w_v (f - 1) g(u)``, ``u = s / (F - 1)``,
+        ``g`` a smoothstep from 0 at ``from`` to 1 at ``to`` (the bud as read, the open petals
+        grown). Empty: every frame grown by the whole factor.
     bending_stiffness, distance_stiffness : mapping of int to float
         Per-id stiffness in [0, 1] replacing ``k_bend`` / ``k_stretch``. Empty.
     variations : mapping of int to Variation
@@ -307,6 +313,7 @@ class CanopyParams:
     rigid_body_animations: tuple[RigidBodyAnimationEntry, ...] = ()
     weights: Mapping[int, FilePath] = field(default_factory=dict)
     petal_weights: Mapping[int, FilePath] = field(default_factory=dict)
+    petal_ramps: Mapping[int, tuple] = field(default_factory=dict)
     bending_stiffness: Mapping[int, float] = field(default_factory=dict)
     distance_stiffness: Mapping[int, float] = field(default_factory=dict)
     variations: Mapping[int, Variation] = field(default_factory=dict)
@@ -319,7 +326,7 @@ class CanopyParams:
     def __post_init__(self):
         for name in ("scene_files", "animations", "rigid_body_animations"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
-        for name in ("weights", "petal_weights", "bending_stiffness", "distance_stiffness", "variations", "lines"):
+        for name in ("weights", "petal_weights", "petal_ramps", "bending_stiffness", "distance_stiffness", "variations", "lines"):
             object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
         object.__setattr__(self, "scene_scale", tuple(float(v) for v in self.scene_scale))
         object.__setattr__(self, "stretch_bounds", tuple(float(v) for v in self.stretch_bounds))

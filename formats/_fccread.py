@@ -39,6 +39,7 @@ class _Reader:
         self.id_lines: dict[int, tuple[str, int]] = {}
         self.weights: dict[int, FilePath] = {}
         self.petal_weights: dict[int, FilePath] = {}
+        self.petal_ramps: dict[int, tuple[float, float]] = {}
         self.bending: dict[int, float] = {}
         self.distance: dict[int, float] = {}
         self.variations: dict[int, Variation] = {}
@@ -272,6 +273,15 @@ class _Reader:
         self.per_id(key, id_, toks[0], n)
         (self.bending if key == "bending stiffness" else self.distance)[id_] = s
 
+    def read_ramp(self, key, spec, value, n):
+        toks = self.count_tokens(key, value, n, 3, "an id and two fractions 0 <= from < to <= 1")
+        id_ = self.ident(key, toks[0], n)
+        lo, hi = (self.number(t, n, f"a number for '{key}'") for t in toks[1:])
+        if not 0.0 <= lo < hi <= 1.0:
+            raise self.err(n, f"two fractions 0 <= from < to <= 1 for '{key}'", shorten(" ".join(toks[1:])))
+        self.per_id(key, id_, toks[0], n)
+        self.petal_ramps[id_] = (lo, hi)
+
     def read_variation(self, key, spec, value, n):
         toks = self.tokens(value)
         if not toks:
@@ -300,6 +310,7 @@ class _Reader:
         for key, table in (
             ("weight", self.weights),
             ("petal weight", self.petal_weights),
+            ("petal ramp", self.petal_ramps),
             ("bending stiffness", self.bending),
             ("distance stiffness", self.distance),
             ("variation", self.variations),
@@ -311,6 +322,10 @@ class _Reader:
                         f"the id of an 'animation' or 'obj' entry for '{key}'",
                         f"id {id_}",
                     )
+        for id_ in self.petal_ramps:
+            if id_ not in self.petal_weights:
+                raise self.err(self.per_id_lines[("petal ramp", id_)],
+                               f"a 'petal weight' line for id {id_} (its 'petal ramp' ramps that growth)", "none")
         cam = self.camera
         if "near" in cam and "far" in cam and not cam["far"] > cam["near"]:
             line = max(self.last_line["near plane"], self.last_line["far plane"])
@@ -337,6 +352,7 @@ class _Reader:
             rigid_body_animations=tuple(self.rbas),
             weights=self.weights,
             petal_weights=self.petal_weights,
+            petal_ramps=self.petal_ramps,
             bending_stiffness=self.bending,
             distance_stiffness=self.distance,
             variations=self.variations,
@@ -358,6 +374,7 @@ _READ = {
     "rba": _Reader.read_rba,
     "weight": _Reader.read_weight,
     "id stiffness": _Reader.read_id_stiffness,
+    "ramp": _Reader.read_ramp,
     "variation": _Reader.read_variation,
     "scheme": _Reader.read_scheme,
 }

@@ -112,6 +112,9 @@ def format_fcc(params: CanopyParams) -> str:
         add(f"weight: {int(id_)} {_check_raw(p.weights[id_].raw, 'weight')}")
     for id_ in sorted(p.petal_weights):
         add(f"petal weight: {int(id_)} {_check_raw(p.petal_weights[id_].raw, 'petal weight')}")
+    for id_ in sorted(p.petal_ramps):
+        lo, hi = p.petal_ramps[id_]
+        add(f"petal ramp: {int(id_)} {_num(lo)} {_num(hi)}")
     for id_ in sorted(p.bending_stiffness):
         add(f"bending stiffness: {int(id_)} {_num(p.bending_stiffness[id_])}")
     for id_ in sorted(p.distance_stiffness):

@@ -120,6 +120,7 @@ obj: 1 0.5 0.5 0.5 ray.obj
 rigid body animation: 2 1 1 1 rba/ heads.scn
 weight: 0 disk.weights
 petal weight: 1 ray.petals
+petal ramp: 1 0.25 0.75
 bending stiffness: 1 0.3
 distance stiffness: 0 0.9
 variation: 0 size 0.1 droop 8 seed 3
@@ -205,6 +206,7 @@ def test_every_key_of_the_list(write, tmp_path):
         ),
         weights={0: FilePath("disk.weights")},
         petal_weights={1: FilePath("ray.petals")},
+        petal_ramps={1: (0.25, 0.75)},
         bending_stiffness={1: 0.3},
         distance_stiffness={0: 0.9},
         variations={0: Variation(size=0.1, droop=8.0, seed=3)},

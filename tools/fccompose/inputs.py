@@ -74,6 +74,7 @@ def _load_template(params: CanopyParams, entry) -> Template:
                              face_material=mesh.face_material)
     if entry.id in params.petal_weights:
         t.petal_weight = read_petal_weight_file(params.petal_weights[entry.id].resolved, nv)
+        t.petal_ramp = params.petal_ramps.get(entry.id)
     return t
 
 

@@ -160,3 +160,29 @@ def carry(vertex_x, vertex_floret, delta, out):
         for d in range(3):
             out[v, d] = (delta[f, d, 0] * vertex_x[v, 0] + delta[f, d, 1] * vertex_x[v, 1]
                          + delta[f, d, 2] * vertex_x[v, 2] + delta[f, d, 3])
+
+
+@njit(cache=True)
+def ramped_petals(frames, weight, factor, lo, hi, out):
+    """A template's frames with its petals grown by a petal factor that takes effect with the
+    floret's development (fcc ``petal ramp``): local vertex v of frame s (of F) scaled by
+    ``1 + w_v (factor - 1) g(u)`` about the floret's origin, ``u = s / (F - 1)`` (1 for a single
+    frame), ``g`` the smoothstep ``3t^2 - 2t^3`` of ``t = (u - lo) / (hi - lo)`` clamped to [0, 1]:
+    the bud (u <= lo) as read, the open floret (u >= hi) grown by the whole factor.
+
+    ``frames`` (F, nv, 3), ``weight`` (nv,) petal weights in [0, 1], ``0 <= lo < hi <= 1``;
+    writes ``out`` (F, nv, 3)."""
+    nf = frames.shape[0]
+    nv = frames.shape[1]
+    for s in range(nf):
+        u = 1.0 if nf < 2 else s / (nf - 1.0)
+        t = (u - lo) / (hi - lo)
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+        g = t * t * (3.0 - 2.0 * t)
+        for v in range(nv):
+            grow = 1.0 + weight[v] * (factor - 1.0) * g
+            for d in range(3):
+                out[s, v, d] = frames[s, v, d] * grow

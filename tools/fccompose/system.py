@@ -19,7 +19,7 @@ from inflo.formats.placement import placement_matrix
 from inflo.tools.common import linalg as la
 from inflo.tools.pbd.solver import mesh_edges, mesh_hinges
 
-from .kernels import predict, rest_values, template_positions
+from .kernels import predict, ramped_petals, rest_values, template_positions
 
 #: the SCN ``#@ type:`` of an obstacle placement: simulated (it collides with the florets), not written
 OBSTACLE = "obstacle"
@@ -51,6 +51,9 @@ class Template:
         Per-vertex petal weights in [0, 1] (``petal weight`` file), None without one.
     petal : float
         The petal factor f this template's frames were grown by (:meth:`with_petals`; 1: as read).
+    petal_ramp : (float, float) or None
+        The ``petal ramp`` (from, to) of its id: the factor takes effect with the frames'
+        development (:meth:`with_petals`); None: every frame grown by the whole factor.
     key : hashable
         Identifies the frames in ``Model.template_x``: ``id`` as read, ``(id, f)`` once grown.
     """
@@ -69,6 +72,7 @@ class Template:
     petal_weight: np.ndarray | None = None
     petal: float = 1.0
     key: object = None
+    petal_ramp: tuple | None = None
 
     def __post_init__(self):
         if self.key is None:
@@ -79,13 +83,22 @@ class Template:
         floret's enlarged petals sized by the available space, the rest of the floret as it is):
         local vertex v of every frame scaled by ``1 + w_v (factor - 1)`` about the floret's origin
         (its attachment point), ``w`` the petal weights. Edges and hinges are shared; rest values
-        follow from the grown frames. Returns ``self`` for a factor of 1 or a template without
-        petal weights."""
+        follow from the grown frames. With a :attr:`petal_ramp` (from, to) the factor takes effect
+        with the development: frame s of F by ``1 + w_v (factor - 1) g(s / (F - 1))``, g a
+        smoothstep from 0 at ``from`` to 1 at ``to`` (:func:`.kernels.ramped_petals`). Returns
+        ``self`` for a factor of 1 or a template without petal weights."""
         if self.petal_weight is None or factor == 1.0:
             return self
-        grow = 1.0 + self.petal_weight * (float(factor) - 1.0)
         out = copy.copy(self)
-        out.frames = np.ascontiguousarray(self.frames * grow[None, :, None])
+        if self.petal_ramp is None:
+            grow = 1.0 + self.petal_weight * (float(factor) - 1.0)
+            out.frames = np.ascontiguousarray(self.frames * grow[None, :, None])
+        else:
+            lo, hi = self.petal_ramp
+            out.frames = np.empty(self.frames.shape)
+            ramped_petals(np.ascontiguousarray(self.frames, np.float64),
+                          np.ascontiguousarray(self.petal_weight, np.float64), float(factor), float(lo), float(hi),
+                          out.frames)
         out.petal, out.key = float(factor), (self.id, float(factor))
         return out
 
