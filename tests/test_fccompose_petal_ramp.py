@@ -5,17 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import run_cli
+from test_petal_growth import N_FRAMES, _floret_files, petal_against_pre_grown
 
 from inflo.formats.errors import FormatError
 from inflo.formats.fcc import read_fcc, write_fcc
-from inflo.formats.obj import list_obj_sequence, read_obj
-from inflo.formats.scn import Placement
 from inflo.tools.fccompose.kernels import ramped_petals
 from inflo.tools.fccompose.model import Template
-from inflo.tools.testing.florets import opening_floret, write_fcc_text, write_floret_animation, write_scene
-
-N_FRAMES = 6
 
 
 def _smoothstep(t):
@@ -100,34 +95,11 @@ def test_a_ramped_petal_factor_keeps_the_bud_and_opens_to_the_whole_factor(tmp_p
     """Floret 0 '#@ petal: 1.8' with 'petal ramp: 0 0.4 1', floret 1 plain: the same canopy as two
     plain placements of two animations, the first one's OBJ frame s grown beforehand by
     1 + w (1.8 - 1) g(s / 5); its first frame is its bud as read, its last 1.8 x as wide."""
-    frames, faces, fixed = opening_floret(N_FRAMES)
-    write_floret_animation(tmp_path / "anim", frames, faces, fixed, tmp_path / "petal_base.txt")
-    v = frames[-1]
-    r = np.hypot(v[:, 0], v[:, 2])
-    w = np.clip((r - r.min()) / (r.max() - r.min()), 0.0, 1.0)
-    w[fixed] = 0.0
-    (tmp_path / "anim.petals").write_text("\n".join(f"{i} {x:.6f}" for i, x in enumerate(w)) + "\n")
+    frames, faces, fixed, w = _floret_files(tmp_path)  # the animation and its petal weights
     w = np.round(w, 6)
     g = _smoothstep((np.arange(N_FRAMES) / (N_FRAMES - 1) - 0.4) / 0.6)
     grown = [f * (1.0 + w * 0.8 * g[s])[:, None] for s, f in enumerate(frames)]
-    write_floret_animation(tmp_path / "grown", grown, faces)
-    up, right = [0, 1, 0], [1, 0, 0]
-    end = N_FRAMES - 1
-    write_scene(tmp_path / "petal.scn", [
-        Placement("ca", 0, [0, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=end, petal=1.8),
-        Placement("ca", 0, [3.5, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=end)])
-    write_scene(tmp_path / "pre.scn", [
-        Placement("ca", 1, [0, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=end),
-        Placement("ca", 0, [3.5, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=end)])
-    write_fcc_text(tmp_path / "petal.fcc", scene="petal.scn",
-                   extra="petal weight: 0 anim.petals\npetal ramp: 0 0.4 1\n")
-    write_fcc_text(tmp_path / "pre.fcc", scene="pre.scn", extra="animation: 1 1 1 1 grown\nweight: 1 petal_base.txt\n")
-    out = {}
-    for name in ("petal", "pre"):
-        res = run_cli("fccompose", "-q", tmp_path / f"{name}.fcc", "-o", tmp_path / f"out_{name}")
-        assert res.returncode == 0, res.stderr
-        out[name] = [read_obj(p) for p in list_obj_sequence(tmp_path / f"out_{name}")]
-    assert len(out["petal"]) == len(out["pre"]) == N_FRAMES
+    out = petal_against_pre_grown(tmp_path, faces, grown, extra="petal ramp: 0 0.4 1\n")
     for a, b in zip(out["petal"], out["pre"]):
         np.testing.assert_allclose(a.vertices, b.vertices, atol=2e-6)  # OBJ rounding (6 decimals)
     n = len(frames[0])

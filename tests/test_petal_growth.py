@@ -94,20 +94,20 @@ def _floret_files(tmp_path):
     return frames, faces, fixed, w
 
 
-def test_a_placements_petal_factor_gives_the_canopy_of_a_pre_grown_template(tmp_path):
-    """Floret 0 with '#@ petal: 1.8' and the weights, floret 1 plain: the same canopy as two plain
-    placements of two animations, the first one's OBJs grown by 1 + w (1.8 - 1) beforehand."""
-    frames, faces, fixed, w = _floret_files(tmp_path)
-    grown = [f * (1.0 + w * 0.8)[:, None] for f in frames]
+def petal_against_pre_grown(tmp_path, faces, grown, extra: str = "") -> dict:
+    """Two canopies of two florets each over N_FRAMES (the animation of :func:`_floret_files` in
+    ``tmp_path``): "petal", floret 0 with '#@ petal: 1.8', its weights and the fcc lines ``extra``;
+    "pre", floret 0 a plain placement of the animation ``grown`` (its frames grown beforehand);
+    floret 1 plain in both. Returns each canopy's OBJ frames."""
     write_floret_animation(tmp_path / "grown", grown, faces)
-    up, right = [0, 1, 0], [1, 0, 0]
+    up, right, end = [0, 1, 0], [1, 0, 0], N_FRAMES - 1
     write_scene(tmp_path / "petal.scn", [
-        Placement("ca", 0, [0, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=N_FRAMES - 1, petal=1.8),
-        Placement("ca", 0, [3.5, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=N_FRAMES - 1)])
+        Placement("ca", 0, [0, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=end, petal=1.8),
+        Placement("ca", 0, [3.5, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=end)])
     write_scene(tmp_path / "pre.scn", [
-        Placement("ca", 1, [0, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=N_FRAMES - 1),
-        Placement("ca", 0, [3.5, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=N_FRAMES - 1)])
-    write_fcc_text(tmp_path / "petal.fcc", scene="petal.scn", extra="petal weight: 0 anim.petals\n")
+        Placement("ca", 1, [0, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=end),
+        Placement("ca", 0, [3.5, 0, 0], [1, 1, 1], up, right, frame_start=0, frame_end=end)])
+    write_fcc_text(tmp_path / "petal.fcc", scene="petal.scn", extra="petal weight: 0 anim.petals\n" + extra)
     write_fcc_text(tmp_path / "pre.fcc", scene="pre.scn",
                    extra="animation: 1 1 1 1 grown\nweight: 1 petal_base.txt\n")
     out = {}
@@ -116,6 +116,14 @@ def test_a_placements_petal_factor_gives_the_canopy_of_a_pre_grown_template(tmp_
         assert res.returncode == 0, res.stderr
         out[name] = [read_obj(p) for p in list_obj_sequence(tmp_path / f"out_{name}")]
     assert len(out["petal"]) == len(out["pre"]) == N_FRAMES
+    return out
+
+
+def test_a_placements_petal_factor_gives_the_canopy_of_a_pre_grown_template(tmp_path):
+    """Floret 0 with '#@ petal: 1.8' and the weights, floret 1 plain: the same canopy as two plain
+    placements of two animations, the first one's OBJs grown by 1 + w (1.8 - 1) beforehand."""
+    frames, faces, fixed, w = _floret_files(tmp_path)
+    out = petal_against_pre_grown(tmp_path, faces, [f * (1.0 + w * 0.8)[:, None] for f in frames])
     for a, b in zip(out["petal"], out["pre"]):
         np.testing.assert_array_equal(a.faces, b.faces)
         np.testing.assert_allclose(a.vertices, b.vertices, atol=2e-6)  # OBJ rounding (6 decimals)
