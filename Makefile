@@ -12,11 +12,11 @@ export QUALITY
 # numba caches compiled kernels beside the sources; keep them out of the way of stale builds
 export PATH := $(CURDIR)/$(VENV)/bin:$(PATH)
 
-.PHONY: test-fast lint all venv bytecode test test-blender bench golden golden-check species new-species $(SPECIES_DIRS) clean distclean
+.PHONY: test-fast lint all venv bytecode kernels test test-blender bench golden golden-check species new-species $(SPECIES_DIRS) clean distclean
 
 all: lily
 
-venv: $(STAMP) bytecode
+venv: $(STAMP) bytecode kernels
 
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -25,6 +25,19 @@ $(STAMP): pyproject.toml
 	@sh tools/canopy_render/ensure_system_gl.sh
 	@sh tools/canopy_view/ensure_browser.sh
 	@touch $(STAMP)
+
+# the canopy's numba kernels compiled ahead, at install (make venv; python -m inflo.tools.warm: a
+# 20-floret canopy run once, about 1.8 min on 2 cores on a fresh machine, 3 s once numba's cache holds
+# them), so that a first canopy run loads them in about a second instead of compiling them for about
+# 100 s (issue 51's start-up; docs/architecture.md). Rerun when the modules holding them change. The
+# species targets and make test do not wait for it (they compile what they call as they go: a first
+# make -B lily took 2.1 min with an empty cache, 0.9 min after this step's 1.8)
+KERNELS := $(VENV)/.inflo-kernels
+KERNEL_SRC := $(wildcard tools/collide/*.py tools/pbd/*.py tools/fccompose/*.py tools/common/*.py tools/warm/*.py)
+kernels: $(KERNELS)
+$(KERNELS): $(STAMP) $(KERNEL_SRC)
+	@$(PY) -m inflo.tools.warm
+	@touch $@
 
 # the sources' bytecode, written ahead (0.1 s when nothing changed): where PYTHONDONTWRITEBYTECODE is
 # set (as on this project's VMs and many container images) Python would otherwise compile every
