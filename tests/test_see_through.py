@@ -7,7 +7,15 @@ import numpy as np
 import pytest
 
 from inflo.formats.obj import ObjMesh
-from inflo.tools.species.checks import ALL_VIEWS, see_through, view_axes, worst_see_through
+from inflo.tools.species.checks import (
+    ALL_VIEWS,
+    depth_fill,
+    region_in_view,
+    see_through,
+    view_axes,
+    view_coverage,
+    worst_see_through,
+)
 
 
 def _cells(cells) -> ObjMesh:
@@ -103,3 +111,37 @@ def test_fill_triangles_covers_the_centres_inside():
         w1 = ((cx - x) * (ay - y) - (cy - y) * (ax - x)) / area
         want |= (w0 >= -1e-9) & (w1 >= -1e-9) & (1.0 - w0 - w1 >= -1e-9)
     assert img.any() and (img == want).all()
+
+
+def _square(z: float, lo: float = 0.0, hi: float = 1.0) -> ObjMesh:
+    """The square [lo, hi]^2 of the plane at height z (Y up: the plane y = z), two triangles."""
+    v = np.array([(lo, z, lo), (hi, z, lo), (hi, z, hi), (lo, z, hi)], float)
+    return ObjMesh(vertices=v, faces=np.array([(0, 1, 2), (0, 2, 3)], np.int32))
+
+
+def test_region_in_view_is_depth_buffered():
+    """A receptacle (the region) under a cover seen from above is hidden where the cover is in
+    front of it, and not at all where the cover is behind it (from below); a cover over half of it
+    leaves half in view; one triangle with its three vertices at one point draws nothing."""
+    region = _square(0.0)
+    over = _square(1.0, -0.5, 1.5)
+    assert region_in_view(over, region, 0.0, 90.0) == 0.0  # from above: the cover is in front
+    assert region_in_view(over, region, 0.0, -90.0) == 1.0  # from below: the cover is behind it
+    half = ObjMesh(vertices=np.array([(-1, 1, -1), (0.5, 1, -1), (0.5, 1, 2), (-1, 1, 2)], float),
+                   faces=np.array([(0, 1, 2), (0, 2, 3)], np.int32))
+    assert region_in_view(half, region, 0.0, 90.0) == pytest.approx(0.5, abs=0.01)
+    dot = ObjMesh(vertices=np.array([(0.5, 1, 0.5)] * 3, float), faces=np.array([(0, 1, 2)], np.int32))
+    assert region_in_view(dot, region, 0.0, 90.0) == 1.0
+    # the silhouettes' measure counts a cover behind the region as hiding it
+    assert 1.0 - view_coverage(over, 1, region=region) == 0.0
+
+
+def test_depth_fill_keeps_the_nearer_triangle():
+    pts = np.array([(0, 0), (4, 0), (0, 4), (0, 0), (4, 0), (0, 4)], float)
+    depth = np.array([0, 0, 0, 1, 1, 1], float)
+    zbuf = np.full((5, 5), -np.inf)
+    label = np.zeros((5, 5), np.int8)
+    depth_fill(pts, depth, np.array([(3, 4, 5)], np.int64), 1, zbuf, label)  # the near one first
+    depth_fill(pts, depth, np.array([(0, 1, 2)], np.int64), 2, zbuf, label)
+    assert (label == 1).sum() == 15 and (label == 2).sum() == 0  # 15 pixel centres in the closed triangle
+    assert np.all(zbuf[label == 1] == 1.0)

@@ -17,9 +17,12 @@ and, of the species (thesis ch. 9, figs. 9.1, 9.2):
 - **almost only ray florets**: every placement but the involucral bracts a ray floret;
 - **closed from above**: the last frame seen from above (Y) covers at least TOP_COVER of its
   silhouette's convex hull (inflo.tools.species.checks.view_coverage) and leaves at most APEX of
-  the receptacle's silhouette in view; seen from the side (X and Z, the mean) at most SIDE of the
-  receptacle's silhouette in view (a guard: the florets on the flank point at the eye, and their
-  narrow feet leave the receptacle showing between them, README "Noticed and left");
+  the receptacle in view; seen obliquely (55 degrees from above, the README's hero still) at most
+  OBLIQUE of it and from the side (8 degrees above the horizontal) at most SIDE (guards: the
+  florets on the flank point at the eye, and their narrow feet leave the receptacle showing
+  between them, README "Noticed and left"). The receptacle's share in view is depth-buffered
+  (inflo.tools.species.checks.region_in_view: a floret behind it hides none of it), the mean of
+  four views round the ball (azimuths 20, 110, 200 and 290 degrees);
 - **smooth florets**: the median over the last frame's florets of each floret's largest angle
   between two adjacent faces (degrees) at most SMOOTH (the old faceted cones: about 130);
 - **a ball**: the open head at least BALL (0.75) times as high (from the lowest bract's base to
@@ -46,7 +49,7 @@ from scipy.stats import spearmanr
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.species import species_of
 from inflo.tools.collide import intersecting_pairs
-from inflo.tools.species.checks import check_head, floret_faces, floret_heights, view_coverage
+from inflo.tools.species.checks import check_head, floret_faces, floret_heights, region_in_view, view_coverage
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 CHECK = species_of(__file__).check
@@ -55,7 +58,10 @@ LAG = CHECK["lag"]
 PRESS = CHECK["press"]
 TOP_COVER = CHECK["top_cover"]
 APEX = CHECK["apex"]
+OBLIQUE = CHECK["oblique"]
 SIDE = CHECK["side"]
+#: the views round the ball the receptacle in view is averaged over (degrees of azimuth)
+AROUND = (20.0, 110.0, 200.0, 290.0)
 SMOOTH = CHECK["smooth"]
 
 
@@ -108,12 +114,14 @@ def main(build: Path) -> int:
 
     receptacle = read_obj(head.receptacle[-1])
     cover = view_coverage(last, 1)
-    apex = 1.0 - view_coverage(last, 1, region=receptacle)
-    side = 0.5 * (2.0 - view_coverage(last, 0, region=receptacle) - view_coverage(last, 2, region=receptacle))
+    apex, oblique, side = (float(np.mean([region_in_view(last, receptacle, az, el) for az in AROUND]))
+                           for el in (90.0, 55.0, 8.0))
     smooth = crease(last)
     print(f"from above: {cover:.3f} of the silhouette's hull covered, {apex:.3f} of the receptacle in view; "
-          f"from the side (X, Z): {side:.3f} of the receptacle in view; "
+          f"at 55 degrees: {oblique:.3f} in view; from the side (8 degrees): {side:.3f} in view; "
           f"florets' largest angle between adjacent faces, median {smooth:.1f} degrees")
+    if oblique > OBLIQUE:
+        failures.append(f"the receptacle shows at 55 degrees: {oblique:.3f} in view (expected <= {OBLIQUE})")
     if side > SIDE:
         failures.append(f"the receptacle shows from the side: {side:.3f} in view (expected <= {SIDE})")
     if cover < TOP_COVER:
