@@ -277,7 +277,7 @@ def cold_start(ctx: BenchContext) -> list[Result]:
                       20.0, f"6,600 triangles, 10 frames, --scheme fast, fresh process, first run after the "
                             f"install's `python -m inflo.tools.warm` ({install:.1f} s, into an empty NUMBA_CACHE_DIR)"))
     out.append(Result("kernels_at_install", install, "s", "", None,
-                      "python -m inflo.tools.warm into an empty NUMBA_CACHE_DIR (make venv; the species targets)"))
+                      "python -m inflo.tools.warm into an empty NUMBA_CACHE_DIR (make venv)"))
     return out
 
 
