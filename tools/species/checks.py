@@ -76,6 +76,18 @@ def view_axes(azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray]
     return right, np.cross(d, right)
 
 
+@njit(cache=True, inline="always")
+def _pixel_box(ax, ay, bx, by, cx, cy, width, height):
+    """A triangle's doubled signed area and the pixel rows and columns its bounding box spans in
+    an image of ``width`` x ``height`` (x0, x1, y0, y1; empty where x0 > x1 or y0 > y1)."""
+    area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    x0 = max(int(np.ceil(min(ax, bx, cx))), 0)
+    x1 = min(int(np.floor(max(ax, bx, cx))), width - 1)
+    y0 = max(int(np.ceil(min(ay, by, cy))), 0)
+    y1 = min(int(np.floor(max(ay, by, cy))), height - 1)
+    return area, x0, x1, y0, y1
+
+
 @njit(cache=True)
 def fill_triangles(points, faces, width, height):
     """Boolean image (height, width): the pixels whose centres (integer coordinates of
@@ -87,13 +99,9 @@ def fill_triangles(points, faces, width, height):
         ax, ay = points[faces[f, 0], 0], points[faces[f, 0], 1]
         bx, by = points[faces[f, 1], 0], points[faces[f, 1], 1]
         cx, cy = points[faces[f, 2], 0], points[faces[f, 2], 1]
-        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+        area, x0, x1, y0, y1 = _pixel_box(ax, ay, bx, by, cx, cy, width, height)
         if area == 0.0:
             continue
-        x0 = max(int(np.ceil(min(ax, bx, cx))), 0)
-        x1 = min(int(np.floor(max(ax, bx, cx))), width - 1)
-        y0 = max(int(np.ceil(min(ay, by, cy))), 0)
-        y1 = min(int(np.floor(max(ay, by, cy))), height - 1)
         for y in range(y0, y1 + 1):
             # the row's crossing with the triangle: only the pixels within a pixel of its ends are
             # tested (the barycentric test below, as over the whole bounding box)
@@ -207,13 +215,9 @@ def depth_fill(points, depth, faces, value, zbuf, label):
     for f in range(faces.shape[0]):
         a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
         ax, ay, bx, by, cx, cy = points[a, 0], points[a, 1], points[b, 0], points[b, 1], points[c, 0], points[c, 1]
-        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+        area, x0, x1, y0, y1 = _pixel_box(ax, ay, bx, by, cx, cy, width, height)
         if area == 0.0:
             continue
-        x0 = max(int(np.ceil(min(ax, bx, cx))), 0)
-        x1 = min(int(np.floor(max(ax, bx, cx))), width - 1)
-        y0 = max(int(np.ceil(min(ay, by, cy))), 0)
-        y1 = min(int(np.floor(max(ay, by, cy))), height - 1)
         for y in range(y0, y1 + 1):
             for x in range(x0, x1 + 1):
                 wa = ((bx - x) * (cy - y) - (by - y) * (cx - x)) / area
