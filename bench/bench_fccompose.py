@@ -230,55 +230,56 @@ def schemes_350k(ctx: BenchContext) -> list[Result]:
     return _schemes(ctx, "fccompose_scheme_350k", 1060)
 
 
+def _timed(cmd: list, env: dict) -> tuple[float, float]:
+    """Run ``cmd`` (its output captured) under ``env``: (wall seconds, CPU seconds); fails on a
+    non-zero exit."""
+    t0 = time.perf_counter()
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    res = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    seconds = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if res.returncode != 0:
+        raise RuntimeError(f"{Path(cmd[0]).name} failed ({res.returncode}): {res.stderr.strip()}")
+    return seconds, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+
+
 def cold_start(ctx: BenchContext) -> list[Result]:
     """A small scene (20 florets, 10 frames) in a fresh process with an empty kernel cache
     (``NUMBA_CACHE_DIR`` a new folder), then again with that cache warm (issue 51 goals: 20 s of
-    compiling at most; warm under 1.5 s, process start included)."""
+    compiling at most; warm under 1.5 s, process start included); and a fresh machine after the
+    install (``make venv``): the kernels compiled ahead by ``python -m inflo.tools.warm`` into
+    another empty cache, then the scene's first run."""
     import os
     import shutil
 
     fcc = _setup(ctx.workdir / "cold", 20, 10, 10)
-    cache = ctx.workdir / "cold" / "numba_cache"
-    shutil.rmtree(cache, ignore_errors=True)
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+
+    def fresh_env(name):
+        cache = ctx.workdir / "cold" / name
+        shutil.rmtree(cache, ignore_errors=True)
+        return dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+
+    def scene(env, label):
+        return _timed([_cli(), str(fcc), "-o", str(ctx.workdir / "cold" / f"out_{label}"), "-q", "--scheme", "fast"],
+                      env)
+
+    env = fresh_env("numba_cache")
     out = []
     for label in ("cold", "warm"):
-        t0 = time.perf_counter()
-        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        res = subprocess.run([_cli(), str(fcc), "-o", str(ctx.workdir / "cold" / f"out_{label}"), "-q",
-                              "--scheme", "fast"], capture_output=True, text=True, env=env)
-        seconds = time.perf_counter() - t0
-        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-        if res.returncode != 0:
-            raise RuntimeError(f"fccompose failed ({res.returncode}): {res.stderr.strip()}")
+        seconds, cpu = scene(env, label)
         goal = 20.0 if label == "cold" else 1.5
         out.append(Result(f"fccompose_small_{label}_cache", seconds, "s", f"issue 51 goal {goal:g} s", goal,
                           f"6,600 triangles, 10 frames, --scheme fast, fresh process; {cpu:.1f} s CPU (the "
                           "figure to compare on a loaded machine)"
                           + (", empty NUMBA_CACHE_DIR" if label == "cold" else ", the cache the cold run filled")))
-    # a fresh machine after the install (make venv): the kernels compiled ahead by
-    # ``python -m inflo.tools.warm`` into another empty cache, then the first run
-    cache = ctx.workdir / "cold" / "numba_cache_installed"
-    shutil.rmtree(cache, ignore_errors=True)
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
-    t0 = time.perf_counter()
-    res = subprocess.run([sys.executable, "-m", "inflo.tools.warm", "-q"], capture_output=True, text=True, env=env)
-    install = time.perf_counter() - t0
-    if res.returncode != 0:
-        raise RuntimeError(f"python -m inflo.tools.warm failed ({res.returncode}): {res.stderr.strip()}")
-    t0 = time.perf_counter()
-    res = subprocess.run([_cli(), str(fcc), "-o", str(ctx.workdir / "cold" / "out_installed"), "-q",
-                          "--scheme", "fast"], capture_output=True, text=True, env=env)
-    seconds = time.perf_counter() - t0
-    if res.returncode != 0:
-        raise RuntimeError(f"fccompose failed ({res.returncode}): {res.stderr.strip()}")
+    env = fresh_env("numba_cache_installed")
+    install, _ = _timed([sys.executable, "-m", "inflo.tools.warm", "-q"], env)
+    seconds, _ = scene(env, "installed")
     out.append(Result("fccompose_small_after_install", seconds, "s", "issue 51 goal 20 s (first run, fresh machine)",
                       20.0, f"6,600 triangles, 10 frames, --scheme fast, fresh process, first run after the "
                             f"install's `python -m inflo.tools.warm` ({install:.1f} s, into an empty NUMBA_CACHE_DIR)"))
     out.append(Result("kernels_at_install", install, "s", "", None,
                       "python -m inflo.tools.warm into an empty NUMBA_CACHE_DIR (make venv)"))
     return out
-
 
 BENCHMARKS = [growth, dense_head, schemes_100k, schemes_350k, cold_start]

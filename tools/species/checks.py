@@ -239,12 +239,11 @@ def region_in_view(mesh, region, azimuth: float, elevation: float, pixels: int =
     hides none of it. Rasterized on ``pixels`` across the larger side of both; 0 for a region
     with no pixels."""
     right, up = view_axes(azimuth, elevation)
-    toward = np.cross(right, up)  # from the scene toward the eye
     n0 = len(mesh.vertices)
     v = np.vstack([np.asarray(mesh.vertices, np.float64), np.asarray(region.vertices, np.float64)])
-    q = np.stack([v[:, 0] * right[0] + v[:, 1] * right[1] + v[:, 2] * right[2],
-                  v[:, 0] * up[0] + v[:, 1] * up[1] + v[:, 2] * up[2]], axis=1)
-    depth = v[:, 0] * toward[0] + v[:, 1] * toward[1] + v[:, 2] * toward[2]
+    # screen x, y and the depth toward the eye
+    screen = la.matmul(v, np.stack([right, up, np.cross(right, up)], axis=1))
+    q, depth = np.ascontiguousarray(screen[:, :2]), np.ascontiguousarray(screen[:, 2])
     used = np.concatenate([np.unique(mesh.faces), n0 + np.unique(region.faces)])
     lo, hi = q[used].min(axis=0), q[used].max(axis=0)
     s = (pixels - 1) / max(float((hi - lo).max()), 1e-300)
