@@ -66,8 +66,8 @@ def ray_pose(s: float) -> dict:
     arc of the roll (degrees; 180 would close the tube), the half arc left at the tip (tip_arc).
     The open ligule leans out and curls back over its own mouth (incurve 55 degrees): seen from
     outside the ball its rounded back, overlapping the next like a scale."""
-    return dict(length=_lerp(0.70, 2.00, s), lean=_lerp(0.0, 15.0, s), incurve=_lerp(10.0, 55.0, s),
-                r_base=_lerp(0.15, 0.32, s), r_mouth=_lerp(0.15, 0.86, s ** 1.2),
+    return dict(length=_lerp(0.70, 3.50, s), lean=_lerp(0.0, 15.0, s), incurve=_lerp(10.0, 55.0, s),
+                r_base=_lerp(0.15, 0.32, s), r_mouth=_lerp(0.15, 1.60, s ** 1.2),
                 arc=_lerp(165.0, 150.0, s), tip_end=TIP_END)
 
 
