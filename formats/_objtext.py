@@ -12,7 +12,8 @@ a decimal with at most 15 significant digits and a power of ten within 10^±22 i
 representable integer multiplied or divided by one exactly representable power of ten, a single
 correctly rounded IEEE operation, so the result is the double that Python's ``float`` gives.
 Anything outside that subset (other line breaks, a number the fast path cannot take, a face
-with more than three corners or texture references, a wrong count, an index out of range) makes
+with more than three corners, a texture or normal reference that is not an integer (texture
+references are read past, as the Python reader does), a wrong count, an index out of range) makes
 the kernel give up on the file (``ok`` false) and the Python reader reads it, errors included.
 
 Writing (:func:`format_fixed`): ``%.Nf`` rows as the RBA writer's kernel does (:mod:`._rbatext`):
@@ -44,7 +45,7 @@ _OTHER = 0
 _V = 1
 _VN = 2
 _F = 3
-_SKIP = 4  # a comment or an empty line
+_SKIP = 4  # a comment, an empty line or a `vt` line
 
 
 @njit(cache=True, inline="always")
@@ -215,6 +216,8 @@ def parse_obj(data):
             elif c == 110 and q - p >= 3 and _is_blank(data[p + 2]):  # vn
                 k = _VN
                 nvn += 1
+            elif c == 116 and (q - p == 2 or _is_blank(data[p + 2])):  # vt: skipped, as the Python reader does
+                k = _SKIP
         elif data[p] == 102 and q - p >= 2 and _is_blank(data[p + 1]):  # f
             k = _F
             nf += 1
@@ -291,12 +294,25 @@ def parse_obj(data):
                 if not ok:
                     return fail
                 nrm = np.int64(0)
-                if p < q and data[p] == 47:  # i//n only
-                    if p + 1 >= q or data[p + 1] != 47 or p + 2 >= q:
-                        return fail
-                    nrm, p, ok = _parse_int(data, p + 2, q)
-                    if not ok:
-                        return fail
+                if p < q and data[p] == 47:
+                    if p + 1 < q and data[p + 1] == 47:  # i//n
+                        if p + 2 >= q:
+                            return fail
+                        nrm, p, ok = _parse_int(data, p + 2, q)
+                        if not ok:
+                            return fail
+                    else:  # i/t or i/t/n: the texture reference is read past (an integer), not kept
+                        if p + 1 >= q:
+                            return fail
+                        _t, p, ok = _parse_int(data, p + 1, q)
+                        if not ok:
+                            return fail
+                        if p < q and data[p] == 47:
+                            if p + 1 >= q:
+                                return fail
+                            nrm, p, ok = _parse_int(data, p + 1, q)
+                            if not ok:
+                                return fail
                 if p < q and not _is_blank(data[p]):
                     return fail
                 faces[jf, cnt] = a

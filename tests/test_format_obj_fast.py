@@ -80,6 +80,11 @@ CASES = {
     "polyline": "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\nl -1 -2\n",
     "polygon": "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\n",
     "texture refs": "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/1\n",
+    "texture and normal refs": "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nvn 0 1 0\n"
+                               "f 1/1/2 2/-1/1 3/1/-2\nf -3/1 -2/1 -1/1\n",
+    "empty texture ref": "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1/ 2/ 3/\nf 1/1/ 2/1/ 3/1/\n",
+    "word texture ref": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2/b 3/c\n",
+    "bad normal after texture": "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1/1/2 2/1/1 3/1/1\n",
     "indented v": "v 0 0 0\n  v 1 0 0\nv 0 1 0\nf 1 2 3\n",
     "crlf": "v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n",
     "no final newline": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3",
@@ -116,9 +121,10 @@ def test_fast_reader_gives_what_the_python_reader_gives(tmp_path, name):
 
 
 def test_the_kernel_takes_the_common_form_and_leaves_the_rest(tmp_path):
-    for name in ("plain", "numbers", "normals", "groups, materials", "colours", "negative refs", "no final newline"):
+    for name in ("plain", "numbers", "normals", "groups, materials", "colours", "negative refs", "no final newline",
+                 "texture refs", "texture and normal refs"):
         assert _fast_taken(tmp_path, CASES[name]), name
-    for name in ("polygon", "texture refs", "crlf", "form feed", "line separator", "many digits", "nan", "word",
+    for name in ("polygon", "empty texture ref", "word texture ref", "crlf", "form feed", "line separator", "many digits", "nan", "word",
                  "two counts", "underscore", "large exponent", "nul"):
         assert not _fast_taken(tmp_path, CASES[name]), name
 

@@ -68,6 +68,21 @@ def cross_pairs(a, b) -> int:
     return len(intersecting_pairs_between(a.vertices, a.faces, b.vertices, b.faces))
 
 
+def leaf_pairs(lf, br, canopy) -> tuple[int, int, int]:
+    """Intersecting pairs of one frame's stem leaves with the branches, with the canopy, and
+    between two leaves."""
+    if len(lf.faces) == 0:
+        return 0, 0, 0
+    ll = 0
+    fg = np.asarray(lf.face_group)
+    for a in np.unique(fg):
+        for b in np.unique(fg):
+            if a < b:
+                fa, fb = lf.faces[fg == a], lf.faces[fg == b]
+                ll += len(intersecting_pairs_between(lf.vertices, fa, lf.vertices, fb))
+    return cross_pairs(lf, br), cross_pairs(lf, canopy), ll
+
+
 def stretch_range(log_path: Path) -> tuple[float, float, list]:
     import csv
 
@@ -97,10 +112,19 @@ def canopy_groups(pos, diameter, slack: float = 1.05) -> int:
 W = np.array([(a, b, 1.0 - a - b) for a in np.linspace(0, 1, 6) for b in np.linspace(0, 1, 6) if a + b <= 1 + 1e-9])
 
 
-def floret_points(mesh, name: str) -> np.ndarray:
-    """Points of a canopy group (its triangles sampled at 21 barycentric points each)."""
-    gi = mesh.groups.index(name)
-    tri = mesh.vertices[mesh.faces[np.asarray(mesh.face_group) == gi]]
+def group_faces(mesh) -> dict:
+    """Per group name of ``mesh``: its faces' indices (one sort, not a pass over every face a group)."""
+    fg = np.asarray(mesh.face_group)
+    order = np.argsort(fg, kind="stable")
+    bounds = np.searchsorted(fg[order], np.arange(len(mesh.groups) + 1))
+    return {name: order[bounds[g]:bounds[g + 1]] for g, name in enumerate(mesh.groups)}
+
+
+def floret_points(mesh, name: str, faces: dict | None = None) -> np.ndarray:
+    """Points of a canopy group (its triangles sampled at 21 barycentric points each); ``faces``:
+    :func:`group_faces` of ``mesh``."""
+    idx = (faces or group_faces(mesh))[name]
+    tri = mesh.vertices[mesh.faces[idx]]
     return np.einsum("kj,mjd->mkd", W, tri).reshape(-1, 3)
 
 
@@ -109,15 +133,20 @@ def ligule_gaps(mesh, typed, rba) -> np.ndarray:
     (its farthest point from its base)."""
     pts = {}
     out = []
+    faces = group_faces(mesh)
+    disks = {}
+    for j, q in enumerate(typed.placements):
+        if q.type == "disk":
+            disks.setdefault(q.group, []).append(j)
     for i, p in enumerate(typed.placements):
         if p.type != "ray":
             continue
         base = rba.pos[rba.index(i)]
-        ray = floret_points(mesh, f"floret_{i}")
-        disk = [j for j, q in enumerate(typed.placements) if q.group == p.group and q.type == "disk"]
+        ray = floret_points(mesh, f"floret_{i}", faces)
+        disk = disks.get(p.group, [])
         for j in disk:
             if j not in pts:
-                pts[j] = floret_points(mesh, f"floret_{j}")
+                pts[j] = floret_points(mesh, f"floret_{j}", faces)
         d = cKDTree(np.vstack([pts[j] for j in disk])).query(ray)[0].min()
         out.append(d / np.linalg.norm(ray - base, axis=1).max())
     return np.array(out)
@@ -128,12 +157,13 @@ def surface_distances(receptacles, typed, rba) -> np.ndarray:
     the floret's size."""
     out = []
     trees = {}
+    faces = group_faces(receptacles)
     for i, p in enumerate(typed.placements):
         if p.type == "bract":
             continue
         h = p.group - 1
         if h not in trees:
-            trees[h] = cKDTree(floret_points(receptacles, f"receptacle_{h}"))
+            trees[h] = cKDTree(floret_points(receptacles, f"receptacle_{h}", faces))
         row = rba.index(i)
         out.append(trees[h].query(rba.pos[row])[0] / rba.scale[row, 0])
     return np.array(out)
@@ -165,6 +195,10 @@ def main(build: Path) -> int:
     print(f"receptacles: {len(recs)} frames")
     if len(recs) != len(canopy):
         fail.append("the receptacle and canopy sequences differ in length")
+    # the stem leaves: tested against the branches, the canopy and each other in each frame, as
+    # the canopy is (each frame's meshes read once)
+    leaves = list_obj_sequence(build / "leaves")
+    lb = lc = ll = 0
     bad = cross = far = rcross = 0
     mesh = rec = None
     for i, path in enumerate(canopy):
@@ -175,6 +209,9 @@ def main(build: Path) -> int:
         rcross += nr
         br = read_obj(branches[min(i, len(branches) - 1)])
         nb = cross_pairs(mesh, br)
+        if i < len(leaves):
+            dl = leaf_pairs(read_obj(leaves[i]), br, mesh)
+            lb, lc, ll = lb + dl[0], lc + dl[1], ll + dl[2]
         heads = read_rba(head_rba[min(i, len(head_rba) - 1)])
         d = cKDTree(br.vertices).query(heads.pos)[0] if len(heads) and len(br.vertices) else np.zeros(len(heads))
         nfar = int((d > 1e-5).sum()) if len(br.vertices) else len(heads)
@@ -264,21 +301,7 @@ def main(build: Path) -> int:
     if not ratio >= facts["stem_base"]:
         fail.append(f"stem base {ratio:.3f} of a head diameter < {facts['stem_base']}")
 
-    # the stem leaves: present, textured, crossing nothing in any frame
-    leaves = list_obj_sequence(build / "leaves")
-    lb = lc = ll = 0
-    for i, path in enumerate(leaves):
-        lf = read_obj(path)
-        if len(lf.faces) == 0:
-            continue
-        lb += cross_pairs(lf, read_obj(branches[min(i, len(branches) - 1)]))
-        lc += cross_pairs(lf, read_obj(canopy[min(i, len(canopy) - 1)]))
-        fg = np.asarray(lf.face_group)
-        for a in np.unique(fg):
-            for b in np.unique(fg):
-                if a < b:
-                    fa, fb = lf.faces[fg == a], lf.faces[fg == b]
-                    ll += len(intersecting_pairs_between(lf.vertices, fa, lf.vertices, fb))
+    # the stem leaves: present, textured, crossing nothing in any frame (tested above)
     n_leaves = 0
     textured = False
     if leaves:

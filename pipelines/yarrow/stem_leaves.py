@@ -35,7 +35,11 @@ from pathlib import Path
 import numpy as np
 
 from inflo.formats.atomic import write_text_atomic
-from inflo.formats.obj import read_obj
+from inflo.formats.obj import read_obj, written_vertices
+
+# imported here, before the branch frames are read, so that they are read by the OBJ reader's
+# numba kernels (formats/obj.py: without numba loaded, frames under 16 MB are read in Python)
+from inflo.tools.collide import intersecting_pairs_between
 
 #: the leaves' material (colors.toml 9; the texture in leaves.mtl)
 MATERIAL = 9
@@ -152,8 +156,6 @@ def free_from(branches: Path, frames: int, first: int, blade, faces, base, azimu
     """The first frame, not before ``first``, from which the leaf (growing from then on) crosses
     no triangle of the frame's branch mesh in any later frame: the branches grow down and graft
     (branch-gen), so a path that passes the leaf's place early may leave it later."""
-    from inflo.tools.collide import intersecting_pairs_between
-
     tri = faces[:, :, 0]
     meshes = {}
     k = first
@@ -202,6 +204,13 @@ def main(argv: list) -> int:
                       f"map_Kd texture.png\nmap_d texture.png\n")
     nv, nt = len(blade), len(vt)
     vt_text = "".join(f"vt {u:.6f} {w:.6f}\n" for u, w in vt)
+    leaf_faces = []  # a leaf's face lines are the same in every frame it is in
+    for i in range(count):
+        fv = faces[:, :, 0] + 1 + i * nv
+        ft = faces[:, :, 1] + 1 + i * nt
+        leaf_faces.append("".join([f"g leaf_{i}\nusemtl mtl{MATERIAL}\n"]
+                                  + [f"f {a}/{ta} {b}/{tb} {c}/{tc}\n"
+                                     for (a, b, c), (ta, tb, tc) in zip(fv.tolist(), ft.tolist())]))
     for k in range(frames):
         parts = [f"# yarrow stem leaves, canopy frame {k} (stem_leaves.py)\nmtllib leaves.mtl\n"]
         faces_txt = []
@@ -211,15 +220,10 @@ def main(argv: list) -> int:
                 p = leaf_at(blade, bases[i], azim[i], lengths[i], age)
             else:
                 p = np.repeat(bases[i][None], nv, axis=0)
-            parts.append("".join(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in p))
+            parts.append(written_vertices(p, "%.6f")[1])  # "v x y z" lines, as "%.6f" writes them
             parts.append(vt_text)
             if age >= 0:
-                lines = [f"g leaf_{i}\nusemtl mtl{MATERIAL}\n"]
-                fv = faces[:, :, 0] + 1 + i * nv
-                ft = faces[:, :, 1] + 1 + i * nt
-                lines += [f"f {a}/{ta} {b}/{tb} {c}/{tc}\n"
-                          for (a, b, c), (ta, tb, tc) in zip(fv.tolist(), ft.tolist())]
-                faces_txt.append("".join(lines))
+                faces_txt.append(leaf_faces[i])
         write_text_atomic(out / f"frame_{k:04d}.obj", "".join(parts + faces_txt))
     print(f"stem_leaves.py: {count} leaves on the main stem ({len(stem)} nodes, radius up to {rmax:.3f}), "
           f"lengths {lengths[0]:.2f}-{lengths[-1]:.2f}, reached at frames {reach}, appearing at frames {first}; "
