@@ -4,6 +4,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from conftest import CLI_NAMES, REPO, run_cli
@@ -33,6 +34,10 @@ def test_non_editable_install_runs_every_cli(tmp_path):
     ).stdout.split()
     assert all(w.startswith(str(target)) for w in where), where
     assert (target / "inflo" / "formats" / "obj.md").exists()
+    static = target / "inflo" / "tools" / "canopy_view" / "static"
+    for rel in ("index.html", "three/three.module.min.js", "three/LICENSE", "three/addons/controls/OrbitControls.js",
+                "three/addons/loaders/GLTFLoader.js", "three/addons/utils/BufferGeometryUtils.js"):
+        assert (static / rel).exists(), rel
     for name in CLI_NAMES:
         script = target / "bin" / name
         assert script.exists(), name
@@ -47,8 +52,11 @@ def test_every_subpackage_is_listed_in_pyproject():
     subpackage missing from the list would be absent from a non-editable install."""
     import tomllib
 
-    listed = set(tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
-    found = {"inflo.formats"}
+    setup = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
+    listed = set(setup["packages"])
+    # and the data folders (no __init__.py), each with its files in package-data
+    found = {"inflo.formats"} | {name for name in setup["package-data"]
+                                 if not (REPO / "tools" / Path(*name.split(".")[2:]) / "__init__.py").exists()}
     for init in (REPO / "tools").rglob("__init__.py"):
         if "__pycache__" in init.parts:
             continue
