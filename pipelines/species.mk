@@ -53,5 +53,8 @@ RENDER_SRC := $(call SRC,canopy_render)
 # canopy-export takes its colour rules from canopy-render's colors.py
 EXPORT_SRC := $(call SRC,canopy_export) $(ROOT)/tools/canopy_render/colors.py
 
+# fccompose's iteration scheme (species.toml `scheme`, per quality; formats/fcc.md "Solver scheme"):
+# `default` unless a quality names `fast`
+SCHEME ?= default
 BACKGROUND ?= 0.55,0.70,0.86
 RENDER := $(BIN)canopy-render -q --background $(BACKGROUND) --colors colors.toml
