@@ -1,14 +1,16 @@
 #!/bin/sh
 # The frames of the yarrow's development sheet and animation (build/yarrow/yarrow_sheet.png,
-# yarrow.gif) as three OBJ sequences of one length (branches, canopy, receptacles), linked from the stage outputs (nothing is
-# recomputed): branch-gen's per-frame branches and the canopy's frame of the same index -- both on
-# the canopy's clock, so picture k shows the branches and the heads of frame k together. A canopy
-# frame with no head yet (before the first emerges) is linked to an empty OBJ.
+# yarrow.gif) as four OBJ sequences of one length (branches, canopy, receptacles, stem leaves),
+# linked from the stage outputs (nothing is recomputed): branch-gen's per-frame branches, the
+# canopy's frame of the same index and the stem leaves of that frame -- all on the canopy's clock,
+# so picture k shows the branches, the leaves and the heads of frame k together. A frame with
+# nothing of a sequence yet (no head before the first emerges, no leaf before the stem reaches
+# it) is linked to an empty OBJ.
 # Usage: sh anim.sh BUILD_DIR   (BUILD_DIR = build/yarrow)
 set -e
 B=$1
 rm -rf "$B/anim"
-mkdir -p "$B/anim/canopy" "$B/anim/branches" "$B/anim/receptacles"
+mkdir -p "$B/anim/canopy" "$B/anim/branches" "$B/anim/receptacles" "$B/anim/leaves"
 printf '# empty: no head yet\n' > "$B/anim/empty.obj"
 k=0
 for f in "$B"/canopy/frame_*.obj; do
@@ -29,6 +31,12 @@ for f in "$B"/canopy/frame_*.obj; do
 		ln -s "../../branches/frames/branches_$n.obj" "$B/anim/branches/frame_$n.obj"
 	else
 		ln -s "../empty.obj" "$B/anim/branches/frame_$n.obj"
+	fi
+	l="$B/leaves/frame_$n.obj"
+	if [ -f "$l" ] && grep -q '^f ' "$l"; then
+		ln -s "../../leaves/frame_$n.obj" "$B/anim/leaves/frame_$n.obj"
+	else
+		ln -s "../empty.obj" "$B/anim/leaves/frame_$n.obj"
 	fi
 	k=$((k + 1))
 done
