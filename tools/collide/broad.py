@@ -451,7 +451,7 @@ def _pair_array(out):
 #: (:func:`box_pairs`; past it the grid takes them all)
 BIG_BOX_BUDGET = 50_000_000
 
-#: a box over this many grid cells is big (:func:`box_pairs`: paired directly, not by the grid)
+#: a box over this many grid cells is big (:func:`box_pairs`: paired by a grid of the big boxes' size)
 BIG_BOX_CELLS = 512
 
 
