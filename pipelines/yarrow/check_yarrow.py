@@ -54,7 +54,7 @@ from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.rba import list_rba_sequence, read_rba
 from inflo.formats.scn import read_scn
 from inflo.tools.collide import intersecting_pairs, intersecting_pairs_between
-from inflo.tools.species.checks import BOUNDS, view_coverage
+from inflo.tools.species.checks import BOUNDS, group_faces, view_coverage
 
 
 def count(mesh) -> int:
@@ -110,14 +110,6 @@ def canopy_groups(pos, diameter, slack: float = 1.05) -> int:
 
 
 W = np.array([(a, b, 1.0 - a - b) for a in np.linspace(0, 1, 6) for b in np.linspace(0, 1, 6) if a + b <= 1 + 1e-9])
-
-
-def group_faces(mesh) -> dict:
-    """Per group name of ``mesh``: its faces' indices (one sort, not a pass over every face a group)."""
-    fg = np.asarray(mesh.face_group)
-    order = np.argsort(fg, kind="stable")
-    bounds = np.searchsorted(fg[order], np.arange(len(mesh.groups) + 1))
-    return {name: order[bounds[g]:bounds[g + 1]] for g, name in enumerate(mesh.groups)}
 
 
 def floret_points(mesh, name: str, faces: dict | None = None) -> np.ndarray:

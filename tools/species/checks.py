@@ -276,13 +276,18 @@ def worst_see_through(mesh, views=ALL_VIEWS, pixels: int = 400) -> tuple[float, 
     return best
 
 
+def group_faces(mesh) -> dict:
+    """Face indices (ascending) of each group of ``mesh``, by name: one sort of the faces, not a
+    pass over every face a group (a final yarrow frame: 2,414 floret groups of 390k faces)."""
+    fg = np.asarray(mesh.face_group)
+    order = np.argsort(fg, kind="stable")
+    bounds = np.searchsorted(fg[order], np.arange(len(mesh.groups) + 1))
+    return {name: order[bounds[g]:bounds[g + 1]] for g, name in enumerate(mesh.groups)}
+
+
 def floret_faces(mesh) -> dict:
     """Face indices of each floret_<placement> group."""
-    out = {}
-    for g, name in enumerate(mesh.groups):
-        if name.startswith("floret_"):
-            out[int(name.split("_")[1])] = np.nonzero(mesh.face_group == g)[0]
-    return out
+    return {int(name.split("_")[1]): idx for name, idx in group_faces(mesh).items() if name.startswith("floret_")}
 
 
 def floret_heights(mesh, frame_rba, scene) -> dict:
