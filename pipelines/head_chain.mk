@@ -19,9 +19,10 @@
 #    empty outward cone of ALPHA degrees, developing RAY_LEAD frames ahead), disk florets;
 # 5. canopy: fccompose of $(SPECIES).fcc: every floret emerges at its first RBA frame and develops
 #    over its own window, colliding with its neighbours (the receptacle is not simulated);
-# 6. pictures: the development (a sheet of the SHEET frames), the head from the front and from
-#    the side, the hero still at frame HERO (the phase effect: outer florets open, inner ones in
-#    bud; two thirds of the way by default), a GIF.
+# 6. pictures: the development (a sheet of the SHEET frames), the head from the front, from
+#    the side and from below (its back: the receptacle's underside, with its phyllaries and its
+#    stem where head.toml [receptacle] gives them), the hero still at frame HERO (the phase
+#    effect: outer florets open, inner ones in bud; two thirds of the way by default), a GIF.
 
 FRAMES := $(shell sed -n 's/^frames *= *\([0-9]*\).*/\1/p' $(HERE)/$(Q)/head.toml)
 LAST := $(shell printf '%04d' $$(($(FRAMES) - 1)))
@@ -37,7 +38,7 @@ obj: $(foreach t,$(TYPES),$(B)/$(t).weights)
 head: $(B)/head/scene.scn
 dimorph: $(B)/head/typed.scn
 canopy: $(B)/canopy/frame_$(LAST).obj
-pictures: $(foreach p,sheet.png front.png side.png mid.png,$(B)/$(SPECIES)_$(p)) $(B)/$(SPECIES).gif
+pictures: $(foreach p,sheet.png front.png side.png back.png mid.png,$(B)/$(SPECIES)_$(p)) $(B)/$(SPECIES).gif
 
 $(B)/head/scene.scn: $(Q)/head.toml $(B)/quality.txt $(PHYLLO_SRC)
 	rm -rf $(B)/head
@@ -63,6 +64,9 @@ $(B)/$(SPECIES)_front.png: $(B)/canopy/frame_$(LAST).obj colors.toml $(RENDER_SR
 
 $(B)/$(SPECIES)_side.png: $(B)/canopy/frame_$(LAST).obj colors.toml $(RENDER_SRC)
 	$(RENDER) $(VIEWS) --frame -1 --elevation 12 --azimuth 20 --size $(STILL_SIZE) -o $@
+
+$(B)/$(SPECIES)_back.png: $(B)/canopy/frame_$(LAST).obj colors.toml $(RENDER_SRC)
+	$(RENDER) $(VIEWS) --frame -1 --elevation -30 --azimuth 20 --size $(STILL_SIZE) -o $@
 
 $(B)/$(SPECIES)_mid.png: $(B)/canopy/frame_$(LAST).obj colors.toml $(RENDER_SRC)
 	$(RENDER) $(VIEWS) --frame $(if $(HERO),$(HERO),$$(($(FRAMES) * 2 / 3))) --elevation 50 --azimuth 20 --size $(STILL_SIZE) -o $@

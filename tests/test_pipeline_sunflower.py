@@ -16,7 +16,8 @@ What is checked (Owens thesis ch. 9, figs. 9.5, 9.6; ch. 6, figs. 6.2, 6.3):
   than its inner neighbours) and each develops over the same window from its emergence;
 - the final canopy's size is that of the thesis's model (table 4.1: about 130k triangles);
 - if the draft build exists (the golden test builds it): check_sunflower.py's report says OK,
-  the disk floret's proportions and the disk's cover from above included.
+  the disk floret's proportions and the disk's cover from above included, and the head's back
+  clothed in phyllaries (the share of the underside they leave in view from 30 degrees below).
 """
 from __future__ import annotations
 
@@ -200,3 +201,6 @@ def test_draft_build_checks_pass_if_built(species_build):
     assert "ray florets: 34 (expected 34)" in text
     # the disk floret in proportion (anther tube against corolla) and the carpet seen from above
     assert "disk floret (open): anther tube" in text and "disk florets from above cover" in text
+    # the back: rows of phyllaries leave at most a fifth of the underside in view (1.0 when bare)
+    back = re.search(r"bracts leave ([0-9.]+) of the receptacle's underside in view from below, ([0-9.]+) from 30", text)
+    assert back and float(back.group(1)) < 0.15 and float(back.group(2)) <= 0.2, text

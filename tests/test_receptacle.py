@@ -68,3 +68,141 @@ def test_receptacle_bad_keys_are_one_line_errors(tmp_path):
     (tmp_path / "p.toml").write_text(DYNAMIC + "[receptacle]\nsegmnts = 20\n")
     r = run_cli("phyllotaxis", "-q", str(tmp_path / "p.toml"), "-o", str(tmp_path / "out"))
     assert r.returncode == 2 and "did you mean 'segments'" in r.stderr
+
+
+# ---- the phyllaries of the underside and the stem's stump ----------------------------------------
+
+CLOTHED = dict(segments=40, rings=8, underside_rings=5, depth=0.3, stem=0.22, inset=0.003, stem_length=0.8,
+               phyllary_rows=5, phyllaries=21, phyllary_length=0.5, phyllary_width=0.92, phyllary_gap=0.006,
+               phyllary_spread=0.04)
+
+
+def _split(mesh):
+    body = mesh.face_group == mesh.groups.index("receptacle")
+    return mesh.faces[body], mesh.faces[~body]
+
+
+@pytest.mark.parametrize("curve", ["disk", "sphere_cap", "paraboloid", "cone"])
+@pytest.mark.parametrize("spread", [0.0, 0.04, 0.2])
+def test_phyllaries_touch_neither_one_another_nor_the_receptacle(curve, spread):
+    from inflo.tools.collide.tritri import intersecting_pairs
+    prof = builtin_curve(curve, radius=1.0, height=0.3, angle=70.0, samples=512)
+    mesh = receptacle_mesh(prof, ReceptacleOptions(**{**CLOTHED, "phyllary_spread": spread}))
+    assert mesh.groups == ["receptacle", "phyllaries"] and mesh.materials == ["mtl5", "mtl4"]
+    body, ph = _split(mesh)
+    assert len(ph) == 5 * 21 * len(_phyllary_faces())
+    # the receptacle with its stump is still a closed outward solid
+    tm = trimesh.Trimesh(mesh.vertices, body, process=False)
+    tm.remove_unreferenced_vertices()
+    assert tm.is_watertight and tm.volume > 0
+    assert len(intersecting_pairs(mesh.vertices, mesh.faces)) == 0
+
+
+def _phyllary_faces():
+    from inflo.tools.phyllotaxis.receptacle import _phyllary_faces as faces
+    return faces()
+
+
+def test_phyllaries_brute_force_on_a_small_tight_head():
+    """Few, wide bracts on a shallow underside (the sag near its bound): the exact all-pairs test."""
+    from inflo.tools.collide.tritri import intersecting_pairs_brute
+    from inflo.tools.phyllotaxis.receptacle import phyllary_sagitta
+    opts = ReceptacleOptions(segments=12, rings=3, underside_rings=3, depth=0.2, stem=0.3, phyllary_rows=3,
+                             phyllaries=5, phyllary_length=0.6, phyllary_width=0.99, phyllary_gap=0.0055,
+                             phyllary_spread=0.1)
+    assert phyllary_sagitta(opts) < 0.5 * opts.phyllary_gap
+    mesh = receptacle_mesh(builtin_curve("disk", radius=1.0, samples=256), opts)
+    assert len(intersecting_pairs_brute(mesh.vertices, mesh.faces)) == 0
+
+
+def test_phyllaries_are_imbricate_rows_that_hide_the_underside():
+    """Each row on its own offset (the rows nearer the stem outermost), bracts of a row apart,
+    facing out; from below and from the side the underside is mostly hidden, and the mesh grows
+    with the head (every length a fraction of the rim radius)."""
+    from inflo.formats.obj import ObjMesh
+    from inflo.tools.species.checks import region_in_view
+    prof = builtin_curve("disk", radius=1.0, samples=512)
+    opts = ReceptacleOptions(**{**CLOTHED, "phyllary_spread": 0.0})
+    mesh = receptacle_mesh(prof, opts)
+    body, ph = _split(mesh)
+    per = len(_phyllary_faces())
+    nv = mesh.vertices.shape[0] - int(body.max()) - 1
+    first = int(body.max()) + 1
+    pv = mesh.vertices[first:].reshape(5, 21, -1, 3)  # rows x bracts x vertices
+    assert nv == 5 * 21 * pv.shape[2]
+    # distance of every bract vertex from the underside's quarter ellipse (rim r = 1, y = -inset)
+    rim_r, rim_y, stem_r = 1.0, -0.003, 0.22
+    phi = np.linspace(0.0, 0.5 * np.pi, 20001)
+    ell = np.stack([stem_r + (rim_r - stem_r) * np.cos(phi), rim_y - 0.3 * np.sin(phi)], axis=1)
+    tree = __import__("scipy.spatial", fromlist=["cKDTree"]).cKDTree(ell)
+    for j in range(5):
+        v = pv[j].reshape(-1, 3)
+        d, _ = tree.query(np.stack([np.hypot(v[:, 0], v[:, 2]), v[:, 1]], axis=1))
+        assert d.min() == pytest.approx((j + 1) * 0.006, abs=2e-4)
+        assert d.max() <= (j + 1.25) * 0.006 + 2e-4
+        # within a row, the bracts' angular spans are disjoint (their widest: 0.92 of the spacing)
+        ang = np.arctan2(pv[j, :, :, 2], pv[j, :, :, 0])
+        centre = 2 * np.pi * (np.arange(21) + 0.5 * (j % 2)) / 21
+        off = (ang - centre[:, None] + np.pi) % (2 * np.pi) - np.pi
+        assert np.abs(off).max() <= 0.92 * np.pi / 21 + 1e-9
+    # faces point away from the receptacle: down or outward
+    tri = mesh.vertices[ph]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    c = tri.mean(axis=1)
+    outward = n[:, 0] * c[:, 0] + n[:, 2] * c[:, 2] - n[:, 1]
+    assert (outward > 0).all()
+    # the underside (no stump, no disc) from below and from the side, with and without bracts
+    v, f = mesh.vertices, mesh.faces
+    nrm = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    rad = np.hypot(v[:, 0], v[:, 2])
+    body_mask = mesh.face_group == 0
+    under = body_mask & (nrm[:, 1] < -0.2 * np.linalg.norm(nrm, axis=1)) & (rad[f].min(axis=1) > 1e-9)
+    region = ObjMesh(v, f[under])
+    assert region_in_view(ObjMesh(v, ph), region, 0.0, -90.0) < 0.15
+    assert region_in_view(ObjMesh(v, ph), region, 20.0, -35.0) < 0.2
+    assert region_in_view(ObjMesh(v, ph[:0]), region, 20.0, -35.0) == pytest.approx(1.0)
+    # the same head twice the size: the same mesh, twice as large
+    big = receptacle_mesh(builtin_curve("disk", radius=2.0, samples=512),
+                          ReceptacleOptions(**{**CLOTHED, "phyllary_spread": 0.0, "inset": 0.006}))
+    np.testing.assert_allclose(big.vertices, 2 * mesh.vertices, atol=1e-9)
+    assert np.array_equal(big.faces, mesh.faces)
+    assert per * 105 == len(ph)
+
+
+def test_stem_stump_hangs_below_the_underside():
+    prof = builtin_curve("disk", radius=1.0, samples=256)
+    bare = receptacle_mesh(prof, ReceptacleOptions(segments=16, rings=4, underside_rings=3, depth=0.3, stem=0.2))
+    stump = receptacle_mesh(prof, ReceptacleOptions(segments=16, rings=4, underside_rings=3, depth=0.3, stem=0.2,
+                                                    stem_length=1.5))
+    assert len(stump.vertices) == len(bare.vertices) + 16
+    assert stump.vertices[:, 1].min() == pytest.approx(bare.vertices[:, 1].min() - 1.5)
+    low = stump.vertices[-17:-1]
+    np.testing.assert_allclose(np.hypot(low[:, 0], low[:, 2]), 0.2)
+    tm = trimesh.Trimesh(stump.vertices, stump.faces, process=False)
+    assert tm.is_watertight and tm.volume > 0
+
+
+@pytest.mark.parametrize("keys, message", [
+    ("phyllary_rows = 3\nphyllary_width = 1.0\n", "receptacle.phyllary_width in (0, 1)"),
+    ("phyllary_rows = 13\n", "receptacle.phyllary_rows in [0, 12]"),
+    ("stem = 0.0\nstem_length = 1.0\n", "receptacle.stem_length 0 when receptacle.stem is 0"),
+    ("depth = 0.05\nphyllary_rows = 3\n", "receptacle.phyllary_gap at least"),
+])
+def test_phyllary_keys_are_checked(tmp_path, keys, message):
+    (tmp_path / "p.toml").write_text(DYNAMIC + "[receptacle]\nsegments = 16\nrings = 4\n" + keys)
+    r = run_cli("phyllotaxis", "-q", str(tmp_path / "p.toml"), "-o", str(tmp_path / "out"))
+    assert r.returncode == 2 and message in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_phyllaries_follow_the_growing_head(tmp_path):
+    (tmp_path / "p.toml").write_text(DYNAMIC + "[receptacle]\nsegments = 16\nrings = 4\nstem_length = 0.5\n"
+                                     "phyllary_rows = 3\nphyllaries = 8\nphyllary_spread = 0.03\n")
+    r = run_cli("phyllotaxis", "-q", str(tmp_path / "p.toml"), "-o", str(tmp_path / "out"))
+    assert r.returncode == 0, r.stderr
+    meshes = [read_obj(f) for f in list_obj_sequence(tmp_path / "out" / "receptacle")]
+    assert all(np.array_equal(m.faces, meshes[0].faces) for m in meshes)
+    from inflo.tools.collide.tritri import intersecting_pairs
+    assert all(len(intersecting_pairs(m.vertices, m.faces)) == 0 for m in meshes)
+    assert meshes[-1].materials == ["mtl5", "mtl4"]

@@ -42,7 +42,15 @@ from scipy.spatial import cKDTree
 
 from inflo.formats.obj import read_obj
 from inflo.formats.species import species_of
-from inflo.tools.species.checks import check_head, check_individuals, check_phase, floret_faces, view_coverage
+from inflo.tools.species.checks import (
+    check_back,
+    check_head,
+    check_individuals,
+    check_phase,
+    floret_faces,
+    receptacle_body,
+    view_coverage,
+)
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 SPECIES = species_of(__file__)
@@ -113,11 +121,13 @@ def main(build: Path) -> int:
     check_phase(head, bud=BUD, failures=failures)
 
     # a dense disk: the receptacle left in view from above at the last frame
-    visible = 1.0 - view_coverage(read_obj(head.canopy[-1]), axis=1, region=read_obj(head.receptacle[-1]))
+    visible = 1.0 - view_coverage(read_obj(head.canopy[-1]), axis=1, region=receptacle_body(read_obj(head.receptacle[-1])))
     print(f"receptacle in view from above at the last frame: {100 * visible:.1f} % (<= {100 * RECEPTACLE_VISIBLE:.1f} %)")
     if visible > RECEPTACLE_VISIBLE:
         failures.append(f"{100 * visible:.1f} % of the receptacle in view from above, expected <= "
                         f"{100 * RECEPTACLE_VISIBLE:.1f} %")
+
+    check_back(head, CHECK["back_in_view"], failures)
 
     # development the right way round: rays and bracts open with the head, not round a bare meristem
     disk = [p for p in scene.placements if p.type == "disk"]

@@ -25,7 +25,10 @@ Prints, and fails (exit 1) on any of:
   ``anther_width``, or its exserted length (anther top over corolla top) over the corolla's height
   outside ``anther_exserted``; in the last canopy frame, the disk florets seen from above cover
   less than ``disk_cover`` of their silhouette's convex hull (checks.view_coverage: the corollas'
-  mouths must touch, a carpet).
+  mouths must touch, a carpet);
+- **a bare back**: in the last frame, the receptacle's underside left in view by its phyllaries
+  (checks.underside_in_view) from 30 degrees below, the worst of four azimuths, over
+  ``back_in_view`` (an involucre of imbricate phyllaries in several series clothes the head's back).
 """
 from __future__ import annotations
 
@@ -37,6 +40,7 @@ import numpy as np
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.species import species_of
 from inflo.tools.species.checks import (
+    check_back,
     check_development,
     check_head,
     check_individuals,
@@ -97,6 +101,7 @@ def main(build: Path) -> int:
     check_development(head, failures=failures, emerged=CHECK["emerged"])
     check_individuals(head, failures=failures, least=CHECK["individual_cv"])
     check_disk(build, head, failures)
+    check_back(head, CHECK["back_in_view"], failures)
     print("OK" if not failures else "FAILED: " + "; ".join(failures))
     return 0 if not failures else 1
 

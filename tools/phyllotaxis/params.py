@@ -26,7 +26,7 @@ from pathlib import Path
 from inflo.formats.errors import FormatError, InputError, parse_toml, shorten
 from inflo.formats.toml_params import LineStyle, ParamText, show_short, unknown_name
 
-from .receptacle import ReceptacleOptions
+from .receptacle import PHYLLARY_VERTICES, ReceptacleOptions, phyllary_sagitta
 
 __all__ = ["SCHEMA", "Params", "Surface", "Primordia", "Dynamics", "Compound", "Hierarchy", "read_params",
            "parse_params", "BUILTIN_CURVES", "DYNAMIC_MODES", "DEVELOPMENT_ORDERS"]
@@ -178,6 +178,7 @@ MAX_SAMPLES = 10_000_000
 MAX_SEGMENTS = 4096
 MAX_RINGS = 1024
 MAX_RECEPTACLE_VERTICES = 1_000_000
+MAX_PHYLLARY_ROWS = 12
 MAX_ROOM_ITERATIONS = 1000
 MAX_COUNT = 10_000_000  # primordia (count and the max_count guards)
 MAX_FRAME = 10_000_000  # a frame number (frame_end)
@@ -377,7 +378,7 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         for key, high in (("segments", MAX_SEGMENTS), ("rings", MAX_RINGS), ("underside_rings", MAX_RINGS)):
             if rc[key] > high:
                 fail("receptacle", key, f"<= {high}")
-        if rc["segments"] * (rc["rings"] + rc["underside_rings"]) > MAX_RECEPTACLE_VERTICES:
+        if rc["segments"] * (rc["rings"] + rc["underside_rings"] + 1) > MAX_RECEPTACLE_VERTICES:
             fail("receptacle", "segments", f"x (rings + underside_rings) <= {MAX_RECEPTACLE_VERTICES} "
                  "(the receptacle's vertices a frame)")
         if not 0 < rc["depth"] <= 1000:
@@ -386,6 +387,34 @@ def _check_ranges(p: dict, w: ParamText) -> None:
             fail("receptacle", "stem", "in [0, 1) (a fraction of the rim radius)")
         if rc["inset"] < 0:
             fail("receptacle", "inset", ">= 0 scene units")
+        if not 0 <= rc["phyllary_rows"] <= MAX_PHYLLARY_ROWS:
+            fail("receptacle", "phyllary_rows", f"in [0, {MAX_PHYLLARY_ROWS}] (0: none)")
+        if not 3 <= rc["phyllaries"] <= MAX_SEGMENTS:
+            fail("receptacle", "phyllaries", f"in [3, {MAX_SEGMENTS}] (bracts a row)")
+        if not 0 <= rc["phyllary_top"] < 0.9:
+            fail("receptacle", "phyllary_top", "in [0, 0.9) (a share of the underside's arc)")
+        if not 0 < rc["phyllary_length"] <= 0.92 - rc["phyllary_top"]:
+            fail("receptacle", "phyllary_length", f"in (0, {0.92 - rc['phyllary_top']:.4g}] (a share of the underside's "
+                 "arc, with phyllary_top at most 0.92)")
+        if not 0 < rc["phyllary_width"] < 1:
+            fail("receptacle", "phyllary_width", "in (0, 1) (a share of the bracts' spacing: they never overlap)")
+        if not 0 < rc["phyllary_gap"] <= 0.05:
+            fail("receptacle", "phyllary_gap", "in (0, 0.05] (a fraction of the rim radius)")
+        if not 0 <= rc["phyllary_spread"] <= 1:
+            fail("receptacle", "phyllary_spread", "in [0, 1] (a fraction of the rim radius)")
+        if not 0 <= rc["stem_length"] <= 1000:
+            fail("receptacle", "stem_length", "in [0, 1000] (a fraction of the rim radius; 0: none)")
+        if rc["stem_length"] > 0 and rc["stem"] == 0:
+            fail("receptacle", "stem_length", "0 when receptacle.stem is 0 (a stem of no width)")
+        if rc["phyllary_rows"] and phyllary_sagitta(ReceptacleOptions(**rc)) >= 0.5 * rc["phyllary_gap"]:
+            fail("receptacle", "phyllary_gap", f"at least {2 * phyllary_sagitta(ReceptacleOptions(**rc)):.4g} with "
+                 "this depth, stem and phyllary_length (twice the sag of a phyllary's edges at the underside's "
+                 "tightest bend)")
+        if rc["phyllary_material"] < 0:
+            fail("receptacle", "phyllary_material", ">= 0")
+        if rc["phyllary_rows"] and rc["phyllary_rows"] * rc["phyllaries"] * PHYLLARY_VERTICES > MAX_RECEPTACLE_VERTICES:
+            fail("receptacle", "phyllary_rows", f"x phyllaries x {PHYLLARY_VERTICES} <= {MAX_RECEPTACLE_VERTICES} "
+                 "(the phyllaries' vertices a frame)")
     if "compound" in p:
         c = p["compound"]
         if not 0 < c["head_fill"] <= 1e3:

@@ -10,8 +10,19 @@ vertex count and order in every frame (an animation fccompose and canopy-export 
 The mesh is closed: the **top**, C rotated about +Y and moved ``inset`` below the florets' bases
 along the surface normal (so that the florets stand on it without touching it), from the apex to
 the rim; and the **underside**, a quarter ellipse from the rim in to a stem of radius
-``stem · rim radius`` at ``depth · rim radius`` below the rim, closed by a disc. Rings of the top
+``stem · rim radius`` at ``depth · rim radius`` below the rim, closed by a disc (with
+``stem_length`` > 0, at the end of a stump of the stem that long, in rim radii). Rings of the top
 are spaced evenly in arc length; ``segments`` vertices per ring.
+
+With ``phyllary_rows`` > 0 the underside carries the **phyllaries** of the involucre's outer
+series (the back of a sunflower or gaillardia head: "the involucre ... of imbricate bracts in
+several series", thesis sec. 4.5, figs. 9.4, 9.6): rows of ovate, acuminate bracts lying on the
+underside, each row on its own offset surface along the normal (``phyllary_gap`` apart, the row
+nearest the stem outermost), staggered half a spacing against the next, its bracts narrower than
+their spacing, its tips overlapping the bases of the row above like roof tiles and lifting off
+(``phyllary_spread``) only where no row lies over them. Every distance is a fraction of the rim
+radius, so the bracts grow with the head and never touch one another or the receptacle
+(:func:`phyllaries`).
 """
 from __future__ import annotations
 
@@ -24,7 +35,7 @@ from inflo.formats.obj import ObjMesh
 
 from .surface import Profile
 
-__all__ = ["ReceptacleOptions", "receptacle_mesh", "receptacle_topology"]
+__all__ = ["PHYLLARY_VERTICES", "ReceptacleOptions", "phyllaries", "phyllary_sagitta", "receptacle_mesh", "receptacle_topology"]
 
 
 @dataclass(frozen=True)
@@ -38,17 +49,27 @@ class ReceptacleOptions:
     stem: float = 0.25
     inset: float = 0.0
     material: int = 5
+    stem_length: float = 0.0
+    phyllary_rows: int = 0
+    phyllaries: int = 21
+    phyllary_length: float = 0.45
+    phyllary_width: float = 0.85
+    phyllary_gap: float = 0.006
+    phyllary_spread: float = 0.0
+    phyllary_top: float = 0.0
+    phyllary_material: int = 4
 
 
 def receptacle_topology(opts: ReceptacleOptions) -> np.ndarray:
     """(m, 3) int32 triangles (outward facing) of the closed receptacle; the same every frame.
 
     Vertex layout: 0 = apex; then ``rings`` top rings (the last is the rim), ``underside_rings``
-    rings of the underside (the last is the stem's rim), then the centre of the bottom disc.
+    rings of the underside (the last is the stem's rim), with ``stem_length`` > 0 one more ring
+    (the stem's cut end), then the centre of the bottom disc.
     Every ring has ``segments`` vertices, angle ``2 pi k / segments`` from +X toward +Z.
     """
     n = int(opts.segments)
-    nr = int(opts.rings) + int(opts.underside_rings)
+    nr = int(opts.rings) + int(opts.underside_rings) + (1 if opts.stem_length > 0 else 0)
     faces = []
     k = np.arange(n)
     k1 = (k + 1) % n
@@ -67,7 +88,9 @@ def receptacle_topology(opts: ReceptacleOptions) -> np.ndarray:
 
 
 def receptacle_mesh(prof: Profile, opts: ReceptacleOptions) -> ObjMesh:
-    """The closed receptacle of generating curve ``prof`` (already scaled to the frame's size)."""
+    """The closed receptacle of generating curve ``prof`` (already scaled to the frame's size),
+    with the phyllaries on its underside when ``opts.phyllary_rows`` > 0 (their vertices after the
+    receptacle's, group ``phyllaries``, ``usemtl mtl<phyllary_material>``)."""
     n, nt, nu = int(opts.segments), int(opts.rings), int(opts.underside_rings)
     ang = 2.0 * math.pi * np.arange(n) / n
     c, s = np.cos(ang), np.sin(ang)
@@ -81,8 +104,10 @@ def receptacle_mesh(prof: Profile, opts: ReceptacleOptions) -> ObjMesh:
     size = max(float(prof.r.max()), 1e-12)
     stem_r = opts.stem * size
     phi = np.linspace(0.0, 0.5 * math.pi, nu + 1)[1:]
-    r_low = stem_r + (rim_r - stem_r) * np.cos(phi)
-    y_low = rim_y - opts.depth * size * np.sin(phi)
+    r_low, y_low = _underside(phi, rim_r, rim_y, stem_r, opts.depth * size)
+    if opts.stem_length > 0:  # a stump of the stem: its cut end stem_length x size below
+        r_low = np.concatenate([r_low, [stem_r]])
+        y_low = np.concatenate([y_low, [y_low[-1] - opts.stem_length * size]])
     rr = np.concatenate([r_top, r_low])
     yy = np.concatenate([y_top, y_low])
     ring = np.empty((len(rr), n, 3))
@@ -91,5 +116,121 @@ def receptacle_mesh(prof: Profile, opts: ReceptacleOptions) -> ObjMesh:
     ring[:, :, 2] = rr[:, None] * s[None, :]
     verts = np.concatenate([[[0.0, apex_y, 0.0]], ring.reshape(-1, 3), [[0.0, float(y_low[-1]), 0.0]]])
     faces = receptacle_topology(opts)
-    return ObjMesh(verts, faces, groups=["receptacle"], face_group=np.zeros(len(faces), np.int32),
-                   materials=[f"mtl{int(opts.material)}"], face_material=np.zeros(len(faces), np.int32))
+    if opts.phyllary_rows <= 0:
+        return ObjMesh(verts, faces, groups=["receptacle"], face_group=np.zeros(len(faces), np.int32),
+                       materials=[f"mtl{int(opts.material)}"], face_material=np.zeros(len(faces), np.int32))
+    pv, pf = phyllaries(rim_r, rim_y, stem_r, opts.depth * size, size, opts)
+    part = np.concatenate([np.zeros(len(faces), np.int32), np.ones(len(pf), np.int32)])
+    return ObjMesh(np.concatenate([verts, pv]), np.concatenate([faces, pf + len(verts)]).astype(np.int32),
+                   groups=["receptacle", "phyllaries"], face_group=part,
+                   materials=[f"mtl{int(opts.material)}", f"mtl{int(opts.phyllary_material)}"], face_material=part)
+
+
+def _underside(phi, rim_r: float, rim_y: float, stem_r: float, depth: float):
+    """(r, y) of the underside's quarter ellipse at parameter ``phi`` (0 at the rim, pi/2 at the
+    stem): semi-axes ``rim_r - stem_r`` across and ``depth`` down, centred at (stem_r, rim_y)."""
+    return stem_r + (rim_r - stem_r) * np.cos(phi), rim_y - depth * np.sin(phi)
+
+
+# a phyllary's half-width along its length (0 = base, 1 = tip), a share of its widest: broadly
+# ovate, widest a third of the way up, then narrowed into a long acuminate tip
+_OUTLINE_U = np.array([0.0, 0.15, 0.35, 0.55, 0.75, 0.9, 1.0])
+_OUTLINE_W = np.array([0.7, 0.92, 1.0, 0.9, 0.55, 0.22, 0.0])
+_ALONG = 16  # stations from base to tip (the tip one vertex)
+_ACROSS = 5  # vertices across (odd: the midrib in the middle)
+#: vertices of one phyllary
+PHYLLARY_VERTICES = (_ALONG - 1) * _ACROSS + 1
+
+
+def phyllaries(rim_r: float, rim_y: float, stem_r: float, depth: float, size: float,
+               opts: ReceptacleOptions) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (v, 3) and outward triangles (f, 3) of the ``phyllary_rows`` rows of
+    ``phyllaries`` bracts on the underside (the quarter ellipse of :func:`_underside`).
+
+    Row j (0 at the rim) spans the meridian arc ``[t_j, t_j + l]`` of the underside, l =
+    ``phyllary_length`` x its arc length, its base toward the stem; the rows are spaced evenly so
+    that the first one's tip is ``phyllary_top`` of the arc below the rim (0: at the rim) and the
+    last one's base 4 % of the arc above the stem. Row j lies ``(j + 1) x phyllary_gap x size`` off the underside along its normal, so the
+    rows nearer the stem lie over the bases of those above (the outer series of an imbricate
+    involucre); a low midrib (a quarter of the gap) keels each bract. Its bracts are centred at
+    angles ``2 pi (k + j/2) / phyllaries`` and at most ``phyllary_width`` of that spacing wide.
+    The part of a row that no later row covers (its upper ``step``) lifts off the surface towards
+    its tip by up to ``phyllary_spread x size``. Rows on separate offset surfaces (outward, on the
+    convex side of the underside, so they never fold) and bracts apart within a row: the bracts
+    touch neither one another nor the receptacle, whatever the size, as long as a bract's flat
+    triangles stray from their offset surface by less than the space between two rows
+    (:func:`phyllary_sagitta`, which ``phyllotaxis`` checks).
+    """
+    rows, per = int(opts.phyllary_rows), int(opts.phyllaries)
+    # the underside's arc length as a function of its parameter (fine table, inverted by interp)
+    phi = np.linspace(0.0, 0.5 * math.pi, 1025)
+    r, y = _underside(phi, rim_r, rim_y, stem_r, depth)
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(r), np.diff(y)))])
+    total = float(arc[-1])
+    length = opts.phyllary_length * total
+    t0, t_end = opts.phyllary_top * total, 0.96 * total
+    step = (t_end - length - t0) / (rows - 1) if rows > 1 else 0.0
+    step = max(step, 0.0)
+    u = np.linspace(0.0, 1.0, _ALONG)
+    half = np.interp(u, _OUTLINE_U, _OUTLINE_W) * opts.phyllary_width * math.pi / per
+    v_across = np.linspace(-1.0, 1.0, _ACROSS)
+    keel = 0.25 * opts.phyllary_gap * size * (1.0 - v_across ** 2)
+    out_v, out_f = [], []
+    base_faces = _phyllary_faces()
+    nv = PHYLLARY_VERTICES
+    count = 0
+    for j in range(rows):
+        tip = t0 + j * step
+        a = tip + length * (1.0 - u)  # arc of each station (base first)
+        ph = np.interp(a, arc, phi)
+        pr, py = _underside(ph, rim_r, rim_y, stem_r, depth)
+        # the outward normal of the ellipse (r, y) = (stem + A cos, rim - B sin): (B cos, -A sin)
+        nr_, ny_ = depth * np.cos(ph), -(rim_r - stem_r) * np.sin(ph)
+        norm = np.hypot(nr_, ny_)
+        norm = np.where(norm > 0, norm, 1.0)
+        nr_, ny_ = nr_ / norm, ny_ / norm
+        free = 0.7 * step if rows > 1 else 0.7 * length
+        lift = opts.phyllary_spread * size * np.clip((tip + free - a) / max(free, 1e-300), 0.0, 1.0) ** 2
+        off = (j + 1) * opts.phyllary_gap * size + lift  # (stations,)
+        # stations x across: offset, radius, height and angle of every vertex
+        o = off[:, None] + keel[None, :]
+        vr = pr[:, None] + o * nr_[:, None]
+        vy = py[:, None] + o * ny_[:, None]
+        dth = half[:, None] * v_across[None, :]
+        for k in range(per):
+            th = 2.0 * math.pi * (k + 0.5 * (j % 2)) / per + dth
+            xyz = np.stack([vr * np.cos(th), vy, vr * np.sin(th)], axis=-1)
+            # the tip: one vertex on the midrib
+            pts = np.concatenate([xyz[:-1].reshape(-1, 3), xyz[-1:, _ACROSS // 2]])
+            out_v.append(pts)
+            out_f.append(base_faces + count * nv)
+            count += 1
+    return np.concatenate(out_v), np.concatenate(out_f).astype(np.int32)
+
+
+def phyllary_sagitta(opts: ReceptacleOptions) -> float:
+    """How far (a fraction of the rim radius) a phyllary's triangle edges along the meridian
+    stray inward from the curved offset surface they lie on, at the underside's tightest bend:
+    ``d^2 / (8 rho)``, d a station's arc length, rho the least radius of curvature of the quarter
+    ellipse (semi-axes ``1 - stem`` and ``depth``: ``min(a^2/b, b^2/a)``). The bracts of two rows
+    stay apart while this is under half of ``phyllary_gap`` (a quarter goes to the midrib)."""
+    a, b = max(1.0 - opts.stem, 1e-12), max(opts.depth, 1e-12)
+    phi = np.linspace(0.0, 0.5 * math.pi, 1025)
+    total = float(np.sum(np.hypot(np.diff(a * np.cos(phi)), np.diff(b * np.sin(phi)))))
+    station = opts.phyllary_length * total / (_ALONG - 1)
+    return station * station / (8.0 * min(a * a / b, b * b / a))
+
+
+def _phyllary_faces() -> np.ndarray:
+    """Triangles of one phyllary: a grid of ``_ALONG - 1`` stations x ``_ACROSS`` vertices (base
+    first), then a fan to the tip vertex; wound to face away from the receptacle."""
+    faces = []
+    for i in range(_ALONG - 2):
+        for k in range(_ACROSS - 1):
+            a, b = i * _ACROSS + k, i * _ACROSS + k + 1
+            c, d = a + _ACROSS, b + _ACROSS
+            faces += [(a, c, b), (b, c, d)]
+    last, tip = (_ALONG - 2) * _ACROSS, (_ALONG - 1) * _ACROSS
+    for k in range(_ACROSS - 1):
+        faces.append((last + k, tip, last + k + 1))
+    return np.asarray(faces, np.int32)

@@ -259,6 +259,56 @@ def region_in_view(mesh, region, azimuth: float, elevation: float, pixels: int =
     return float((label == 2).sum()) / alone
 
 
+def receptacle_body(receptacle):
+    """The receptacle itself (its group ``receptacle``) of a ``[receptacle]`` mesh, without the
+    phyllaries on its underside; the mesh as it is when it has none."""
+    from inflo.formats.obj import ObjMesh
+
+    groups = list(receptacle.groups)
+    if "phyllaries" not in groups or receptacle.face_group is None:
+        return receptacle
+    keep = np.asarray(receptacle.face_group) == groups.index("receptacle")
+    return ObjMesh(receptacle.vertices, receptacle.faces[keep])
+
+
+def underside_in_view(receptacle, front=None, elevation: float = -30.0,
+                      azimuths=(0.0, 90.0, 180.0, 270.0)) -> tuple:
+    """How bare a head's back is: the share of its receptacle's underside (the body's faces
+    turned down, not the stem's disc) that its phyllaries (the group ``phyllaries`` of a
+    ``[receptacle]`` mesh), with the mesh ``front`` (the canopy: bracts reflexed over the rim) if
+    given, leave in view, from straight below and, the worst of ``azimuths``, from ``elevation``
+    (:func:`region_in_view`). (1.0, 1.0) for a receptacle with no phyllaries."""
+    from inflo.formats.obj import ObjMesh
+
+    v, f = np.asarray(receptacle.vertices, np.float64), np.asarray(receptacle.faces)
+    groups = list(receptacle.groups)
+    if "phyllaries" not in groups or receptacle.face_group is None:
+        return 1.0, 1.0
+    body = np.asarray(receptacle.face_group) == groups.index("receptacle")
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    length = np.sqrt(np.sum(n * n, axis=1))
+    radius = np.hypot(v[:, 0], v[:, 2])
+    under = body & (n[:, 1] < -0.2 * length) & (radius[f].min(axis=1) > 1e-9 * max(float(radius.max()), 1e-300))
+    region, bracts = ObjMesh(v, f[under]), ObjMesh(v, f[~body])
+    if front is not None and len(front.faces):
+        bracts = ObjMesh(np.vstack([v, np.asarray(front.vertices, np.float64)]),
+                         np.vstack([f[~body], np.asarray(front.faces) + len(v)]))
+    below = region_in_view(bracts, region, 0.0, -90.0)
+    return below, max(region_in_view(bracts, region, float(a), float(elevation)) for a in azimuths)
+
+
+def check_back(head, most: float, failures: list) -> tuple:
+    """The head's back clothed: prints :func:`underside_in_view` of the last receptacle frame
+    (behind its phyllaries and the last canopy frame) and fails when more than ``most`` of the
+    underside stays in view from 30 degrees below."""
+    below, side = underside_in_view(read_obj(head.receptacle[-1]), read_obj(head.canopy[-1]))
+    print(f"the head's back: its phyllaries and bracts leave {below:.3f} of the receptacle's underside in view from below, "
+          f"{side:.3f} from 30 degrees below (at most {most})")
+    if side > most:
+        failures.append(f"the head's back: {side:.3f} of the underside bare from 30 degrees below")
+    return below, side
+
+
 ALL_VIEWS = ((0.0, 90.0), (0.0, -90.0)) + tuple((float(az), float(el)) for el in (35, 0, -35)
                                                   for az in range(0, 360, 30))
 
@@ -351,13 +401,17 @@ def check_head(build: Path, *, rays: int | None, failures: list, per_frame=None,
         n = len(intersecting_pairs(mesh.vertices, mesh.faces, tri_part=mesh.face_group))
         rec = read_obj(receptacle[min(i, len(receptacle) - 1)])
         nr = len(intersecting_pairs_between(mesh.vertices, mesh.faces, rec.vertices, rec.faces))
+        # a receptacle with phyllaries on its underside: they touch neither one another nor it
+        clothed = "phyllaries" in rec.groups
+        ns = len(intersecting_pairs(rec.vertices, rec.faces)) if clothed else 0
         total_pairs += n
-        total_rec += nr
-        if n or nr or i % 10 == 0 or i == len(canopy) - 1:
+        total_rec += nr + ns
+        if n or nr or ns or i % 10 == 0 or i == len(canopy) - 1:
             print(f"  frame {i:3d}: {len(mesh.faces)} triangles, {len(mesh.groups)} florets, {n} intersecting pairs, "
-                  f"{nr} with the receptacle")
-        if n or nr:
-            failures.append(f"frame {i}: {n} intersecting pairs, {nr} with the receptacle")
+                  f"{nr} with the receptacle" + (f", {ns} within it (phyllaries)" if clothed else ""))
+        if n or nr or ns:
+            failures.append(f"frame {i}: {n} intersecting pairs, {nr} with the receptacle"
+                            + (f", {ns} within it" if clothed else ""))
         if per_frame is not None:
             per_frame(i, mesh)
     last = mesh
