@@ -539,7 +539,8 @@ def check_individuals(head: Head, *, failures: list, least: float = 0.02) -> dic
 def main(argv=None) -> int:
     """``python -m inflo.tools.species.checks PIPELINE_DIR BUILD_DIR``: the shared report of a head
     whose facts are all in the [check] table of its species.toml (``rays``, ``bud``: the
-    phase effect's bud height; a species with facts of its own has its check_<species>.py)."""
+    phase effect's bud height, ``back_in_view``: :func:`check_back`; a species with facts of its
+    own has its check_<species>.py)."""
     import sys
 
     from inflo.formats.species import read_species
@@ -553,6 +554,8 @@ def main(argv=None) -> int:
     head = check_head(Path(args[1]), rays=facts.get("rays"), failures=failures)
     if "bud" in facts:
         check_phase(head, bud=facts["bud"], failures=failures)
+    if "back_in_view" in facts:
+        check_back(head, facts["back_in_view"], failures)
     print("OK" if not failures else "FAILED: " + "; ".join(failures))
     return 0 if not failures else 1
 
