@@ -22,7 +22,9 @@ Prints, and fails (exit 1) on any of:
   view_coverage along Y); the disk florets are reshaped by their neighbours (fig. 9.8: at least
   ``reshaped_min`` of them deviate from their template by more than ``reshaped_by``, see
   :func:`deviations`); the rays spread outward (their mean angle below the horizontal, base to
-  ligule tip, at most ``ray_droop_max`` degrees).
+  ligule tip, at most ``ray_droop_max`` degrees); the heads' backs clothed (their phyllaries
+  and the florets leave at most ``back_in_view`` of the six undersides in view from 30 degrees
+  below, checks.check_back; no phyllary crosses another, a receptacle or a floret in any frame).
 """
 from __future__ import annotations
 
@@ -35,7 +37,14 @@ from scipy.stats import spearmanr
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.placement import placement_matrix
 from inflo.formats.species import species_of
-from inflo.tools.species.checks import check_head, check_individuals, floret_faces, frames_with_contacts, view_coverage
+from inflo.tools.species.checks import (
+    check_back,
+    check_head,
+    check_individuals,
+    floret_faces,
+    frames_with_contacts,
+    view_coverage,
+)
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 CHECK = species_of(__file__).check
@@ -105,6 +114,7 @@ def main(build: Path) -> int:
     failures: list = []
     head = check_head(build, rays=None, failures=failures, scene="typed.scn", receptacle="receptacles.obj")
     check_individuals(head, failures=failures)  # no clones (dyssodia.fcc's variation line)
+    check_back(head, CHECK["back_in_view"], failures)  # the heads' undersides clothed in phyllaries
     scene = head.scene
     groups = np.array([p.group for p in scene.placements])
     types = np.array(head.types)

@@ -82,8 +82,13 @@ def main(src: Path, receptacle: Path, ring: float, tilt: float, drop: float, dst
     write_scn(dst, scene, header=f"{HEADS} copies of {src.name} ({what})")
     write_scn(dst_obstacles, obstacles, header=f"the {HEADS} receptacles as obstacles ({what})")
     n = len(rec.faces)
-    mesh = ObjMesh(np.concatenate(verts), np.concatenate(faces), groups=[f"receptacle_{k}" for k in range(HEADS)],
-                   face_group=np.repeat(np.arange(HEADS), n), materials=rec.materials,
+    # one group a head (receptacle_k), and with phyllaries on its underside a second (phyllaries_k)
+    parts = list(rec.groups) if rec.face_group is not None and "phyllaries" in rec.groups else ["receptacle"]
+    part = np.zeros(n, np.int64) if len(parts) == 1 else np.asarray(rec.face_group, np.int64)
+    mesh = ObjMesh(np.concatenate(verts), np.concatenate(faces),
+                   groups=[f"{g}_{k}" for k in range(HEADS) for g in parts],
+                   face_group=(np.repeat(np.arange(HEADS), n) * len(parts) + np.tile(part, HEADS)).astype(np.int32),
+                   materials=rec.materials,
                    face_material=None if rec.face_material is None else np.tile(rec.face_material, HEADS))
     write_obj(dst_receptacles, mesh)
     return 0

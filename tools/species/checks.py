@@ -259,16 +259,26 @@ def region_in_view(mesh, region, azimuth: float, elevation: float, pixels: int =
     return float((label == 2).sum()) / alone
 
 
+def _clothed(receptacle) -> bool:
+    """Whether a receptacle mesh carries phyllaries (a group ``phyllaries``, or ``phyllaries_k``
+    for the k-th of several heads)."""
+    return receptacle.face_group is not None and any(g.startswith("phyllaries") for g in receptacle.groups)
+
+
+def _body_faces(receptacle) -> np.ndarray:
+    """(m,) bool: the faces of the receptacle itself (not its phyllaries)."""
+    names = np.array([g.startswith("phyllaries") for g in receptacle.groups] + [False])
+    return ~names[np.asarray(receptacle.face_group)]
+
+
 def receptacle_body(receptacle):
-    """The receptacle itself (its group ``receptacle``) of a ``[receptacle]`` mesh, without the
-    phyllaries on its underside; the mesh as it is when it has none."""
+    """The receptacle itself (its groups but ``phyllaries``) of a ``[receptacle]`` mesh, without
+    the phyllaries on its underside; the mesh as it is when it has none."""
     from inflo.formats.obj import ObjMesh
 
-    groups = list(receptacle.groups)
-    if "phyllaries" not in groups or receptacle.face_group is None:
+    if not _clothed(receptacle):
         return receptacle
-    keep = np.asarray(receptacle.face_group) == groups.index("receptacle")
-    return ObjMesh(receptacle.vertices, receptacle.faces[keep])
+    return ObjMesh(receptacle.vertices, receptacle.faces[_body_faces(receptacle)])
 
 
 def underside_in_view(receptacle, front=None, elevation: float = -30.0,
@@ -281,10 +291,9 @@ def underside_in_view(receptacle, front=None, elevation: float = -30.0,
     from inflo.formats.obj import ObjMesh
 
     v, f = np.asarray(receptacle.vertices, np.float64), np.asarray(receptacle.faces)
-    groups = list(receptacle.groups)
-    if "phyllaries" not in groups or receptacle.face_group is None:
+    if not _clothed(receptacle):
         return 1.0, 1.0
-    body = np.asarray(receptacle.face_group) == groups.index("receptacle")
+    body = _body_faces(receptacle)
     n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
     length = np.sqrt(np.sum(n * n, axis=1))
     radius = np.hypot(v[:, 0], v[:, 2])
@@ -402,7 +411,7 @@ def check_head(build: Path, *, rays: int | None, failures: list, per_frame=None,
         rec = read_obj(receptacle[min(i, len(receptacle) - 1)])
         nr = len(intersecting_pairs_between(mesh.vertices, mesh.faces, rec.vertices, rec.faces))
         # a receptacle with phyllaries on its underside: they touch neither one another nor it
-        clothed = "phyllaries" in rec.groups
+        clothed = _clothed(rec)
         ns = len(intersecting_pairs(rec.vertices, rec.faces)) if clothed else 0
         total_pairs += n
         total_rec += nr + ns
