@@ -201,6 +201,6 @@ def test_draft_build_checks_pass_if_built(species_build):
     assert "ray florets: 34 (expected 34)" in text
     # the disk floret in proportion (anther tube against corolla) and the carpet seen from above
     assert "disk floret (open): anther tube" in text and "disk florets from above cover" in text
-    # the back: rows of phyllaries leave at most a fifth of the underside in view (1.0 when bare)
+    # the back: rows of phyllaries leave at most a quarter of the underside in view (1.0 when bare)
     back = re.search(r"bracts leave ([0-9.]+) of the receptacle's underside in view from below, ([0-9.]+) from 30", text)
-    assert back and float(back.group(1)) < 0.15 and float(back.group(2)) <= 0.2, text
+    assert back and float(back.group(1)) < 0.15 and float(back.group(2)) <= 0.25, text

@@ -104,12 +104,13 @@ def _phyllary_faces():
 
 
 def test_phyllaries_brute_force_on_a_small_tight_head():
-    """Few, wide bracts on a shallow underside (the sag near its bound): the exact all-pairs test."""
+    """Few, wide bracts on a shallow underside (the sag near its bound), varied the most: the exact
+    all-pairs test."""
     from inflo.tools.collide.tritri import intersecting_pairs_brute
     from inflo.tools.phyllotaxis.receptacle import phyllary_sagitta
     opts = ReceptacleOptions(segments=12, rings=3, underside_rings=3, depth=0.2, stem=0.3, phyllary_rows=3,
                              phyllaries=5, phyllary_length=0.6, phyllary_width=0.99, phyllary_gap=0.0055,
-                             phyllary_spread=0.1)
+                             phyllary_spread=0.1, phyllary_variation=0.3)
     assert phyllary_sagitta(opts) < 0.5 * opts.phyllary_gap
     mesh = receptacle_mesh(builtin_curve("disk", radius=1.0, samples=256), opts)
     assert len(intersecting_pairs_brute(mesh.vertices, mesh.faces)) == 0
@@ -140,11 +141,15 @@ def test_phyllaries_are_imbricate_rows_that_hide_the_underside():
         d, _ = tree.query(np.stack([np.hypot(v[:, 0], v[:, 2]), v[:, 1]], axis=1))
         assert d.min() == pytest.approx((j + 1) * 0.006, abs=2e-4)
         assert d.max() <= (j + 1.25) * 0.006 + 2e-4
-        # within a row, the bracts' angular spans are disjoint (their widest: 0.92 of the spacing)
+        # within a row, every bract inside its own slot of 2 pi / 21 (so the spans are disjoint),
+        # at most 0.92 of the slot wide, and no two alike (seeded variation)
         ang = np.arctan2(pv[j, :, :, 2], pv[j, :, :, 0])
         centre = 2 * np.pi * (np.arange(21) + 0.5 * (j % 2)) / 21
         off = (ang - centre[:, None] + np.pi) % (2 * np.pi) - np.pi
-        assert np.abs(off).max() <= 0.92 * np.pi / 21 + 1e-9
+        assert np.abs(off).max() < np.pi / 21
+        span = off.max(axis=1) - off.min(axis=1)
+        assert span.max() <= 2 * 0.92 * np.pi / 21 + 1e-9
+        assert np.std(span) > 0.01 * span.mean()
     # faces point away from the receptacle: down or outward
     tri = mesh.vertices[ph]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
@@ -167,6 +172,15 @@ def test_phyllaries_are_imbricate_rows_that_hide_the_underside():
     np.testing.assert_allclose(big.vertices, 2 * mesh.vertices, atol=1e-9)
     assert np.array_equal(big.faces, mesh.faces)
     assert per * 105 == len(ph)
+    # the variation is seeded: the same bracts again; another seed, other bracts; none, all alike
+    again = receptacle_mesh(prof, ReceptacleOptions(**{**CLOTHED, "phyllary_spread": 0.0}))
+    np.testing.assert_array_equal(again.vertices, mesh.vertices)
+    other = receptacle_mesh(prof, ReceptacleOptions(**{**CLOTHED, "phyllary_spread": 0.0, "phyllary_seed": 2}))
+    assert not np.allclose(other.vertices, mesh.vertices)
+    alike = receptacle_mesh(prof, ReceptacleOptions(**{**CLOTHED, "phyllary_spread": 0.0, "phyllary_variation": 0.0}))
+    a = alike.vertices[first:].reshape(5, 21, -1, 3)
+    radius = np.hypot(a[..., 0], a[..., 2])
+    np.testing.assert_allclose(radius, np.broadcast_to(radius[:, :1], radius.shape), atol=1e-12)  # all alike
 
 
 def test_stem_stump_hangs_below_the_underside():

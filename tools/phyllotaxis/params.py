@@ -379,7 +379,7 @@ def _check_ranges(p: dict, w: ParamText) -> None:
             if rc[key] > high:
                 fail("receptacle", key, f"<= {high}")
         if rc["segments"] * (rc["rings"] + rc["underside_rings"] + 1) > MAX_RECEPTACLE_VERTICES:
-            fail("receptacle", "segments", f"x (rings + underside_rings) <= {MAX_RECEPTACLE_VERTICES} "
+            fail("receptacle", "segments", f"x (rings + underside_rings + 1) <= {MAX_RECEPTACLE_VERTICES} "
                  "(the receptacle's vertices a frame)")
         if not 0 < rc["depth"] <= 1000:
             fail("receptacle", "depth", "> 0 (a fraction of the rim radius), at most 1000")
@@ -402,6 +402,10 @@ def _check_ranges(p: dict, w: ParamText) -> None:
             fail("receptacle", "phyllary_gap", "in (0, 0.05] (a fraction of the rim radius)")
         if not 0 <= rc["phyllary_spread"] <= 1:
             fail("receptacle", "phyllary_spread", "in [0, 1] (a fraction of the rim radius)")
+        if not 0 <= rc["phyllary_variation"] <= 0.3:
+            fail("receptacle", "phyllary_variation", "in [0, 0.3] (0: every phyllary alike)")
+        if not 0 <= rc["phyllary_seed"] < 2**63:
+            fail("receptacle", "phyllary_seed", "in [0, 2^63)")
         if not 0 <= rc["stem_length"] <= 1000:
             fail("receptacle", "stem_length", "in [0, 1000] (a fraction of the rim radius; 0: none)")
         if rc["stem_length"] > 0 and rc["stem"] == 0:

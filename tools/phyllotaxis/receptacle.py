@@ -57,6 +57,8 @@ class ReceptacleOptions:
     phyllary_gap: float = 0.006
     phyllary_spread: float = 0.0
     phyllary_top: float = 0.0
+    phyllary_variation: float = 0.1
+    phyllary_seed: int = 1
     phyllary_material: int = 4
 
 
@@ -155,7 +157,10 @@ def phyllaries(rim_r: float, rim_y: float, stem_r: float, depth: float, size: fl
     involucre); a low midrib (a quarter of the gap) keels each bract. Its bracts are centred at
     angles ``2 pi (k + j/2) / phyllaries`` and at most ``phyllary_width`` of that spacing wide.
     The part of a row that no later row covers (its upper ``step``) lifts off the surface towards
-    its tip by up to ``phyllary_spread x size``. Rows on separate offset surfaces (outward, on the
+    its tip by up to ``phyllary_spread x size``. Each bract is its own (``phyllary_variation`` v,
+    seeded by ``phyllary_seed``, the same in every frame): up to v shorter (its base where the
+    row's is), up to v narrower, shifted by up to v of its half-slot within the slack of it, its tip lifting up to 3v
+    less: it only ever gives up room, so what holds for the bracts alike holds for them. Rows on separate offset surfaces (outward, on the
     convex side of the underside, so they never fold) and bracts apart within a row: the bracts
     touch neither one another nor the receptacle, whatever the size, as long as a bract's flat
     triangles stray from their offset surface by less than the space between two rows
@@ -179,26 +184,37 @@ def phyllaries(rim_r: float, rim_y: float, stem_r: float, depth: float, size: fl
     base_faces = _phyllary_faces()
     nv = PHYLLARY_VERTICES
     count = 0
+    # each bract its own (seeded, the same in every frame): shorter, narrower, shifted within its
+    # slot, its tip lifting more or less
+    rng = np.random.default_rng(int(opts.phyllary_seed))
+    draw = rng.random((rows, per, 4))
+    var = float(opts.phyllary_variation)
     for j in range(rows):
         tip = t0 + j * step
-        a = tip + length * (1.0 - u)  # arc of each station (base first)
-        ph = np.interp(a, arc, phi)
-        pr, py = _underside(ph, rim_r, rim_y, stem_r, depth)
-        # the outward normal of the ellipse (r, y) = (stem + A cos, rim - B sin): (B cos, -A sin)
-        nr_, ny_ = depth * np.cos(ph), -(rim_r - stem_r) * np.sin(ph)
-        norm = np.hypot(nr_, ny_)
-        norm = np.where(norm > 0, norm, 1.0)
-        nr_, ny_ = nr_ / norm, ny_ / norm
         free = 0.7 * step if rows > 1 else 0.7 * length
-        lift = opts.phyllary_spread * size * np.clip((tip + free - a) / max(free, 1e-300), 0.0, 1.0) ** 2
-        off = (j + 1) * opts.phyllary_gap * size + lift  # (stations,)
-        # stations x across: offset, radius, height and angle of every vertex
-        o = off[:, None] + keel[None, :]
-        vr = pr[:, None] + o * nr_[:, None]
-        vy = py[:, None] + o * ny_[:, None]
-        dth = half[:, None] * v_across[None, :]
         for k in range(per):
-            th = 2.0 * math.pi * (k + 0.5 * (j % 2)) / per + dth
+            shorter, narrower, shift, lifts = draw[j, k]
+            own = length * (1.0 - var * shorter)
+            a = tip + length - own * u  # arc of each station (base first; the base where the row's is)
+            ph = np.interp(a, arc, phi)
+            pr, py = _underside(ph, rim_r, rim_y, stem_r, depth)
+            # the outward normal of the ellipse (r, y) = (stem + A cos, rim - B sin): (B cos, -A sin)
+            nr_, ny_ = depth * np.cos(ph), -(rim_r - stem_r) * np.sin(ph)
+            norm = np.hypot(nr_, ny_)
+            norm = np.where(norm > 0, norm, 1.0)
+            nr_, ny_ = nr_ / norm, ny_ / norm
+            spread = opts.phyllary_spread * max(1.0 - 3.0 * var * lifts, 0.0)
+            lift = spread * size * np.clip((tip + free - a) / max(free, 1e-300), 0.0, 1.0) ** 2
+            off = (j + 1) * opts.phyllary_gap * size + lift  # (stations,)
+            # stations x across: offset, radius, height and angle of every vertex; the bract's
+            # half-width and shift keep it inside its slot of 2 pi / per
+            o = off[:, None] + keel[None, :]
+            vr = pr[:, None] + o * nr_[:, None]
+            vy = py[:, None] + o * ny_[:, None]
+            w = 1.0 - var * narrower
+            slack = (1.0 - opts.phyllary_width * w) * math.pi / per
+            centre = 2.0 * math.pi * (k + 0.5 * (j % 2)) / per + min(0.9 * slack, var * math.pi / per) * (2.0 * shift - 1.0)
+            th = centre + w * half[:, None] * v_across[None, :]
             xyz = np.stack([vr * np.cos(th), vy, vr * np.sin(th)], axis=-1)
             # the tip: one vertex on the midrib
             pts = np.concatenate([xyz[:-1].reshape(-1, 3), xyz[-1:, _ACROSS // 2]])
