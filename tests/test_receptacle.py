@@ -220,3 +220,33 @@ def test_phyllaries_follow_the_growing_head(tmp_path):
     from inflo.tools.collide.tritri import intersecting_pairs
     assert all(len(intersecting_pairs(m.vertices, m.faces)) == 0 for m in meshes)
     assert meshes[-1].materials == ["mtl5", "mtl4"]
+
+
+def test_species_checks_measure_the_back_and_find_the_body():
+    """checks.underside_in_view: 1.0 bare, well under it clothed, lower still with something in
+    front; receptacle_body drops the phyllaries, also in a mesh of several heads (groups
+    receptacle_k, phyllaries_k, as the dyssodia's compose_heads.py writes them)."""
+    from inflo.formats.obj import ObjMesh
+    from inflo.tools.species.checks import receptacle_body, underside_in_view
+    prof = builtin_curve("sphere_cap", radius=1.0, angle=60.0, samples=512)
+    bare = receptacle_mesh(prof, ReceptacleOptions(**{**CLOTHED, "phyllary_rows": 0}))
+    clothed = receptacle_mesh(prof, ReceptacleOptions(**CLOTHED))
+    assert underside_in_view(bare) == (1.0, 1.0)
+    below, side = underside_in_view(clothed)
+    assert below < 0.2 and side < 0.3
+    # a disc under the head hides its whole underside from straight below
+    disc = ObjMesh(np.array([[-3.0, -2.0, -3.0], [3.0, -2.0, -3.0], [3.0, -2.0, 3.0], [-3.0, -2.0, 3.0]]),
+                   np.array([[0, 1, 2], [0, 2, 3]], np.int32))
+    assert underside_in_view(clothed, disc)[0] == pytest.approx(0.0, abs=1e-3)
+    body = receptacle_body(clothed)
+    np.testing.assert_array_equal(body.faces, bare.faces)
+    assert receptacle_body(bare) is bare
+    # two heads in one mesh, their groups numbered
+    n, m = len(clothed.vertices), len(clothed.faces)
+    two = ObjMesh(np.vstack([clothed.vertices, clothed.vertices + [5.0, 0.0, 0.0]]),
+                  np.vstack([clothed.faces, clothed.faces + n]),
+                  groups=["receptacle_0", "phyllaries_0", "receptacle_1", "phyllaries_1"],
+                  face_group=np.concatenate([clothed.face_group, clothed.face_group + 2]).astype(np.int32))
+    assert len(receptacle_body(two).faces) == 2 * len(bare.faces)
+    assert underside_in_view(two)[0] < 0.25  # (the raster is coarser on two heads: 0.15 against 0.13)
+    assert m == len(two.faces) // 2
