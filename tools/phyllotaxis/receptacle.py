@@ -15,14 +15,15 @@ the rim; and the **underside**, a quarter ellipse from the rim in to a stem of r
 are spaced evenly in arc length; ``segments`` vertices per ring.
 
 With ``phyllary_rows`` > 0 the underside carries the **phyllaries** of the involucre's outer
-series (the back of a sunflower or gaillardia head: "the involucre ... of imbricate bracts in
-several series", thesis sec. 4.5, figs. 9.4, 9.6): rows of ovate, acuminate bracts lying on the
-underside, each row on its own offset surface along the normal (``phyllary_gap`` apart, the row
-nearest the stem outermost), staggered half a spacing against the next, its bracts narrower than
-their spacing, its tips overlapping the bases of the row above like roof tiles and lifting off
-(``phyllary_spread``) only where no row lies over them. Every distance is a fraction of the rim
-radius, so the bracts grow with the head and never touch one another or the receptacle
-(:func:`phyllaries`).
+series: the back of a sunflower or gaillardia head, clothed in overlapping bracts (the thesis's
+Gaillardia "incorporates involucral bracts: specialized leaves that surround the head and protect
+it in its early development", ch. 9, with fig. 9.4; the canopy's bracts are one ring at the rim).
+Rows of ovate, acuminate bracts lie on the underside, each row on its own offset surface along
+the normal (``phyllary_gap`` apart, the row nearest the stem outermost), staggered half a spacing
+against the next, its bracts narrower than their spacing, its tips overlapping the bases of the
+row above like roof tiles and lifting off (``phyllary_spread``) only where no row lies over them.
+Every distance is a fraction of the rim radius, so the bracts grow with the head and never touch
+one another or the receptacle (:func:`phyllaries`).
 """
 from __future__ import annotations
 
@@ -35,7 +36,14 @@ from inflo.formats.obj import ObjMesh
 
 from .surface import Profile
 
-__all__ = ["PHYLLARY_VERTICES", "ReceptacleOptions", "phyllaries", "phyllary_sagitta", "receptacle_mesh", "receptacle_topology"]
+__all__ = [
+    "PHYLLARY_VERTICES",
+    "ReceptacleOptions",
+    "phyllaries",
+    "phyllary_sagitta",
+    "receptacle_mesh",
+    "receptacle_topology",
+]
 
 
 @dataclass(frozen=True)
@@ -152,19 +160,23 @@ def phyllaries(rim_r: float, rim_y: float, stem_r: float, depth: float, size: fl
     Row j (0 at the rim) spans the meridian arc ``[t_j, t_j + l]`` of the underside, l =
     ``phyllary_length`` x its arc length, its base toward the stem; the rows are spaced evenly so
     that the first one's tip is ``phyllary_top`` of the arc below the rim (0: at the rim) and the
-    last one's base 4 % of the arc above the stem. Row j lies ``(j + 1) x phyllary_gap x size`` off the underside along its normal, so the
-    rows nearer the stem lie over the bases of those above (the outer series of an imbricate
-    involucre); a low midrib (a quarter of the gap) keels each bract. Its bracts are centred at
-    angles ``2 pi (k + j/2) / phyllaries`` and at most ``phyllary_width`` of that spacing wide.
-    The part of a row that no later row covers (its upper ``step``) lifts off the surface towards
-    its tip by up to ``phyllary_spread x size``. Each bract is its own (``phyllary_variation`` v,
-    seeded by ``phyllary_seed``, the same in every frame): up to v shorter (its base where the
-    row's is), up to v narrower, shifted by up to v of its half-slot within the slack of it, its tip lifting up to 3v
-    less: it only ever gives up room, so what holds for the bracts alike holds for them. Rows on separate offset surfaces (outward, on the
-    convex side of the underside, so they never fold) and bracts apart within a row: the bracts
-    touch neither one another nor the receptacle, whatever the size, as long as a bract's flat
-    triangles stray from their offset surface by less than the space between two rows
-    (:func:`phyllary_sagitta`, which ``phyllotaxis`` checks).
+    last one's base 4 % of the arc above the stem. Row j lies ``(j + 1) x phyllary_gap x size``
+    off the underside along its normal, so the rows nearer the stem lie over the bases of those
+    above (the outer series of an imbricate involucre); a low midrib (a quarter of the gap) keels
+    each bract. Its bracts are centred at angles ``2 pi (k + j/2) / phyllaries`` and at most
+    ``phyllary_width`` of that spacing wide. The part of a row that no later row covers (its upper
+    ``step``) lifts off the surface towards its tip by up to ``phyllary_spread x size``.
+
+    Each bract is its own (``phyllary_variation`` v, seeded by ``phyllary_seed``, the same in
+    every frame): up to v shorter (its base where the row's is), up to v narrower, shifted by up
+    to v of its half-slot within the slack of the slot, its tip lifting up to 3v less. It only
+    ever gives up room, so what holds for bracts alike holds for these.
+
+    Rows on separate offset surfaces (outward, on the convex side of the underside, so they never
+    fold) and bracts apart within a row: the bracts touch neither one another nor the receptacle,
+    whatever the size, as long as a bract's flat triangles stray from their offset surface by
+    less than the space between two rows (:func:`phyllary_sagitta`, which ``phyllotaxis``
+    checks).
     """
     rows, per = int(opts.phyllary_rows), int(opts.phyllaries)
     # the underside's arc length as a function of its parameter (fine table, inverted by interp)
@@ -185,7 +197,7 @@ def phyllaries(rim_r: float, rim_y: float, stem_r: float, depth: float, size: fl
     nv = PHYLLARY_VERTICES
     count = 0
     # each bract its own (seeded, the same in every frame): shorter, narrower, shifted within its
-    # slot, its tip lifting more or less
+    # slot, its tip lifting less
     rng = np.random.default_rng(int(opts.phyllary_seed))
     draw = rng.random((rows, per, 4))
     var = float(opts.phyllary_variation)
@@ -213,7 +225,8 @@ def phyllaries(rim_r: float, rim_y: float, stem_r: float, depth: float, size: fl
             vy = py[:, None] + o * ny_[:, None]
             w = 1.0 - var * narrower
             slack = (1.0 - opts.phyllary_width * w) * math.pi / per
-            centre = 2.0 * math.pi * (k + 0.5 * (j % 2)) / per + min(0.9 * slack, var * math.pi / per) * (2.0 * shift - 1.0)
+            centre = (2.0 * math.pi * (k + 0.5 * (j % 2)) / per
+                      + min(0.9 * slack, var * math.pi / per) * (2.0 * shift - 1.0))
             th = centre + w * half[:, None] * v_across[None, :]
             xyz = np.stack([vr * np.cos(th), vy, vr * np.sin(th)], axis=-1)
             # the tip: one vertex on the midrib
