@@ -223,11 +223,13 @@ def _check_frames_work(section: str, frames: int, birth, receptacle) -> None:
                          f"lower {section}.frames or max_count")
     if receptacle is not None:
         from .receptacle import PHYLLARY_VERTICES
-        verts = (receptacle.segments * (receptacle.rings + receptacle.underside_rings + 1)
+        stump = 1 if receptacle.stem_length > 0 else 0
+        verts = (receptacle.segments * (receptacle.rings + receptacle.underside_rings + stump)
                  + receptacle.phyllary_rows * receptacle.phyllaries * PHYLLARY_VERTICES) * frames
         if verts > MAX_RBA_ROWS:
             raise InputError(f"expected at most {MAX_RBA_ROWS} receptacle vertices over all frames (segments x "
-                             f"(rings + underside_rings + 1), plus the phyllaries' vertices, x {section}.frames), found {verts}")
+                             f"(rings + underside_rings, + 1 with a stump), plus the phyllaries' vertices, "
+                             f"x {section}.frames), found {verts}")
 
 
 def _room(final: dict, h_p, birth: np.ndarray) -> tuple:

@@ -378,9 +378,10 @@ def _check_ranges(p: dict, w: ParamText) -> None:
         for key, high in (("segments", MAX_SEGMENTS), ("rings", MAX_RINGS), ("underside_rings", MAX_RINGS)):
             if rc[key] > high:
                 fail("receptacle", key, f"<= {high}")
-        if rc["segments"] * (rc["rings"] + rc["underside_rings"] + 1) > MAX_RECEPTACLE_VERTICES:
-            fail("receptacle", "segments", f"x (rings + underside_rings + 1) <= {MAX_RECEPTACLE_VERTICES} "
-                 "(the receptacle's vertices a frame)")
+        stump = 1 if rc["stem_length"] > 0 else 0
+        if rc["segments"] * (rc["rings"] + rc["underside_rings"] + stump) > MAX_RECEPTACLE_VERTICES:
+            fail("receptacle", "segments", f"x (rings + underside_rings{' + 1' if stump else ''}) <= "
+                 f"{MAX_RECEPTACLE_VERTICES} (the receptacle's vertices a frame)")
         if not 0 < rc["depth"] <= 1000:
             fail("receptacle", "depth", "> 0 (a fraction of the rim radius), at most 1000")
         if not 0 <= rc["stem"] < 1:

@@ -142,6 +142,14 @@ def _underside(phi, rim_r: float, rim_y: float, stem_r: float, depth: float):
     return stem_r + (rim_r - stem_r) * np.cos(phi), rim_y - depth * np.sin(phi)
 
 
+def _underside_arc(rim_r: float, rim_y: float, stem_r: float, depth: float):
+    """The underside's parameter (0 at the rim, pi/2 at the stem: 1025 samples) and the arc
+    length from the rim at each (a table :func:`numpy.interp` inverts)."""
+    phi = np.linspace(0.0, 0.5 * math.pi, 1025)
+    r, y = _underside(phi, rim_r, rim_y, stem_r, depth)
+    return phi, np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(r), np.diff(y)))])
+
+
 # a phyllary's half-width along its length (0 = base, 1 = tip), a share of its widest: broadly
 # ovate, widest a third of the way up, then narrowed into a long acuminate tip
 _OUTLINE_U = np.array([0.0, 0.15, 0.35, 0.55, 0.75, 0.9, 1.0])
@@ -179,10 +187,7 @@ def phyllaries(rim_r: float, rim_y: float, stem_r: float, depth: float, size: fl
     checks).
     """
     rows, per = int(opts.phyllary_rows), int(opts.phyllaries)
-    # the underside's arc length as a function of its parameter (fine table, inverted by interp)
-    phi = np.linspace(0.0, 0.5 * math.pi, 1025)
-    r, y = _underside(phi, rim_r, rim_y, stem_r, depth)
-    arc = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(r), np.diff(y)))])
+    phi, arc = _underside_arc(rim_r, rim_y, stem_r, depth)
     total = float(arc[-1])
     length = opts.phyllary_length * total
     t0, t_end = opts.phyllary_top * total, 0.96 * total
@@ -244,8 +249,7 @@ def phyllary_sagitta(opts: ReceptacleOptions) -> float:
     ellipse (semi-axes ``1 - stem`` and ``depth``: ``min(a^2/b, b^2/a)``). The bracts of two rows
     stay apart while this is under half of ``phyllary_gap`` (a quarter goes to the midrib)."""
     a, b = max(1.0 - opts.stem, 1e-12), max(opts.depth, 1e-12)
-    phi = np.linspace(0.0, 0.5 * math.pi, 1025)
-    total = float(np.sum(np.hypot(np.diff(a * np.cos(phi)), np.diff(b * np.sin(phi)))))
+    total = float(_underside_arc(1.0, 0.0, 1.0 - a, b)[1][-1])
     station = opts.phyllary_length * total / (_ALONG - 1)
     return station * station / (8.0 * min(a * a / b, b * b / a))
 

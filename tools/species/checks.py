@@ -405,14 +405,18 @@ def check_head(build: Path, *, rays: int | None, failures: list, per_frame=None,
     # with an intersection are listed
     total_pairs = total_rec = 0
     mesh = None
+    last_rec = rec = None
+    clothed, ns = False, 0
     for i, path in enumerate(canopy):
         mesh = read_obj(path)
         n = len(intersecting_pairs(mesh.vertices, mesh.faces, tri_part=mesh.face_group))
-        rec = read_obj(receptacle[min(i, len(receptacle) - 1)])
+        rec_path = receptacle[min(i, len(receptacle) - 1)]
+        if rec_path != last_rec:  # a static receptacle (one file for every frame) is read once
+            last_rec, rec = rec_path, read_obj(rec_path)
+            # a receptacle with phyllaries on its underside: they touch neither one another nor it
+            clothed = _clothed(rec)
+            ns = len(intersecting_pairs(rec.vertices, rec.faces)) if clothed else 0
         nr = len(intersecting_pairs_between(mesh.vertices, mesh.faces, rec.vertices, rec.faces))
-        # a receptacle with phyllaries on its underside: they touch neither one another nor it
-        clothed = _clothed(rec)
-        ns = len(intersecting_pairs(rec.vertices, rec.faces)) if clothed else 0
         total_pairs += n
         total_rec += nr + ns
         if n or nr or ns or i % 10 == 0 or i == len(canopy) - 1:
