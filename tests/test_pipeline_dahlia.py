@@ -13,7 +13,9 @@ sizes along the ball, the collisions-off run, and the draft build's check.
   floret: dimorph's cone has no direction there, size_along.py retypes it);
 - size_along.py: the later florets larger by 1 + gain f^power, the bracts untouched;
 - whorl.py: the top's florets lean in over the apex, all the same way round it, as they open,
-  turning about the edge of their foot (never below the receptacle);
+  turning about the edge of their foot (never below the receptacle), the lean rising along the
+  ball with RAMP;
+- check_dahlia.py's outline from the side: a dome near 1, a crown over a waist far less;
 - the ray floret's rounded, blunt tip (its rows' arcs drawn back to TIP_END, no point);
 - if the draft build exists (the golden test builds it): check_dahlia.py's report says OK, and
   its figures of the look (coverage from above, the receptacle in view, the florets' largest
@@ -187,6 +189,58 @@ def test_whorl_leans_the_top_in_round_the_apex(head, tmp_path):
     assert np.all(rise >= -1e-12)
 
 
+def test_whorl_lean_rises_along_the_ball(head, tmp_path):
+    """With RAMP the j-th of the COUNT florets leans by at most ANGLE (j / COUNT) ** RAMP: the first
+    of them hardly, the last (on the apex) fully; without it (0) all alike."""
+    _, out, _ = head
+    scene = read_scn(out / "types.scn")
+    n = len(scene.placements)
+    from inflo.formats.rba import read_rba
+    last = sorted((out / "rba").glob("*.rba"))[-1].name
+    a = read_rba(out / "rba" / last)
+    tilts = {}
+    for ramp in ("0", "2"):
+        r = subprocess.run([sys.executable, str(DAH / "whorl.py"), str(out / "rba"), str(out / "types.scn"),
+                            str(tmp_path / ramp), "20", "50", "40", ramp], capture_output=True, text=True,
+                           timeout=120)
+        assert r.returncode == 0, r.stderr
+        b = read_rba(tmp_path / ramp / last)
+        ua = a.up / np.linalg.norm(a.up, axis=1)[:, None]
+        ub = b.up / np.linalg.norm(b.up, axis=1)[:, None]
+        tilts[ramp] = dict(zip(a.ids.tolist(), np.degrees(np.arccos(np.clip(np.sum(ua * ub, axis=1), -1, 1)))))
+    frame = int(last.split(".")[0])
+    checked = 0
+    for j, k in enumerate(range(n - 20, n), start=1):
+        if k not in tilts["0"]:
+            continue  # not formed yet
+        p = scene.placements[k]
+        start = p.emergence if p.emergence is not None else p.frame_start
+        w = min(max((frame - start) / max(p.frame_end - p.frame_start, 1), 0.0), 1.0)
+        grown = w * w * (3.0 - 2.0 * w)  # the lean grows with the floret's development
+        assert tilts["0"][k] == pytest.approx(50.0 * grown, abs=1e-3)  # RBA digits
+        assert tilts["2"][k] == pytest.approx(50.0 * (j / 20) ** 2 * grown, abs=1e-3)
+        checked += grown > 0.5
+    assert checked >= 5
+
+
+def test_outline_from_the_side_tells_a_dome_from_a_crown_over_a_waist():
+    """check_dahlia.upper_outline: a hemisphere's upper half covers its hull (about 1); a ball whose
+    top is a narrow crown on a thin neck over a wide lower half covers far less."""
+    spec = importlib.util.spec_from_file_location("check_dahlia", DAH / "check_dahlia.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    import trimesh
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+    assert mod.upper_outline(ball) > 0.97
+    neck = trimesh.creation.cylinder(radius=0.15, height=1.0)
+    neck.apply_translation([0.0, 0.0, 0.5])
+    crown = trimesh.creation.icosphere(subdivisions=3, radius=0.5)
+    crown.apply_translation([0.0, 0.0, 1.3])
+    waisted = trimesh.util.concatenate([ball, neck, crown])
+    waisted.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))  # z up -> y up
+    assert mod.upper_outline(waisted) < 0.85
+
+
 def test_draft_build_check_says_ok(species_build):
     species_build("dahlia")  # the draft build, made here if no test made it yet
     report = BUILD / "check.txt"
@@ -235,6 +289,10 @@ def test_draft_build_closed_from_above_and_smooth(species_build):
     assert oblique <= check["oblique"] <= 0.1
     assert side <= check["side"] <= 0.13
     assert smooth <= check["smooth"] < 100.0  # the faceted cones of before: about 130
+    m = re.search(r"^from the side: the upper half covers (\S+) of its outline's hull", text, re.M)
+    assert m, text[-2000:]
+    # round from the side, not a crown of quills over a waist (0.804 with the top leaning alike)
+    assert float(m.group(1)) >= check["outline"] >= 0.83
 
 
 def test_draft_build_windows_rays_and_bracts_open_with_their_age(species_build):

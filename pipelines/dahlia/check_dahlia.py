@@ -23,6 +23,10 @@ and, of the species (thesis ch. 9, figs. 9.1, 9.2):
   between them, README "Noticed and left"). The receptacle's share in view is depth-buffered
   (inflo.tools.species.checks.region_in_view: a floret behind it hides none of it), the mean of
   four views round the ball (azimuths 20, 110, 200 and 290 degrees);
+- **round from the side**: the ball's upper half (the faces above its mid-height) seen from the
+  side covers at least OUTLINE of its silhouette's convex hull, the least over four azimuths
+  (inflo.tools.species.checks.view_coverage of the projection): a crown of erect quills over a
+  waist, the top leaning in alike, measured 0.79 at draft;
 - **smooth florets**: the median over the last frame's florets of each floret's largest angle
   between two adjacent faces (degrees) at most SMOOTH (the old faceted cones: about 130);
 - **a ball**: the open head at least BALL (0.75) times as high (from the lowest bract's base to
@@ -42,6 +46,7 @@ from __future__ import annotations
 import csv
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 from scipy.stats import spearmanr
@@ -49,7 +54,15 @@ from scipy.stats import spearmanr
 from inflo.formats.obj import list_obj_sequence, read_obj
 from inflo.formats.species import species_of
 from inflo.tools.collide import intersecting_pairs
-from inflo.tools.species.checks import check_head, floret_faces, floret_heights, region_in_view, view_coverage
+from inflo.tools.common import linalg as la
+from inflo.tools.species.checks import (
+    check_head,
+    floret_faces,
+    floret_heights,
+    region_in_view,
+    view_axes,
+    view_coverage,
+)
 
 # the species' facts: the [check] table of species.toml (formats/species.md)
 CHECK = species_of(__file__).check
@@ -63,6 +76,7 @@ SIDE = CHECK["side"]
 #: the views round the ball the receptacle in view is averaged over (degrees of azimuth)
 AROUND = (20.0, 110.0, 200.0, 290.0)
 SMOOTH = CHECK["smooth"]
+OUTLINE = CHECK["outline"]
 
 
 def crease(mesh) -> float:
@@ -83,6 +97,22 @@ def crease(mesh) -> float:
             cos = np.einsum("ij,ij->i", n[o[:-1][same]], n[o[1:][same]])
             worst.append(float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).max()))
     return float(np.median(worst)) if worst else 0.0
+
+
+def upper_outline(mesh, azimuths=AROUND) -> float:
+    """The least, over side views from ``azimuths`` (degrees), of the share of the convex hull of
+    the silhouette of the mesh's upper half (its faces wholly above its mid-height) that the
+    silhouette covers: 1 for a dome, less where the outline pinches in (a waist) or stands in
+    spikes."""
+    v = np.asarray(mesh.vertices, np.float64)
+    mid = 0.5 * (v[:, 1].min() + v[:, 1].max())
+    upper = mesh.faces[np.all(v[mesh.faces][:, :, 1] >= mid, axis=1)]
+    least = 1.0
+    for az in azimuths:
+        right, up = view_axes(az, 0.0)
+        screen = la.matmul(v, np.stack([right, up, np.cross(right, up)], axis=1))
+        least = min(least, view_coverage(SimpleNamespace(vertices=screen, faces=upper), 2))
+    return least
 
 
 def collisions(folder: Path) -> int:
@@ -117,6 +147,10 @@ def main(build: Path) -> int:
     apex, oblique, side = (float(np.mean([region_in_view(last, receptacle, az, el) for az in AROUND]))
                            for el in (90.0, 55.0, 8.0))
     smooth = crease(last)
+    outline = upper_outline(last)
+    print(f"from the side: the upper half covers {outline:.3f} of its outline's hull (the least of four views)")
+    if outline < OUTLINE:
+        failures.append(f"the top is not round from the side: {outline:.3f} of its hull (expected >= {OUTLINE})")
     print(f"from above: {cover:.3f} of the silhouette's hull covered, {apex:.3f} of the receptacle in view; "
           f"at 55 degrees: {oblique:.3f} in view; from the side (8 degrees): {side:.3f} in view; "
           f"florets' largest angle between adjacent faces, median {smooth:.1f} degrees")
