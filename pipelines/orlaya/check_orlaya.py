@@ -14,8 +14,8 @@ Prints, and fails (exit 1) on any of:
   - three forms where fig. 6.4c puts them: large ray florets towards the periphery of the whole
     umbel (none in the central umbellet; their median distance from the umbel's centre above the
     other forms', at least 90 % on the outer side of their umbellet), each turned towards its free
-    space (its +X within 30 degrees of the direction away from the umbel's centre, or, for one on
-    the inner side facing a gap, of the direction away from its umbellet's centre); small ray
+    space (its +X within 30 degrees of the direction away from its umbellet's centre, as
+    `dimorph --orient-rays group` turns it, or away from the umbel's centre, as `top` does); small ray
     florets in most umbellets; five-fold florets inside;
   - only the petals grow: in the last frame every floret's stylopodium has the same size in floret
     units (within 2 %), while the petals reach farther the larger the petal factor (the median
@@ -159,10 +159,10 @@ def main(build: Path) -> int:
                   if np.linalg.norm((pos[k] - centre)[[0, 2]]) <= ud[int(groups[k])]]
     turned = []
     for k in large:
-        # towards its free space: away from the umbel's centre, or (inner side) from its umbellet's
-        out = (pos[k] - (uc[int(groups[k])] if int(k) in inner_side else centre))[[0, 2]]
+        # towards its free space: away from its umbellet's centre or from the umbel's
         r = scene.placements[k].right[[0, 2]]
-        cos = float(out @ r / (np.linalg.norm(out) * np.linalg.norm(r)))
+        cos = max(float(out @ r / (np.linalg.norm(out) * np.linalg.norm(r)))
+                  for out in ((pos[k] - uc[int(groups[k])])[[0, 2]], (pos[k] - centre)[[0, 2]]))
         if cos < np.cos(np.radians(30)):
             turned.append(int(k))
     with_small = sum(1 for g in umbellets if ((groups == g) & (types == "small_ray")).any())
