@@ -13,7 +13,9 @@ centre (phyllotaxis sets a placement's ``right`` along the receptacle's meridian
   into a tubular corolla"): one organ ``corolla``, five-fold, bilateral half petal of 3 columns x 6
   rows, the first 4 rows of each lateral boundary fused (a closed tube up to the throat), the top
   two rows free (the lobes). Bud: a closed barrel whose lobes converge over the top; open: a
-  narrow tube with five short lobes spread outward at the throat.
+  narrow tube with five short, broad lobes spread outward at the throat (each lobe's last two rows
+  spanning 34 and 28 of its sector's 36 degrees a side: a carpet of corollas from above, where
+  lobes of 28 and 6 degrees left the receptacle in view between them, issue 43).
 - **Ray floret** (yarrow: a short, broad, three-toothed ligule): one organ ``ligule``, symmetry 1,
   bilateral half of 5 columns x 6 rows (9 columns mirrored), quadratic across so the three lobes
   of the tip stay visible: the tip row reaches furthest at the midline (the middle lobe) and at
@@ -44,7 +46,7 @@ DISK = {
     "open": dict(time=1.0,
                  r=[0.18, 0.20, 0.22, 0.25, 0.36, 0.56],
                  y=[0.00, 0.17, 0.34, 0.50, 0.60, 0.58],
-                 half=[36, 36, 36, 36, 28, 6]),
+                 half=[36, 36, 36, 36, 34, 28]),  # broad lobes (28, 6 before: issue 43)
 }
 
 # ---- ray floret: a short corolla tube rolled from the ligule's base, then the ligule ------------
