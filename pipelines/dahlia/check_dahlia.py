@@ -26,7 +26,7 @@ and, of the species (thesis ch. 9, figs. 9.1, 9.2):
 - **round from the side**: the ball's upper half (the faces above its mid-height) seen from the
   side covers at least OUTLINE of its silhouette's convex hull, the least over four azimuths
   (inflo.tools.species.checks.view_coverage of the projection): a crown of erect quills over a
-  waist, the top leaning in alike, measured 0.79 at draft;
+  waist, the top leaning in alike, measured 0.804 at draft and 0.845 final;
 - **smooth florets**: the median over the last frame's florets of each floret's largest angle
   between two adjacent faces (degrees) at most SMOOTH (the old faceted cones: about 130);
 - **a ball**: the open head at least BALL (0.75) times as high (from the lowest bract's base to
