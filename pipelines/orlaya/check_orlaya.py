@@ -14,8 +14,9 @@ Prints, and fails (exit 1) on any of:
   - three forms where fig. 6.4c puts them: large ray florets towards the periphery of the whole
     umbel (none in the central umbellet; their median distance from the umbel's centre above the
     other forms', at least 90 % on the outer side of their umbellet), each turned towards its free
-    space (its +X within 30 degrees of the direction away from its umbellet's centre, as
-    `dimorph --orient-rays group` turns it, or away from the umbel's centre, as `top` does); small ray
+    space, as species.toml's `orient_rays` turns it (its +X within 30 degrees of the direction away
+    from its umbellet's centre for `group`; for `top`, away from the umbel's centre, or, for one on
+    the inner side facing a gap, away from its umbellet's centre); small ray
     florets in most umbellets; five-fold florets inside;
   - only the petals grow: in the last frame every floret's stylopodium has the same size in floret
     units (within 2 %), while the petals reach farther the larger the petal factor (the median
@@ -67,6 +68,13 @@ def bounds(quality: str) -> tuple[float, float]:
 
 
 COVER_MIN, EMPTY_MAX = bounds("draft")
+
+
+def orient_rays() -> str:
+    """species.toml's ``orient_rays``: the side dimorph turns each large ray floret to."""
+    from inflo.formats.species import read_species
+
+    return str(read_species(HERE / "species.toml").setting("draft", "orient_rays"))
 
 
 def floret_spacing(pos: np.ndarray) -> float:
@@ -158,11 +166,14 @@ def main(build: Path) -> int:
     inner_side = [int(k) for k in large
                   if np.linalg.norm((pos[k] - centre)[[0, 2]]) <= ud[int(groups[k])]]
     turned = []
+    by_group = orient_rays() == "group"
     for k in large:
-        # towards its free space: away from its umbellet's centre or from the umbel's
+        # towards its free space, as dimorph turned it: away from its umbellet's centre (group), or
+        # (top) from the umbel's, or for one on the inner side of its umbellet from its umbellet's
+        own = by_group or int(k) in inner_side
+        out = (pos[k] - (uc[int(groups[k])] if own else centre))[[0, 2]]
         r = scene.placements[k].right[[0, 2]]
-        cos = max(float(out @ r / (np.linalg.norm(out) * np.linalg.norm(r)))
-                  for out in ((pos[k] - uc[int(groups[k])])[[0, 2]], (pos[k] - centre)[[0, 2]]))
+        cos = float(out @ r / (np.linalg.norm(out) * np.linalg.norm(r)))
         if cos < np.cos(np.radians(30)):
             turned.append(int(k))
     with_small = sum(1 for g in umbellets if ((groups == g) & (types == "small_ray")).any())
