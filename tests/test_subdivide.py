@@ -178,3 +178,31 @@ def test_weld_only_vertices_coincident_in_every_frame():
     V2[3] = [2, 0, 0]  # apart in the second frame: a bud tip that opens, not a seam
     w = weld_coincident([V, V2], F)
     assert w.welded == 0 and w.faces.tolist() == F.tolist()
+
+
+def test_cli_writes_a_frame_with_pairs_left_with_the_digits_that_keep_it_clear(tmp_path, monkeypatch):
+    """A frame where the collision response left pairs closer than the spacing is written with as
+    many decimals as keep it collision-free: here a triangle's tip 4e-7 above another's face, which
+    six decimals would put on it (touching: an intersecting pair for every reader)."""
+    from click.testing import CliRunner
+
+    from inflo.tools.subdivide import cli as sub_cli
+    from inflo.tools.subdivide.smooth import LevelReport
+
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 4e-7], [0.3, 0.2, 1], [0.2, 0.3, 1]], float)
+    F = np.array([[0, 1, 2], [3, 4, 5]])
+    mesh = ObjMesh(V, F, groups=["floret_0", "floret_1"], face_group=np.array([0, 1], np.int32))
+    assert len(intersecting_pairs(V, F)) == 0
+    rounded = np.array([[float(f"{x:.6f}") for x in row] for row in V])
+    assert len(intersecting_pairs(rounded, F)) == 1  # what six decimals would write
+    write_obj(tmp_path / "in.obj", mesh)
+    for left, clear in ((1, True), (0, False)):
+        monkeypatch.setattr(sub_cli, "subdivide_meshes", lambda meshes, levels, left=left, **kw: (
+            [mesh], [LevelReport(0, 1, 2, 1, left)]))
+        out = tmp_path / f"out{left}.obj"
+        res = CliRunner().invoke(sub_cli.main, [str(tmp_path / "in.obj"), "--check", "-o", str(out)])
+        assert res.exit_code == 0, res.output
+        m = read_obj(out)
+        assert (len(intersecting_pairs(m.vertices, m.faces)) == 0) == clear
+        # --check counts the numbers as written
+        assert f"pairs per frame: max {0 if clear else 1}" in res.output

@@ -10,7 +10,9 @@ For each level every triangle is quadrisected in its plane (collision-free), the
 are computed, and the vertices move toward them with continuous collision detection and collision
 constraints of thickness ``--spacing`` (fig. 4.8c). A summary per level (faces, collision
 constraints needed, pairs left) goes to stderr; ``--check`` adds an exact static intersection test
-of each output frame.
+of each output frame as written. A frame where the collision response left pairs closer than the
+spacing is written with as many decimals as keep it collision-free (six rounded two such faces
+into each other: the yarrow's smoothed final frame), the others with six.
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ from pathlib import Path
 import click
 
 from inflo.formats.atomic import check_output_path, refuse_output_over_inputs, staged_output
-from inflo.formats.obj import list_obj_sequence, read_obj, read_obj_sequence, write_obj
+from inflo.formats.obj import FLOAT_FMT, list_obj_sequence, read_obj, read_obj_sequence, write_obj, written_vertices
 from inflo.tools.common.cli import inflo_command, progress
 
 from .smooth import subdivide_meshes
@@ -113,15 +115,28 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
         output, "subdivide", stale_patterns=(r"frame_\d+\.obj",), inputs=[(p, "input mesh") for p in paths])
     with staged as stage:
         with progress(length=len(meshes), label="subdivide", quiet=quiet) as bar:
-            out, reports = [], []
+            out, reports, at_risk = [], [], set()
             for start, stop in topology_runs(meshes):  # one subdivision plan per topology
                 o, r = subdivide_meshes(meshes[start:stop], levels, resolve=resolve, name=str(paths[start]),
                                         on_frame=lambda k: bar.update(1), notes=notes)
+                at_risk.update(len(out) + x.frame for x in r if x.remaining_intersections > 0)
                 out.extend(o)
                 reports.extend(r)
         targets = [Path(output)] if single else [Path(stage) / p.name for p in paths]
-        for t, m in zip(targets, out):
-            write_obj(t, m)
+        if at_risk:
+            from inflo.tools.fccompose.output import written_text
+        if check:
+            from inflo.tools.collide import intersecting_pairs
+        counts = []
+        for k, (t, m) in enumerate(zip(targets, out)):
+            # where the resolver left pairs closer than the spacing, rounding them to six decimals
+            # can make two of them cross: such a frame is written with as many digits as keep it
+            # as collision-free as it is in memory (fccompose's written-frame guarantee)
+            fmt = written_text(m.vertices, m.faces, tri_part=m.face_group)[0] if k in at_risk else FLOAT_FMT
+            xr, text = written_vertices(m.vertices, fmt)
+            write_obj(t, m, fmt=fmt, vertex_text=text)
+            if check:  # the written numbers, as a reader gets them
+                counts.append(len(intersecting_pairs(xr, m.faces)))
     if not quiet:
         for note in notes:
             click.echo(f"subdivide: {note}", err=True)
@@ -134,8 +149,5 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
                         f"pairs left {sum(r.remaining_intersections for r in rows)}")
             click.echo(msg, err=True)
     if check:
-        from inflo.tools.collide import intersecting_pairs
-
-        counts = [len(intersecting_pairs(m.vertices, m.faces)) for m in out]
         click.echo(f"subdivide: intersecting triangle pairs per frame: max {max(counts)}, total {sum(counts)}",
                    err=True)
