@@ -122,16 +122,18 @@ def floret_points(mesh, name: str, faces: dict | None = None) -> np.ndarray:
 
 def ligule_gaps(mesh, typed, rba) -> np.ndarray:
     """Per ray floret: the gap from it to the nearest disk floret of its head over its length
-    (its farthest point from its base)."""
+    (its farthest point from its base). A floret absent from the mesh (one still waiting for room:
+    the check's count of florets fails on it) is left out; a ray whose head has no disk floret
+    present has no gap."""
     pts = {}
     out = []
     faces = group_faces(mesh)
     disks = {}
     for j, q in enumerate(typed.placements):
-        if q.type == "disk":
+        if q.type == "disk" and f"floret_{j}" in faces:
             disks.setdefault(q.group, []).append(j)
     for i, p in enumerate(typed.placements):
-        if p.type != "ray":
+        if p.type != "ray" or f"floret_{i}" not in faces or not disks.get(p.group):
             continue
         base = rba.pos[rba.index(i)]
         ray = floret_points(mesh, f"floret_{i}", faces)

@@ -21,7 +21,12 @@ centre (phyllotaxis sets a placement's ``right`` along the receptacle's meridian
   of the tip stay visible: the tip row reaches furthest at the midline (the middle lobe) and at
   the lateral lobe, and recedes at the notches between them and at the rounded edge. Bud: small,
   erect and cupped around the floret axis; mid: tilted out by about 45 degrees; open: spread
-  almost level, pointing away from the head centre, the tip a little down.
+  almost level, pointing away from the head centre, the tip a little down. The open ligule is
+  a little broader than long (2.1 floret units broad, 1.9 long from the tube's mouth: 0.84
+  of the receptacle's radius), as in *A. millefolium*, whose ligules (2-3 mm) nearly match the
+  involucre's width: a head's five or six rays close most of the ring round its disk and reach
+  its neighbours' (issue 43; 1.44 broad and 1.28 long before, which left the room between the
+  heads open from above).
 """
 from __future__ import annotations
 
@@ -78,11 +83,13 @@ RAY = {
                 cup=0.35),
     # open: the tube flared to a throat a little wider than the disk florets' (0.46 at 0.55, theirs 0.36 at
     # 0.6), whose rim meets the lobes of the disk florets beside it; the ligule spread almost level
-    # from the tube's mouth, short and broad, pointing away from the head centre
+    # from the tube's mouth, 2.1 broad and 1.9 long, pointing away from the head centre (issue 43:
+    # 1.44 x 1.28 before; 2.2 x 2.05 left a floret of a late head with no room to emerge at final,
+    # 2.0 x 1.85 a pair of florets stuck at draft)
     "open": dict(time=1.0,
-                 mid=[(0.14, 0.00), (0.24, 0.22), (0.42, 0.44), (0.50, 0.56), (0.70, 0.68), (1.02, 0.73),
-                      (1.40, 0.68), (1.78, 0.58)],
-                 half=[None, None, None, None, 0.62, 0.72, 0.72, 0.72],
+                 mid=[(0.14, 0), (0.24, 0.22), (0.42, 0.44), (0.5, 0.56), (0.751, 0.68), (1.3, 0.722),
+                      (1.867, 0.646), (2.434, 0.512)],
+                 half=[None, None, None, None, 0.705, 0.975, 1.043, 1.009],
                  roll=[TUBE, TUBE, TUBE, TUBE, 80.0, 10.0, 0.0, 0.0],
                  cup=0.08),
 }
