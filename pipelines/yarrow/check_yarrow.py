@@ -128,12 +128,16 @@ def ligule_gaps(mesh, typed, rba) -> np.ndarray:
     pts = {}
     out = []
     faces = group_faces(mesh)
+
+    def present(i):
+        return len(faces.get(f"floret_{i}", ())) > 0
+
     disks = {}
     for j, q in enumerate(typed.placements):
-        if q.type == "disk" and f"floret_{j}" in faces:
+        if q.type == "disk" and present(j):
             disks.setdefault(q.group, []).append(j)
     for i, p in enumerate(typed.placements):
-        if p.type != "ray" or f"floret_{i}" not in faces or not disks.get(p.group):
+        if p.type != "ray" or not present(i) or not disks.get(p.group):
             continue
         base = rba.pos[rba.index(i)]
         ray = floret_points(mesh, f"floret_{i}", faces)
