@@ -15,8 +15,10 @@ import numpy as np
 from inflo.formats.atomic import frame_name, write_bytes_atomic, write_text_atomic
 from inflo.formats.errors import InputError
 from inflo.formats.fcc import CanopyParams
-from inflo.formats.obj import ObjMesh, write_obj, written_vertices
-from inflo.tools.collide.tritri import intersecting_pairs
+from inflo.formats.obj import ObjMesh, write_obj
+from inflo.tools.collide.written import WRITE_FORMATS as WRITE_FORMATS
+from inflo.tools.collide.written import written_format as written_format
+from inflo.tools.collide.written import written_text
 
 from .model import Model, State
 
@@ -54,42 +56,6 @@ def _fingerprint(params: CanopyParams, model: Model, inputs: dict | None = None)
     if params.solver_scheme != "default":  # --scheme: a resumed run must go on with the same
         h.update(b"solver scheme\0" + params.solver_scheme.encode("ascii"))
     return h.hexdigest()
-
-
-#: Coordinate formats of the written frames, tried in turn (:func:`written_format`).
-WRITE_FORMATS = ("%.6f", "%.9f", "%.12f", "%.17g")
-
-
-def written_format(x: np.ndarray, faces: np.ndarray, formats=WRITE_FORMATS, tri_part: np.ndarray | None = None) -> str:
-    """The first of ``formats`` whose written coordinates keep the canopy as collision-free as
-    ``x`` is: rounding to 6 decimals can make two petals that lie flat on each other, closer than
-    the rounding, cross (a written-frame guarantee). The written numbers are parsed back
-    and tested exactly (:func:`intersecting_pairs`, touching counts); where ``x`` itself has
-    intersecting pairs (the sanity check reports them), more digits cannot help and the first
-    format is kept. ``tri_part``: the floret of each face (the exact test goes floret by floret)."""
-    return written_text(x, faces, formats, tri_part)[0]
-
-
-def written_text(x: np.ndarray, faces: np.ndarray, formats=WRITE_FORMATS,
-                 tri_part: np.ndarray | None = None) -> tuple[str, str]:
-    """(:func:`written_format`, the ``v`` lines of ``x`` in it): the frame's vertices formatted
-    once, for the check and the file."""
-    n = None
-    first = None
-    for fmt in formats:
-        xr, text = written_vertices(x, fmt)
-        if first is None:
-            first = (fmt, text)
-        if fmt == formats[-1]:
-            return fmt, text
-        found = len(intersecting_pairs(xr, faces, tri_part=tri_part))
-        if found == 0:
-            return fmt, text
-        if n is None:
-            n = len(intersecting_pairs(x, faces, tri_part=tri_part))
-            if n >= found:
-                return first
-    return first
 
 
 def _write_frame(out: Path, model: Model, x: np.ndarray, k: int, tri_on: np.ndarray | None = None,

@@ -124,7 +124,7 @@ def main(source, levels, output, no_collisions, spacing, collision_iterations, m
                 reports.extend(r)
         targets = [Path(output)] if single else [Path(stage) / p.name for p in paths]
         if at_risk:
-            from inflo.tools.fccompose.output import written_text
+            from inflo.tools.collide.written import written_text
         if check:
             from inflo.tools.collide import intersecting_pairs
         counts = []
