@@ -50,7 +50,7 @@ RES = {"draft": dict(ray=("0.2", "9"), disk=("0.25", "3"), heads=16, ray_tris=80
        "final": dict(ray=("0.08", "15"), disk=("0.25", str(YARROW / "disk_eta.func")), heads=71, ray_tris=336,
                      disk_tris=200, frames=100)}
 HEAD_SCALE, BUD = 0.35, 1  # the Makefile's
-ALPHA, TH_A = 60, 0.8
+ALPHA = 60  # the Makefile's; TH_A is species.toml's th_a
 
 
 def _load(name):
@@ -60,6 +60,14 @@ def _load(name):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+def _settings(quality: str = "draft") -> dict:
+    """species.toml [settings] and its ``quality`` table: the Makefile's settings."""
+    import tomllib
+
+    data = tomllib.loads((YARROW / "species.toml").read_text())
+    return {**data["settings"], **data[quality]}
 
 
 def _radius(scene):
@@ -78,12 +86,14 @@ def corymb(tmp_path_factory):
         assert r.returncode == 0, r.stderr
     r = run_cli("phyllotaxis", "-q", YARROW / "involucre.toml", "-o", out / "involucre")
     assert r.returncode == 0, r.stderr
-    r = subprocess.run([sys.executable, str(YARROW / "corymb_heads.py"), str(out / "growth"), str(out / "head" / "scene.scn"),
+    lift = _settings()
+    r = subprocess.run([sys.executable, str(YARROW / "corymb_heads.py"), "--dome", str(lift["dome"]),
+                        "--jitter", str(lift["height_jitter"]), "--late", str(lift["late_drop"]), str(out / "growth"), str(out / "head" / "scene.scn"),
                         str(RES["draft"]["frames"]), str(HEAD_SCALE), str(BUD), str(out),
                         str(out / "involucre" / "scene.scn"), str(out / "head" / "receptacle.obj")],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
-    r = run_cli("dimorph", "-q", out / "corymb" / "scene.scn", "--alpha", ALPHA, "--half-angle", "--threshold", TH_A,
+    r = run_cli("dimorph", "-q", out / "corymb" / "scene.scn", "--alpha", ALPHA, "--half-angle", "--threshold", lift["th_a"],
                 "--marginal", 10, "--bracts", BRACTS, "--bract-id", 2, "-o", out / "corymb" / "typed.scn")
     assert r.returncode == 0, r.stderr
     return out
@@ -192,6 +202,47 @@ def test_one_clock_heads_and_florets(corymb):
             row = fl.index(h * NF + 20)
             np.testing.assert_allclose(fl.pos[row], expect[:3], atol=2e-6)
             np.testing.assert_allclose(fl.scale[row, 0], frames[k].scale[hr, 0] * q.scale[0] * HEAD_SCALE, rtol=1e-5)
+
+
+def test_lift_heads_is_a_low_cap_with_seeded_heights():
+    """corymb_heads.lift_heads (issue 43): the heads of a flat pattern put on a paraboloid cap
+    (the farthest head ``dome`` mean head diameters below the centre), each raised or lowered by
+    at most ``jitter`` of its own diameter, the heads born in the pattern's last frame ``late``
+    lower; a head keeps its height in every frame; only Y changes; the same heights on every run."""
+    from inflo.formats.rba import RbaFrame
+
+    mod = _load("corymb_heads")
+    ring = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0], [-2.0, 0.0], [0.0, -2.0]])
+
+    def frame(g, n):
+        pos = np.zeros((n, 3))
+        pos[:, [0, 2]] = g * ring[:n] + g * np.array([5.0, 1.0])  # the pattern grows about its origin
+        one = np.ones((n, 3))
+        up = np.tile([0.0, 1.0, 0.0], (n, 1))
+        right = np.tile([1.0, 0.0, 0.0], (n, 1))
+        return RbaFrame(np.arange(n, dtype=np.int32), pos, g * one, up, right)
+
+    seq = [frame(0.5, 3), frame(0.8, 5), frame(1.0, 5)]
+    flat = mod.lift_heads(seq, 0.35, 0.0, 0.0)
+    assert flat is seq  # nothing asked: the pattern as it is
+    cap = mod.lift_heads(seq, 0.35, 0.4, 0.0)
+    d = 2 * 0.35  # the heads' mean disc diameter in the last frame (sizes 1)
+    np.testing.assert_allclose(cap[-1].pos[:, 1], [0.0, -0.4 * d, -0.4 * d, -0.4 * d, -0.4 * d], atol=1e-12)
+    for f, g in zip(cap, seq):
+        np.testing.assert_array_equal(f.pos[:, [0, 2]], g.pos[:, [0, 2]])
+        np.testing.assert_array_equal(f.scale, g.scale)
+        np.testing.assert_allclose(f.pos[:, 1], cap[-1].pos[: len(f.pos), 1])  # its height in every frame
+    bumpy = mod.lift_heads(seq, 0.35, 0.0, 0.1)
+    h = bumpy[-1].pos[:, 1]
+    assert np.all(np.abs(h) <= 0.1 * d) and np.ptp(h) > 0.02 * d
+    np.testing.assert_array_equal(h, mod.lift_heads(seq, 0.35, 0.0, 0.1)[-1].pos[:, 1])
+    np.testing.assert_allclose(mod.lift_heads(seq, 0.35, 0.4, 0.1)[-1].pos[:, 1], cap[-1].pos[:, 1] + h)
+    # the heads born in the pattern's last frame (``end``; here heads 3 and 4, born in frame 1)
+    # stand ``late`` mean diameters lower still, from their birth on
+    low = mod.lift_heads(seq, 0.35, 0.4, 0.0, late=0.25, end=1)
+    np.testing.assert_allclose(low[-1].pos[:, 1] - cap[-1].pos[:, 1], [0, 0, 0, -0.25 * d, -0.25 * d], atol=1e-12)
+    np.testing.assert_allclose(low[1].pos[:, 1], low[-1].pos[:, 1])
+    np.testing.assert_allclose(mod.lift_heads(seq, 0.35, 0.4, 0.0, late=0.25, end=3)[-1].pos[:, 1], cap[-1].pos[:, 1])
 
 
 def test_involucre_and_receptacles(corymb):
@@ -391,3 +442,10 @@ def test_built_corymb_is_one_closed_cap_on_a_leafy_stem(built):
     assert check.cross_pairs(last, mesh) == 0
     # the leaves stand below the heads, along the stem
     assert last.vertices[:, 1].max() < mesh.vertices[:, 1].min()
+    # a low convex cap (species.toml dome, height_jitter): the heads farther from the corymb's
+    # centre stand lower, within about a head's diameter of the highest
+    heads = read_rba(sorted((BUILD / "heads" / "rba").glob("*.rba"))[-1])
+    r2 = ((heads.pos[:, [0, 2]] - heads.pos[:, [0, 2]].mean(axis=0)) ** 2).sum(axis=1)
+    y = heads.pos[:, 1]
+    assert np.corrcoef(r2, y)[0, 1] < -0.5
+    assert 0.0 < np.ptp(y) < 2 * 0.35 * d.mean()

@@ -1,7 +1,7 @@
 """The yarrow's heads on one clock: the growing corymb pattern and every head's florets (the
 `corymb` stage's last step).
 
-Usage: python corymb_heads.py PATTERN_DIR HEAD.scn FRAMES HEAD_SCALE BUD OUT_DIR [INVOLUCRE.scn RECEPTACLE.obj]
+Usage: python corymb_heads.py [--dome D] [--jitter J] [--late L] PATTERN_DIR HEAD.scn FRAMES HEAD_SCALE BUD OUT_DIR [INVOLUCRE.scn RECEPTACLE.obj]
        python corymb_heads.py --obstacles TYPED.scn RECEPTACLES.scn OUT.scn
 
 PATTERN_DIR is a dynamic recursive-segregation pattern (``phyllotaxis``, ``[hierarchy]`` with
@@ -130,6 +130,51 @@ def drop_engulfed(scene: Scene, seq: list, reach: float) -> tuple[Scene, list, l
     return out, frames, sorted(dropped)
 
 
+def lift_heads(seq: list, head_scale: float, dome: float, jitter: float, seed: int = 0, late: float = 0.0,
+               end: int | None = None) -> list:
+    """The heads at their heights in the cap (issue 43, one closed corymb): the pattern is flat
+    (recursive segregation on a plane, fig. 5.3); a real corymb is a low convex cap whose heads
+    stand at slightly different heights, one head's rays over its neighbour's. Head h is lowered by
+    ``dome`` x D x (r_h / R)^2 (a paraboloid: r_h its distance in the plane from the heads'
+    centroid in the last frame, R the farthest head's, D the heads' mean disc diameter there, 2 x
+    ``head_scale`` x the pattern's mean size) and raised by ``jitter`` x its own disc diameter x
+    u_h, u_h uniform in [-1, 1] (seeded by ``seed``, one draw per pattern placement). The heads
+    that form in frame ``end`` or later (the pattern's last frame: they are born at their full size
+    among open older heads, where the heads formed before grew into their room with the meristem)
+    stand ``late`` x D lower still: the youngest heads of a corymb sit below the older ones, whose
+    open rays spread over them rather than through their receptacles. A head keeps
+    that height in every frame: the meristem grows in its plane only (branches.toml's growth has
+    no Y rate), so the peduncles, grown by branch-gen on the same frames, meet their heads without
+    a kink. Returns new frames (positions changed in Y only)."""
+    if not seq or (dome == 0.0 and jitter == 0.0):
+        return seq
+    last = seq[-1]
+    xz = last.pos[:, [0, 2]]
+    centre = xz.mean(axis=0)
+    r2 = ((xz - centre) ** 2).sum(axis=1)
+    reach2 = float(r2.max()) or 1.0
+    own = 2.0 * head_scale * last.scale[:, 0]
+    u = np.random.default_rng(seed).uniform(-1.0, 1.0, len(last.ids))
+    order = np.argsort(np.asarray(last.ids, np.int64), kind="stable")  # draws in placement order
+    draw = np.empty(len(u))
+    draw[order] = u
+    lift = -dome * float(own.mean()) * r2 / reach2 + jitter * own * draw
+    if late and end is not None:
+        born = {}
+        for k, f in enumerate(seq):
+            for pid in f.ids:
+                born.setdefault(int(pid), k)
+        lift = lift - late * float(own.mean()) * np.array([born[int(pid)] >= end for pid in last.ids], float)
+    height = {int(pid): float(lift[i]) for i, pid in enumerate(last.ids)}
+    out = []
+    for f in seq:
+        pos = f.pos.copy()
+        if len(pos):
+            pos[:, 1] += np.array([height[int(pid)] for pid in f.ids])
+        out.append(RbaFrame(f.ids, pos, f.scale, f.up, f.right))
+    return out
+
+
 def sphere_centre(inv: Scene) -> np.ndarray:
     """The centre of the sphere the involucre's placements lie on (phyllotaxis's ``sphere_cap``:
     (0, -radius, 0), the pole at the origin), from the placements: the point on the axis equally
@@ -170,7 +215,8 @@ def receptacle_frames(mesh: ObjMesh, poses: list, n_heads: int, n: int, head_sca
 
 
 def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, out: Path,
-         involucre_path: Path | None = None, receptacle_path: Path | None = None) -> int:
+         involucre_path: Path | None = None, receptacle_path: Path | None = None,
+         dome: float = 0.0, jitter: float = 0.0, late: float = 0.0) -> int:
     scene = read_scn(pattern / "scene.scn")
     frames_in = [read_rba(p) for p in list_rba_sequence(pattern / "rba")]
     head = read_scn(head_path)
@@ -187,6 +233,7 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
         if dropped:
             print(f"corymb_heads.py: {len(dropped)} heads formed within an older head's involucre left out "
                   f"(pattern placements {', '.join(map(str, dropped))})")
+    seq = lift_heads(seq, head_scale, dome, jitter, late=late, end=min(len(frames_in) - 1 - start, n - 1))
     emerged = {}
     for k, f in enumerate(seq):
         for pid in f.ids:
@@ -317,15 +364,21 @@ def cli(argv: list) -> int:
     if argv[:1] == ["--obstacles"] and len(argv) == 4:
         return append_obstacles(Path(argv[1]), Path(argv[2]), Path(argv[3]))
     try:
+        argv, lift = list(argv), {"dome": 0.0, "jitter": 0.0, "late": 0.0}
+        for key in lift:
+            if f"--{key}" in argv:
+                i = argv.index(f"--{key}")
+                lift[key] = float(argv[i + 1])
+                del argv[i:i + 2]
         if len(argv) not in (6, 8):
             raise ValueError
         pattern, head, n, scale, bud, out = argv[:6]
         extra = tuple(Path(a) for a in argv[6:])
         args = (Path(pattern), Path(head), int(n), float(scale), int(bud), Path(out)) + extra
-    except ValueError:
+    except (ValueError, IndexError):
         print(__doc__.strip().splitlines()[2], file=sys.stderr)
         return 2
-    return main(*args)
+    return main(*args, **lift)
 
 
 if __name__ == "__main__":
