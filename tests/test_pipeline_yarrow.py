@@ -12,6 +12,8 @@ What is checked (Owens thesis figs. 5.3, 6.4a, 7.6, 9.9-9.14, ch. 8):
 - one clock (corymb_heads.py): the heads and every head's florets on the canopy's frames, the
   same length; heads emerge at their RBA frames, their florets' windows shifted by the emergence,
   each floret's RBA row its head's pose times its pose in the head; the pattern held after its end;
+- the heads on a low convex cap (corymb_heads.lift_heads: a paraboloid, seeded heights, the
+  heads born last lower; the built corymb's heads lower toward its rim);
 - dimorph over the whole corymb (fig. 6.4a): the rays per head vary with the head's place, about 5
   on average, only on each head's margin;
 - the pipeline Makefile chains the stages in order and switches resolution with QUALITY;

@@ -24,6 +24,11 @@ The canopy's clock (FRAMES frames, 0 .. FRAMES - 1):
 - head h emerges (as a bud) at its first canopy frame E_h; its florets' windows are the head's
   ``ca:`` windows shifted by E_h + BUD: the first heads open first, each from its rim inward.
 
+With ``--dome D``, ``--jitter J``, ``--late L`` (default 0: the pattern's plane) the heads stand at
+their heights in a low convex cap, every frame (:func:`lift_heads`; issue 43): the rim heads D
+mean head diameters below the centre, each head up to J of its own diameter higher or lower
+(seeded), the heads born in the pattern's last frame L diameters lower still.
+
 Writes under OUT_DIR, atomically per file:
 
 - ``heads/scene.scn`` + ``heads/rba/`` (FRAMES files): the heads on the canopy's clock, for
