@@ -244,6 +244,8 @@ def test_lift_heads_is_a_low_cap_with_seeded_heights():
     low = mod.lift_heads(seq, 0.35, 0.4, 0.0, late=0.25, end=1)
     np.testing.assert_allclose(low[-1].pos[:, 1] - cap[-1].pos[:, 1], [0, 0, 0, -0.25 * d, -0.25 * d], atol=1e-12)
     np.testing.assert_allclose(low[1].pos[:, 1], low[-1].pos[:, 1])
+    only = mod.lift_heads(seq, 0.35, 0.0, 0.0, late=0.25, end=1)[-1].pos[:, 1]  # late alone: the same drop
+    np.testing.assert_allclose(only, [0, 0, 0, -0.25 * d, -0.25 * d], atol=1e-12)
     np.testing.assert_allclose(mod.lift_heads(seq, 0.35, 0.4, 0.0, late=0.25, end=3)[-1].pos[:, 1], cap[-1].pos[:, 1])
 
 

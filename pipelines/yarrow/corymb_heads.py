@@ -151,7 +151,7 @@ def lift_heads(seq: list, head_scale: float, dome: float, jitter: float, seed: i
     that height in every frame: the meristem grows in its plane only (branches.toml's growth has
     no Y rate), so the peduncles, grown by branch-gen on the same frames, meet their heads without
     a kink. Returns new frames (positions changed in Y only)."""
-    if not seq or (dome == 0.0 and jitter == 0.0):
+    if not seq or (dome == 0.0 and jitter == 0.0 and (late == 0.0 or end is None)):
         return seq
     last = seq[-1]
     xz = last.pos[:, [0, 2]]
