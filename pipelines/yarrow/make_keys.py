@@ -44,15 +44,15 @@ OUT = HERE
 DISK_NU, DISK_NV, DISK_FUSED = 3, 6, 4
 DISK = {
     # time, radius per row, height per row, half angle per row (degrees; 36 = the symmetry plane);
-    # the tube narrows to its base on the ovary (0.12, 0.18 before: issue 43, the throat seen from
-    # above showed the receptacle down the tube, 0.043 of the corymb's top view; 0.08 let Loop
-    # subdivision fold the narrow base into itself)
+    # the tube narrows to its base on the ovary (0.10; 0.18, then 0.12 before: issue 43, the throat
+    # seen from above showed the receptacle down the tube, 0.043 of the corymb's top view at 0.18,
+    # 0.027 at 0.12; 0.08 let Loop subdivision fold the narrow base into itself)
     "bud": dict(time=0.0,
-                r=[0.12, 0.21, 0.26, 0.26, 0.20, 0.05],
+                r=[0.10, 0.21, 0.26, 0.26, 0.20, 0.05],
                 y=[0.00, 0.13, 0.26, 0.38, 0.48, 0.55],
                 half=[36, 36, 36, 36, 30, 10]),
     "open": dict(time=1.0,
-                 r=[0.12, 0.17, 0.22, 0.25, 0.36, 0.56],
+                 r=[0.10, 0.17, 0.22, 0.25, 0.36, 0.56],
                  y=[0.00, 0.17, 0.34, 0.50, 0.60, 0.58],
                  half=[36, 36, 36, 36, 34, 28]),  # broad lobes (28, 6 before: issue 43)
 }
