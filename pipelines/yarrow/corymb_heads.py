@@ -195,18 +195,28 @@ def sphere_centre(inv: Scene) -> np.ndarray:
     return np.array([0.0, c, 0.0])
 
 
-def receptacle_frames(mesh: ObjMesh, poses: list, n_heads: int, n: int, head_scale: float, out: Path) -> None:
-    """``receptacles/frame_NNNN.obj``: ``mesh`` (the head's units) under every head, on its pose
-    (``poses[k][h]``: the head's 4x4 pose in frame k, or None before it emerges) x ``head_scale``."""
+def receptacle_frames(mesh: ObjMesh, out: Path, n_heads: int, first_id: int, n: int) -> None:
+    """``receptacles/frame_NNNN.obj``: ``mesh`` (the head's units) under every head, on the RBA row of
+    its receptacle's obstacle placement (id ``first_id + h``) in ``corymb/rba/NNNN.rba`` as written
+    (six decimals) and read back: the very poses from which fccompose places the obstacles, so the
+    check tests the florets against the receptacles they were kept off; written with nine decimals
+    (before, poses carried in memory and six decimals put a vertex the canopy had left touching a
+    receptacle 6e-8 inside it: one canopy-receptacle pair at final frame 84). A head not yet
+    emerged keeps its vertices on its first row, without faces."""
     nv, nf = mesh.n_vertices, mesh.n_faces
-    hv = np.hstack([mesh.vertices * head_scale, np.ones((nv, 1))])
-    first = [next(p[h] for p in poses if p[h] is not None) for h in range(n_heads)]
+    hv = np.hstack([mesh.vertices, np.ones((nv, 1))])
+    mats = []
+    for k in range(n):
+        f = read_rba(out / "corymb" / "rba" / f"{k:04d}.rba")
+        rows = [f.index(first_id + h) for h in range(n_heads)]
+        mats.append([None if r is None else f.matrix(r) for r in rows])
+    first = [next(m[h] for m in mats if m[h] is not None) for h in range(n_heads)]
     for k in range(n):
         verts, faces, group = [], [], []
         for h in range(n_heads):
-            H = poses[k][h]
-            verts.append(la.matmul(hv, (first[h] if H is None else H).T)[:, :3])
-            if H is not None:
+            M = mats[k][h]
+            verts.append(la.matmul(hv, (first[h] if M is None else M).T)[:, :3])
+            if M is not None:
                 faces.append(mesh.faces + h * nv)
                 group.append(np.full(nf, h, np.int32))
         faces = np.vstack(faces) if faces else np.zeros((0, 3), np.int32)
@@ -214,7 +224,7 @@ def receptacle_frames(mesh: ObjMesh, poses: list, n_heads: int, n: int, head_sca
         m = ObjMesh(np.vstack(verts), faces, groups=[f"receptacle_{h}" for h in range(n_heads)],
                     face_group=group, materials=list(mesh.materials[:1]) or ["mtl5"],
                     face_material=np.zeros(len(faces), np.int32))
-        write_obj(out / "receptacles" / f"frame_{k:04d}.obj", m, mtllib=None,
+        write_obj(out / "receptacles" / f"frame_{k:04d}.obj", m, mtllib=None, fmt="%.9f",
                   header=f"yarrow receptacles, frame {k}: {len(set(group.tolist()))} of {n_heads} heads "
                          "(corymb_heads.py)")
 
@@ -345,7 +355,7 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
         write_scn(out / "corymb" / "receptacles.scn", obstacles,
                   header=f"the receptacles of the {len(heads)} heads as obstacles (id {OBSTACLE_ID}; corymb_heads.py): "
                          "appended to the typed scene after dimorph")
-        receptacle_frames(read_obj(receptacle_path), poses, len(heads), n, head_scale, out)
+        receptacle_frames(read_obj(receptacle_path), out, len(heads), len(heads) * nf, n)
     first = sorted(emerged.values())
     print(f"corymb_heads.py: {len(heads)} heads x {nflo} florets{inv_note}; pattern frames {start}-{len(frames_in) - 1} "
           f"= canopy frames 0-{end}, then held to frame {n - 1}; heads emerge at canopy "

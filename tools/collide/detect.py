@@ -599,7 +599,13 @@ def _live_pairs(pairs, verts_a, verts_b, x0, x1, pad, act_a, act_b, left_a, left
     """The rows (a, b) of ``pairs`` whose elements (rows of ``verts_a`` / ``verts_b``) have
     overlapping boxes from ``x0`` to ``x1`` (grown by ``pad``), neither flagged in ``left_a`` /
     ``left_b`` and, with ``need_active``, one flagged in ``act_a`` / ``act_b`` (the elements with
-    an active vertex); in their order."""
+    an active vertex); in their order.
+
+    (An index of the pairs by element, so that a retry round tests only the pairs of its active
+    elements, was measured on the final yarrow and not kept: the rounds after a relaxation, which
+    moves whole florets, have 60-100 % of the pairs active, and there the box tests, not the scan of
+    the flags, are the cost: 2.1 M edge-edge pairs, 81 ms either way with every pair active, 6 ms
+    against 10 ms with 0.2 % active; the phase as a whole 5.1 s against 5.3 s over two frames.)"""
     keep = np.zeros(pairs.shape[0], np.bool_)
     ba = np.empty(6)
     bb = np.empty(6)
