@@ -402,6 +402,29 @@ def test_built_heads_have_a_body(built):
     assert check.cross_pairs(mesh, rec) == 0
 
 
+def test_built_receptacles_are_the_simulated_obstacles(built, monkeypatch):
+    """The receptacle frames the check tests the canopy against are where fccompose kept the
+    florets off them: every vertex of the obstacles fccompose places (from the RBA rows as written)
+    within 1e-8 of the written receptacles, in the first frame with every head and the last (with
+    the poses carried in memory and six decimals they differed by about 1e-6, and a vertex the
+    final canopy left touching a receptacle read 6e-8 inside it)."""
+    from inflo.formats.fcc import read_fcc
+    from inflo.tools.fccompose.model import build_model
+
+    monkeypatch.chdir(YARROW)  # yarrow.fcc names its inputs relative to its folder
+    model = build_model(read_fcc(YARROW / "yarrow.fcc"))
+    ob = np.nonzero(model.obstacle_vertices)[0].astype(np.int32)
+    recs = list_obj_sequence(BUILD / "receptacles")
+    full = next(k for k, p in enumerate(recs) if read_obj(p).n_faces == read_obj(recs[-1]).n_faces)
+    for k in sorted({full, len(recs) - 1}):
+        x = np.zeros((model.n_vertices, 3))
+        model.template_positions(model.schedule(float(k)), vertices=ob, out=x)
+        rec = read_obj(recs[k])
+        assert rec.n_vertices == len(ob)
+        dist, _ = cKDTree(rec.vertices).query(x[ob])
+        assert dist.max() < 1e-8, (k, dist.max())
+
+
 def test_built_branches_grow_with_the_heads(built):
     frames = sorted((BUILD / "branches" / "frames").glob("branches_*.obj"))
     canopy = list_obj_sequence(BUILD / "canopy")
