@@ -316,16 +316,15 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
             q.frame_start, q.frame_end, q.group = int(emerged[pid]), int(emerged[pid]) + 1, h + 1
             q.emergence, q.type, q.petal, q.interpolation = float(emerged[pid]), "obstacle", None, None
             obstacles.placements.append(q)
-    poses = []
     for k, f in enumerate(seq):
         ids, pos, scale, up, right = [], [], [], [], []
-        poses.append([None] * len(heads))
+        poses = [None] * len(heads)  # the heads' poses in this frame (None: not emerged yet)
         for h, pid in enumerate(heads):
             row = f.index(pid)
             if row is None:
                 continue
             H = placement_matrix(f.pos[row], f.scale[row], f.up[row], f.right[row])
-            poses[k][h] = H
+            poses[h] = H
             m = la.matmul(H, local)  # every floret and bract of the head at once
             s = la.norm(m[:, :3, 1], axis=1)[:, None]
             ids.extend(range(h * nf, h * nf + nf))
@@ -335,9 +334,9 @@ def main(pattern: Path, head_path: Path, n: int, head_scale: float, bud: int, ou
             right.append(m[:, :3, 0] / s)
         if receptacle_path is not None:
             for h in range(len(heads)):
-                if poses[k][h] is None:
+                if poses[h] is None:
                     continue
-                M = la.matmul(poses[k][h], rec_local)
+                M = la.matmul(poses[h], rec_local)
                 s = la.norm(M[:3, 1])
                 ids.append(len(heads) * nf + h)
                 pos.append(M[None, :3, 3])
